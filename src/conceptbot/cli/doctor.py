@@ -1,0 +1,127 @@
+"""``conceptbot doctor``: what is installed and working, one line each."""
+
+from __future__ import annotations
+
+import importlib.metadata
+import time
+from dataclasses import dataclass
+from typing import Callable
+
+import click
+
+from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.core.config import DEFAULT_EMBEDDER, DEFAULT_LLM, Settings
+from conceptbot.core.errors import ConceptBotError
+from conceptbot.models import store
+from conceptbot.models.registry import create_embedder, open_store, split_spec
+
+
+@dataclass(frozen=True)
+class Check:
+    """One diagnostic line. ``required`` failures make ``doctor`` exit 1."""
+
+    name: str
+    ok: bool
+    detail: str
+    required: bool = True
+
+
+def _version(dist: str) -> str:
+    return importlib.metadata.version(dist)
+
+
+def check_llama() -> Check:
+    """llama-cpp-python imports (the embedded LLM runtime)."""
+    try:
+        import llama_cpp  # noqa: F401
+
+        return Check("llama.cpp runtime", True, f"llama-cpp-python {_version('llama_cpp_python')}")
+    except Exception as exc:  # a broken native build raises OSError, ImportError, ...
+        return Check("llama.cpp runtime", False, f"cannot import llama_cpp ({exc}); run bash scripts/install.sh")
+
+
+def check_model(settings: Settings) -> Check:
+    """The configured (or default) local model is present and its sha256 is right."""
+    name, argument = split_spec(settings.llm)
+    if name != "llamacpp":
+        return Check("local model", True, f"not used (LLM is {name})", required=False)
+    model = argument or split_spec(DEFAULT_LLM)[1]
+    if model not in store.catalogue():
+        return Check(f"model {model}", True, "user-supplied GGUF file (no catalogue hash)", required=True)
+    started = time.perf_counter()
+    try:
+        path = store.verify(settings.models_dir, model, full=True)
+    except ConceptBotError as exc:
+        return Check(f"model {model}", False, str(exc).replace("\n", " "))
+    return Check(f"model {model}", True, f"sha256 ok ({time.perf_counter() - started:.1f} s) {path}")
+
+
+def check_embedder(settings: Settings) -> Check:
+    """The configured embedder loads and embeds a sentence."""
+    try:
+        started = time.perf_counter()
+        vectors = create_embedder(settings.embedder, settings).embed(["a knife is a sharp object"])
+        elapsed = time.perf_counter() - started
+    except ConceptBotError as exc:
+        return Check("embedder", False, str(exc).replace("\n", " "))
+    return Check("embedder", True, f"{settings.embedder or DEFAULT_EMBEDDER}: dim {vectors.shape[1]}, loaded in {elapsed:.1f} s")
+
+
+def check_knowledge(settings: Settings) -> Check:
+    """The knowledge graph database is present."""
+    path = settings.home / "kg" / "conceptnet.db"
+    if path.is_file():
+        return Check("knowledge graph", True, str(path))
+    # Until the knowledge layer lands (issue 3) a missing graph is a warning, not a failure.
+    return Check("knowledge graph", False, "not installed yet (arrives with `conceptbot kg install`)", required=False)
+
+
+def check_pybullet() -> Check:
+    """The simulator imports."""
+    try:
+        import pybullet  # noqa: F401
+
+        return Check("pybullet", True, f"pybullet {_version('pybullet')}")
+    except Exception as exc:
+        return Check("pybullet", False, f"cannot import pybullet ({exc})")
+
+
+def check_cache(settings: Settings) -> Check:
+    """The cache database opens and is migrated."""
+    try:
+        db = open_store(settings)
+        migrations = db.applied_migrations()
+        db.close()
+    except Exception as exc:  # sqlite3 errors, permissions
+        return Check("cache database", False, f"{settings.cache_db}: {exc}")
+    return Check("cache database", True, f"{settings.cache_db} (schema v{migrations[-1][0]}, WAL)")
+
+
+CHECKS: list[Callable[[Settings], Check]] = [
+    lambda s: check_llama(),
+    check_model,
+    check_embedder,
+    check_knowledge,
+    lambda s: check_pybullet(),
+    check_cache,
+]
+
+
+@click.command()
+@pass_app
+def doctor(app: AppContext) -> None:
+    """Check what is installed and working; exit 1 when the default stack is broken."""
+    settings = app.settings
+    click.echo(f"conceptbot {_version('conceptbot')} | home {settings.home} | llm {settings.llm} | embedder {settings.embedder}")
+    broken = False
+    for run in CHECKS:
+        check = run(settings)
+        if check.ok:
+            mark, colour = "ok  ", "green"
+        elif check.required:
+            mark, colour, broken = "FAIL", "red", True
+        else:
+            mark, colour = "warn", "yellow"
+        click.echo(click.style(f"[{mark}] ", fg=colour) + f"{check.name}: {check.detail}")
+    if broken:
+        raise click.exceptions.Exit(1)

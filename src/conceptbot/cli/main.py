@@ -1,0 +1,66 @@
+"""The ``conceptbot`` command."""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import click
+
+from conceptbot import __version__
+from conceptbot.core.config import Settings, load_settings
+from conceptbot.core.errors import ConceptBotError
+
+
+@dataclass
+class AppContext:
+    """What every sub-command gets: resolved settings."""
+
+    settings: Settings
+
+
+pass_app = click.make_pass_decorator(AppContext)
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
+@click.version_option(__version__, prog_name="conceptbot")
+@click.option("--home", type=click.Path(path_type=Path), help="Home directory (default: $CONCEPTBOT_HOME or the user cache dir).")
+@click.option("--llm", "llm", metavar="SPEC", help="LLM backend, e.g. llamacpp:qwen2.5-coder-1.5b, openai:gpt-4o-mini, openai-compatible:URL#MODEL.")
+@click.option("--embedder", metavar="SPEC", help="Embedder backend, e.g. sentence-transformers:all-MiniLM-L6-v2, openai:text-embedding-ada-002.")
+@click.option("--no-cache", is_flag=True, help="Neither read nor write the LLM and embedding caches.")
+@click.pass_context
+def cli(ctx: click.Context, home: Path | None, llm: str | None, embedder: str | None, no_cache: bool) -> None:
+    """ConceptBot: turn a request to a robot into a safe, feasible plan, grounded in ConceptNet."""
+    settings = load_settings(home=home, llm=llm, embedder=embedder, use_cache=False if no_cache else None)
+    ctx.obj = AppContext(settings=settings)
+
+
+def _register() -> None:
+    from conceptbot.cli import doctor, llm_cmd, models_cmd
+
+    cli.add_command(models_cmd.models)
+    cli.add_command(llm_cmd.llm)
+    cli.add_command(doctor.doctor)
+
+
+_register()
+
+
+def main() -> None:
+    """Entry point: run the CLI, turning user errors into a message and a non-zero exit."""
+    try:
+        cli.main(standalone_mode=False)
+    except ConceptBotError as exc:
+        click.secho(f"Error: {exc.message}", fg="red", err=True)
+        if exc.hint:
+            click.echo(f"Hint: {exc.hint}", err=True)
+        sys.exit(exc.exit_code)
+    except click.exceptions.Abort:
+        click.echo("Aborted.", err=True)
+        sys.exit(130)
+    except click.ClickException as exc:
+        exc.show()
+        sys.exit(exc.exit_code)
+    except click.exceptions.Exit as exc:
+        sys.exit(exc.exit_code)

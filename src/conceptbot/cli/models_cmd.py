@@ -1,0 +1,65 @@
+"""``conceptbot models``: list and install local models."""
+
+from __future__ import annotations
+
+import click
+from rich.console import Console
+from rich.progress import BarColumn, DownloadColumn, Progress, TimeRemainingColumn, TransferSpeedColumn
+from rich.table import Table
+
+from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.core.errors import ConceptBotError
+from conceptbot.models import store
+
+
+@click.group()
+def models() -> None:
+    """List and install local (embedded) models."""
+
+
+def _status(app: AppContext, name: str) -> str:
+    try:
+        store.source_files(store.get_entry(name))
+        parts = "parts available"
+    except ConceptBotError:
+        parts = "parts missing"
+    entry = store.get_entry(name)
+    path = store.model_path(app.settings.models_dir, entry)
+    if not path.is_file():
+        return f"not installed ({parts})"
+    if path.stat().st_size != entry.size:
+        return "corrupt (wrong size)"
+    return "installed"
+
+
+@models.command("list")
+@pass_app
+def list_models(app: AppContext) -> None:
+    """Show the models ConceptBot can run locally and whether they are installed."""
+    table = Table(show_header=True, header_style="bold")
+    for column in ("name", "size", "status", "description"):
+        table.add_column(column)
+    for name, entry in store.catalogue().items():
+        table.add_row(name, f"{entry.size / 1e6:,.0f} MB", _status(app, name), entry.description)
+    Console().print(table)
+    click.echo(f"Models folder: {app.settings.models_dir}")
+
+
+@models.command("install")
+@click.argument("name")
+@click.option("--force", is_flag=True, help="Re-join and re-verify even if a good copy is present.")
+@pass_app
+def install_model(app: AppContext, name: str, force: bool) -> None:
+    """Join NAME's parts into the models folder and verify its sha256."""
+    entry = store.get_entry(name)
+    with Progress(
+        "[progress.description]{task.description}", BarColumn(), DownloadColumn(), TransferSpeedColumn(),
+        TimeRemainingColumn(), transient=False,
+    ) as progress:
+        task = progress.add_task(f"joining {name}", total=None)
+        path = store.install(
+            app.settings.models_dir, name, force=force,
+            progress=lambda n: progress.advance(task, n),
+            on_total=lambda total: progress.update(task, total=total),
+        )
+    click.echo(f"{name}: installed and verified (sha256 {entry.sha256[:16]}...) at {path}")

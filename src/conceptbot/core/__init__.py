@@ -1,0 +1,1 @@
+"""Plain typed data shared by every layer: errors, usage accounting, settings."""

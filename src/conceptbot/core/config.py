@@ -1,0 +1,153 @@
+"""Settings: where ConceptBot keeps its files and which backends it uses.
+
+Precedence, lowest to highest: built-in defaults, ``$CONCEPTBOT_HOME/config.toml``, environment
+variables, explicit overrides (CLI flags). Settings are a frozen value passed to whatever needs them;
+there is no global configuration object.
+
+Environment variables:
+    CONCEPTBOT_HOME        home directory (default: the user's cache dir, e.g. ~/.cache/conceptbot)
+    CONCEPTBOT_LLM         LLM backend spec, e.g. ``llamacpp:qwen2.5-coder-1.5b``,
+                           ``openai:gpt-4o-mini``,
+                           ``openai-compatible:http://127.0.0.1:8000/v1#llama-3.3-70b``
+    CONCEPTBOT_EMBEDDER    embedder spec, e.g. ``sentence-transformers:all-MiniLM-L6-v2``,
+                           ``openai:text-embedding-ada-002``
+    CONCEPTBOT_API_KEY     key for ``openai-compatible`` servers (falls back to OPENAI_API_KEY)
+    OPENAI_API_KEY         key for the ``openai`` backends
+    OPENAI_BASE_URL        base URL for the ``openai`` backends (default: the official API)
+    CONCEPTBOT_TIMEOUT     HTTP time-out in seconds (default 60)
+    CONCEPTBOT_MAX_RETRIES bounded retries for HTTP backends (default 3, exponential backoff)
+    CONCEPTBOT_THREADS     CPU threads for the embedded LLM (default: all cores)
+    CONCEPTBOT_N_CTX       context window of the embedded LLM (default 4096)
+"""
+
+from __future__ import annotations
+
+import os
+import tomllib
+from dataclasses import dataclass, field, fields, replace
+from pathlib import Path
+from typing import Any, Mapping
+
+import platformdirs
+
+from conceptbot.core.errors import ConfigError
+
+DEFAULT_LLM = "llamacpp:qwen2.5-coder-1.5b"
+DEFAULT_EMBEDDER = "sentence-transformers:all-MiniLM-L6-v2"
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Resolved settings. Secrets are excluded from ``repr`` so they never reach a log.
+
+    Attributes:
+        home: Directory for models, knowledge graph, caches and logs.
+        llm: LLM backend spec.
+        embedder: Embedder backend spec.
+        use_cache: Whether LLM and embedding caches are read and written.
+        openai_api_key: Key for the official OpenAI API.
+        openai_base_url: Base URL override for the ``openai`` backend.
+        compatible_api_key: Key for ``openai-compatible`` servers.
+        timeout_s: HTTP time-out per request.
+        max_retries: Retries after a failed HTTP request (exponential backoff).
+        n_threads: CPU threads for the embedded LLM (None: all cores).
+        n_ctx: Context window of the embedded LLM in tokens.
+    """
+
+    home: Path
+    llm: str = DEFAULT_LLM
+    embedder: str = DEFAULT_EMBEDDER
+    use_cache: bool = True
+    openai_api_key: str | None = field(default=None, repr=False)
+    openai_base_url: str | None = None
+    compatible_api_key: str | None = field(default=None, repr=False)
+    timeout_s: float = 60.0
+    max_retries: int = 3
+    n_threads: int | None = None
+    n_ctx: int = 4096
+
+    @property
+    def models_dir(self) -> Path:
+        """Where local model files are kept."""
+        return self.home / "models"
+
+    @property
+    def cache_db(self) -> Path:
+        """The SQLite file holding LLM/embedding caches and the call log."""
+        return self.home / "cache.db"
+
+    @property
+    def config_file(self) -> Path:
+        """The optional TOML configuration file."""
+        return self.home / "config.toml"
+
+    def with_overrides(self, **overrides: Any) -> Settings:
+        """Return a copy with the given non-``None`` fields replaced."""
+        return replace(self, **{k: v for k, v in overrides.items() if v is not None})
+
+
+_ENV: dict[str, tuple[str, type]] = {
+    "CONCEPTBOT_LLM": ("llm", str),
+    "CONCEPTBOT_EMBEDDER": ("embedder", str),
+    "CONCEPTBOT_API_KEY": ("compatible_api_key", str),
+    "OPENAI_API_KEY": ("openai_api_key", str),
+    "OPENAI_BASE_URL": ("openai_base_url", str),
+    "CONCEPTBOT_TIMEOUT": ("timeout_s", float),
+    "CONCEPTBOT_MAX_RETRIES": ("max_retries", int),
+    "CONCEPTBOT_THREADS": ("n_threads", int),
+    "CONCEPTBOT_N_CTX": ("n_ctx", int),
+}
+
+
+def default_home(env: Mapping[str, str] | None = None) -> Path:
+    """The home directory: ``$CONCEPTBOT_HOME`` or the user's cache dir."""
+    env = os.environ if env is None else env
+    if env.get("CONCEPTBOT_HOME"):
+        return Path(env["CONCEPTBOT_HOME"]).expanduser()
+    return Path(platformdirs.user_cache_dir("conceptbot"))
+
+
+def _coerce(name: str, value: Any, kind: type, origin: str) -> Any:
+    try:
+        return kind(value)
+    except (TypeError, ValueError):
+        raise ConfigError(
+            f"{origin}: {name} must be a {kind.__name__}, got {value!r}"
+        ) from None
+
+
+def load_settings(env: Mapping[str, str] | None = None, **overrides: Any) -> Settings:
+    """Resolve settings from defaults, the config file, the environment and overrides.
+
+    Args:
+        env: Environment to read (default: ``os.environ``); tests pass their own.
+        **overrides: Field values that win over everything else (``None`` means "not given").
+
+    Returns:
+        The resolved :class:`Settings`.
+
+    Raises:
+        ConfigError: The config file is not valid TOML or has an unknown key or bad value.
+    """
+    env = os.environ if env is None else env
+    home = Path(overrides.pop("home", None) or default_home(env))
+    values: dict[str, Any] = {}
+    known = {f.name: f for f in fields(Settings)}
+    config_file = home / "config.toml"
+    if config_file.is_file():
+        try:
+            data = tomllib.loads(config_file.read_text(encoding="utf-8"))
+        except tomllib.TOMLDecodeError as exc:
+            raise ConfigError(f"{config_file} is not valid TOML: {exc}") from None
+        for key, value in data.items():
+            if key not in known or key == "home":
+                raise ConfigError(
+                    f"{config_file}: unknown setting {key!r}",
+                    hint=f"known settings: {', '.join(sorted(set(known) - {'home'}))}",
+                )
+            values[key] = value
+    for var, (name, kind) in _ENV.items():
+        if env.get(var):
+            values[name] = _coerce(name, env[var], kind, f"environment variable {var}")
+    values.update({k: v for k, v in overrides.items() if v is not None})
+    return Settings(home=home, **values)

@@ -1,0 +1,1 @@
+"""Model layer: LLM and embedder protocols, backends, model store, caches and the call log."""

@@ -1,0 +1,171 @@
+"""Wrappers that put the SQLite cache and the call log in front of any LLM or embedder."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, replace
+from typing import Any, Sequence
+
+import numpy as np
+
+from conceptbot.core.usage import Usage
+from conceptbot.models.cache import CacheStore, CallRecord, request_key
+from conceptbot.models.embedder import Embedder
+from conceptbot.models.llm import LLM, ChatRequest, ChatResponse, ScoreRequest, ScoreResponse
+from conceptbot.models.pricing import estimate_cost
+
+
+def _usage_dict(usage: Usage) -> dict[str, Any]:
+    return asdict(usage)
+
+
+class CachedLLM:
+    """An :class:`~conceptbot.models.llm.LLM` that answers repeated requests from the cache and logs
+    every call (hits too, with ``cached=1`` and zero cost).
+
+    Args:
+        inner: The real backend.
+        store: The cache database, or ``None`` for no caching and no log.
+        use_cache: Read and write the response cache (``--no-cache`` turns this off; calls are
+            still logged).
+        module: Label written to the call log (``cli``, ``ope``, ``urp``, ``planner``, ...).
+    """
+
+    def __init__(
+        self, inner: LLM, store: CacheStore | None, *, use_cache: bool = True, module: str = "default"
+    ) -> None:
+        self.inner = inner
+        self.store = store
+        self.use_cache = use_cache
+        self.module = module
+        self.backend = inner.backend
+        self.model = inner.model
+        self.capabilities = inner.capabilities
+
+    def with_module(self, module: str) -> CachedLLM:
+        """The same backend and cache, logging under another module name."""
+        return CachedLLM(self.inner, self.store, use_cache=self.use_cache, module=module)
+
+    def _log(self, kind: str, usage: Usage, cached: bool, error: str | None = None) -> None:
+        if self.store is None:
+            return
+        cost = 0.0 if cached else estimate_cost(
+            self.backend, self.model, usage.prompt_tokens, usage.completion_tokens
+        )
+        self.store.log_call(
+            CallRecord(
+                kind=kind, module=self.module, backend=self.backend, model=self.model,
+                prompt_tokens=usage.prompt_tokens, completion_tokens=usage.completion_tokens,
+                latency_s=usage.latency_s, cost_usd=cost, cached=cached, error=error,
+            )
+        )
+
+    def _cached(self, kind: str, canonical: dict[str, Any]) -> tuple[str, dict[str, Any] | None, float]:
+        key = request_key(kind, self.backend, self.model, canonical)
+        started = time.perf_counter()
+        hit = self.store.get_response(key) if (self.store is not None and self.use_cache) else None
+        return key, hit, time.perf_counter() - started
+
+    def _store(self, key: str, kind: str, canonical: dict[str, Any], response: dict[str, Any]) -> None:
+        if self.store is not None and self.use_cache:
+            self.store.put_response(
+                key, kind=kind, backend=self.backend, model=self.model, request=canonical, response=response
+            )
+
+    def chat(self, request: ChatRequest) -> ChatResponse:
+        """Chat through the cache; see :meth:`LLM.chat`."""
+        canonical = request.canonical()
+        key, hit, lookup_s = self._cached("chat", canonical)
+        if hit is not None:
+            usage = Usage(hit["usage"]["prompt_tokens"], hit["usage"]["completion_tokens"], lookup_s, 0.0, 0)
+            self._log("chat", usage, cached=True)
+            return ChatResponse(
+                choices=tuple(hit["choices"]), usage=usage, backend=self.backend, model=self.model,
+                cached=True, finish_reasons=tuple(hit.get("finish_reasons", ())),
+            )
+        try:
+            response = self.inner.chat(request)
+        except Exception as exc:
+            self._log("chat", Usage(calls=1), cached=False, error=f"{type(exc).__name__}: {exc}"[:500])
+            raise
+        cost = estimate_cost(self.backend, self.model, response.usage.prompt_tokens, response.usage.completion_tokens)
+        response = replace(response, usage=replace(response.usage, cost_usd=cost or 0.0))
+        self._store(key, "chat", canonical, {
+            "choices": list(response.choices), "usage": _usage_dict(response.usage),
+            "finish_reasons": list(response.finish_reasons),
+        })
+        self._log("chat", response.usage, cached=False)
+        return response
+
+    def score(self, request: ScoreRequest) -> ScoreResponse:
+        """Score through the cache; see :meth:`LLM.score`."""
+        canonical = request.canonical()
+        key, hit, lookup_s = self._cached("score", canonical)
+        if hit is not None:
+            usage = Usage(hit["usage"]["prompt_tokens"], 0, lookup_s, 0.0, 0)
+            self._log("score", usage, cached=True)
+            return ScoreResponse(
+                logprobs=tuple(hit["logprobs"]), token_counts=tuple(hit["token_counts"]), usage=usage,
+                backend=self.backend, model=self.model, cached=True,
+            )
+        try:
+            response = self.inner.score(request)
+        except Exception as exc:
+            self._log("score", Usage(calls=1), cached=False, error=f"{type(exc).__name__}: {exc}"[:500])
+            raise
+        self._store(key, "score", canonical, {
+            "logprobs": list(response.logprobs), "token_counts": list(response.token_counts),
+            "usage": _usage_dict(response.usage),
+        })
+        self._log("score", response.usage, cached=False)
+        return response
+
+
+class CachedEmbedder:
+    """An :class:`~conceptbot.models.embedder.Embedder` that embeds each (model, text) once.
+
+    Args:
+        inner: The real embedder.
+        store: The cache database, or ``None``.
+        use_cache: Read and write the embedding cache.
+        module: Label for the call log.
+    """
+
+    def __init__(
+        self, inner: Embedder, store: CacheStore | None, *, use_cache: bool = True, module: str = "embed"
+    ) -> None:
+        self.inner = inner
+        self.store = store
+        self.use_cache = use_cache
+        self.module = module
+        self.backend = inner.backend
+        self.model = inner.model
+        # Memory layer in front of SQLite: the pipeline embeds the same target words many times.
+        self._memory: dict[str, np.ndarray] = {}
+
+    def embed(self, texts: Sequence[str]) -> np.ndarray:
+        """Unit vectors, one row per text; only unseen texts reach the backend."""
+        if not texts:
+            return np.zeros((0, 0), dtype=np.float32)
+        known: dict[str, np.ndarray] = {t: self._memory[t] for t in texts if t in self._memory}
+        missing = [t for t in dict.fromkeys(texts) if t not in known]
+        if missing and self.store is not None and self.use_cache:
+            known.update(self.store.get_embeddings(self.model, missing))
+            missing = [t for t in missing if t not in known]
+        if missing:
+            started = time.perf_counter()
+            vectors = self.inner.embed(missing)
+            latency = time.perf_counter() - started
+            known.update(zip(missing, vectors))
+            if self.store is not None:
+                if self.use_cache:
+                    self.store.put_embeddings(self.model, missing, vectors)
+                tokens = sum(len(t.split()) for t in missing)  # word count: a cheap token estimate
+                self.store.log_call(CallRecord(
+                    kind="embed", module=self.module, backend=self.backend, model=self.model,
+                    prompt_tokens=tokens, completion_tokens=0, latency_s=latency,
+                    cost_usd=estimate_cost(self.backend, self.model, tokens, 0), cached=False,
+                ))
+        if self.use_cache:
+            self._memory.update(known)
+        return np.stack([known[t] for t in texts]).astype(np.float32)

@@ -1,0 +1,223 @@
+"""The LLM protocol used by the whole product, and the data that crosses it.
+
+Two operations:
+
+* :meth:`LLM.chat` — chat completion with ``n`` choices, temperature, ``max_tokens``, stop strings
+  and optional JSON-schema-constrained output.
+* :meth:`LLM.score` — the log-probability of each candidate continuation after a prompt (SayCan-style
+  option scoring, the Planner's one-pass scoring). Backends that cannot do this raise
+  :class:`~conceptbot.core.errors.NotSupportedError`; check ``supports_scoring`` first.
+
+Requests and responses are frozen dataclasses; no backend-specific (OpenAI-shaped) dicts leave a
+backend.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from typing import Any, Literal, Mapping, Protocol, Sequence, runtime_checkable
+
+from conceptbot.core.usage import Usage
+
+Role = Literal["system", "user", "assistant"]
+
+
+@dataclass(frozen=True)
+class Message:
+    """One chat message."""
+
+    role: Role
+    content: str
+
+
+def _freeze_schema(schema: Mapping[str, Any] | str | None) -> str | None:
+    if schema is None or isinstance(schema, str):
+        return schema
+    return json.dumps(schema, sort_keys=True, separators=(",", ":"))
+
+
+@dataclass(frozen=True)
+class ChatRequest:
+    """A chat-completion request.
+
+    Attributes:
+        messages: The conversation, oldest first.
+        n: Number of independent completions wanted.
+        temperature: Sampling temperature (0 = greedy).
+        max_tokens: Upper bound on generated tokens per completion.
+        stop: Strings that end a completion (not included in the text).
+        json_schema: A JSON schema (canonical JSON text) the reply must satisfy, or ``None``.
+        seed: Base random seed; completion ``i`` uses ``seed + i`` where a backend loops.
+    """
+
+    messages: tuple[Message, ...]
+    n: int = 1
+    temperature: float = 0.0
+    max_tokens: int = 256
+    stop: tuple[str, ...] = ()
+    json_schema: str | None = None
+    seed: int = 0
+
+    @classmethod
+    def of(
+        cls,
+        messages: Sequence[Message] | str,
+        *,
+        system: str | None = None,
+        json_schema: Mapping[str, Any] | str | None = None,
+        stop: Sequence[str] = (),
+        **params: Any,
+    ) -> ChatRequest:
+        """Build a request from a prompt string or messages, with an optional system message."""
+        if isinstance(messages, str):
+            messages = [Message("user", messages)]
+        msgs = ([Message("system", system)] if system else []) + list(messages)
+        return cls(
+            messages=tuple(msgs), json_schema=_freeze_schema(json_schema), stop=tuple(stop), **params
+        )
+
+    def schema(self) -> dict[str, Any] | None:
+        """The JSON schema as a dict, or ``None``."""
+        return None if self.json_schema is None else json.loads(self.json_schema)
+
+    def canonical(self) -> dict[str, Any]:
+        """A JSON-able description of the request, used for cache keys (no secrets in it)."""
+        return {
+            "messages": [[m.role, m.content] for m in self.messages],
+            "n": self.n,
+            "temperature": self.temperature,
+            "max_tokens": self.max_tokens,
+            "stop": list(self.stop),
+            "json_schema": self.json_schema,
+            "seed": self.seed,
+        }
+
+
+@dataclass(frozen=True)
+class ChatResponse:
+    """The reply to a :class:`ChatRequest`.
+
+    Attributes:
+        choices: The ``n`` completion texts.
+        usage: Tokens, latency and cost of producing them.
+        backend: Backend name (``llamacpp``, ``openai``, ...).
+        model: Model identifier as the backend knows it.
+        cached: True when the reply came from the response cache.
+        finish_reasons: Per choice, why generation stopped (``stop``, ``length``, ...).
+    """
+
+    choices: tuple[str, ...]
+    usage: Usage
+    backend: str
+    model: str
+    cached: bool = False
+    finish_reasons: tuple[str, ...] = ()
+
+    @property
+    def text(self) -> str:
+        """The first choice."""
+        return self.choices[0]
+
+
+@dataclass(frozen=True)
+class ScoreRequest:
+    """Score candidate continuations of one prompt by token log-probabilities.
+
+    Exactly one of ``messages`` (rendered with the model's chat template, generation prompt added,
+    then ``assistant_prefix``) or ``prompt`` (raw text, for completion-style prompts such as
+    SayCan's) is given.
+
+    Attributes:
+        options: The candidate continuations, scored independently.
+        messages: Chat messages that form the prompt.
+        prompt: Raw prompt text.
+        assistant_prefix: Text the assistant's reply starts with before the option.
+    """
+
+    options: tuple[str, ...]
+    messages: tuple[Message, ...] | None = None
+    prompt: str | None = None
+    assistant_prefix: str = ""
+
+    def __post_init__(self) -> None:
+        if (self.messages is None) == (self.prompt is None):
+            raise ValueError("ScoreRequest needs exactly one of messages or prompt")
+        if not self.options:
+            raise ValueError("ScoreRequest needs at least one option")
+
+    def canonical(self) -> dict[str, Any]:
+        """A JSON-able description of the request, used for cache keys."""
+        return {
+            "options": list(self.options),
+            "messages": None if self.messages is None else [[m.role, m.content] for m in self.messages],
+            "prompt": self.prompt,
+            "assistant_prefix": self.assistant_prefix,
+        }
+
+
+@dataclass(frozen=True)
+class ScoreResponse:
+    """Log-probabilities of each option (same order as the request).
+
+    Attributes:
+        logprobs: Sum of the option's token log-probabilities (natural log).
+        token_counts: Number of tokens of each option.
+        usage: Tokens and latency of scoring.
+        backend: Backend name.
+        model: Model identifier.
+        cached: True when the result came from the cache.
+    """
+
+    logprobs: tuple[float, ...]
+    token_counts: tuple[int, ...]
+    usage: Usage
+    backend: str
+    model: str
+    cached: bool = False
+
+    def mean_logprobs(self) -> tuple[float, ...]:
+        """Per-token average log-probability (length-normalised)."""
+        return tuple(lp / max(n, 1) for lp, n in zip(self.logprobs, self.token_counts))
+
+
+@dataclass(frozen=True)
+class Capabilities:
+    """What a backend can do."""
+
+    scoring: bool = False
+    json_schema: bool = False
+    native_n: bool = False
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+
+@runtime_checkable
+class LLM(Protocol):
+    """A language model backend.
+
+    Attributes:
+        backend: Registry name of the backend (``llamacpp``, ``openai``, ``openai-compatible``, ``fake``).
+        model: Model identifier.
+        capabilities: What the backend supports.
+    """
+
+    backend: str
+    model: str
+    capabilities: Capabilities
+
+    def chat(self, request: ChatRequest) -> ChatResponse:
+        """Complete a chat.
+
+        Raises:
+            BackendUnavailableError: The backend cannot be reached or loaded.
+            BackendRequestError: The backend refused the request.
+        """
+        ...
+
+    def score(self, request: ScoreRequest) -> ScoreResponse:
+        """Log-probability of each option after the prompt.
+
+        Raises:
+            NotSupportedError: The backend cannot return token log-probabilities.
+        """
+        ...
