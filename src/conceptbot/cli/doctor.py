@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import importlib.metadata
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import click
 
@@ -37,7 +37,9 @@ def check_llama() -> Check:
 
         return Check("llama.cpp runtime", True, f"llama-cpp-python {_version('llama_cpp_python')}")
     except Exception as exc:  # a broken native build raises OSError, ImportError, ...
-        return Check("llama.cpp runtime", False, f"cannot import llama_cpp ({exc}); run bash scripts/install.sh")
+        return Check(
+            "llama.cpp runtime", False, f"cannot import llama_cpp ({exc}); run bash scripts/install.sh"
+        )
 
 
 def check_model(settings: Settings) -> Check:
@@ -64,7 +66,11 @@ def check_embedder(settings: Settings) -> Check:
         elapsed = time.perf_counter() - started
     except ConceptBotError as exc:
         return Check("embedder", False, str(exc).replace("\n", " "))
-    return Check("embedder", True, f"{settings.embedder or DEFAULT_EMBEDDER}: dim {vectors.shape[1]}, loaded in {elapsed:.1f} s")
+    return Check(
+        "embedder",
+        True,
+        f"{settings.embedder or DEFAULT_EMBEDDER}: dim {vectors.shape[1]}, loaded in {elapsed:.1f} s",
+    )
 
 
 def check_knowledge(settings: Settings) -> Check:
@@ -73,7 +79,9 @@ def check_knowledge(settings: Settings) -> Check:
     if path.is_file():
         return Check("knowledge graph", True, str(path))
     # Until the knowledge layer lands (issue 3) a missing graph is a warning, not a failure.
-    return Check("knowledge graph", False, "not installed yet (arrives with `conceptbot kg install`)", required=False)
+    return Check(
+        "knowledge graph", False, "not installed yet (arrives with `conceptbot kg install`)", required=False
+    )
 
 
 def check_pybullet() -> Check:
@@ -112,7 +120,10 @@ CHECKS: list[Callable[[Settings], Check]] = [
 def doctor(app: AppContext) -> None:
     """Check what is installed and working; exit 1 when the default stack is broken."""
     settings = app.settings
-    click.echo(f"conceptbot {_version('conceptbot')} | home {settings.home} | llm {settings.llm} | embedder {settings.embedder}")
+    click.echo(
+        f"conceptbot {_version('conceptbot')} | home {settings.home}"
+        f" | llm {settings.llm} | embedder {settings.embedder}"
+    )
     broken = False
     for run in CHECKS:
         check = run(settings)

@@ -19,17 +19,33 @@ from conceptbot.models.structured import chat_json
 @click.option("--system", "-s", help="System message.")
 @click.option("--max-tokens", default=256, show_default=True, type=click.IntRange(1, 32768))
 @click.option("--temperature", "-t", default=0.0, show_default=True, type=click.FloatRange(0.0, 2.0))
-@click.option("-n", "n", default=1, show_default=True, type=click.IntRange(1, 64), help="Number of completions.")
+@click.option(
+    "-n", "n", default=1, show_default=True, type=click.IntRange(1, 64), help="Number of completions."
+)
 @click.option("--seed", default=0, show_default=True, type=int)
-@click.option("--schema", type=click.Path(exists=True, dir_okay=False, path_type=Path),
-              help="JSON schema file: the reply must be JSON matching it.")
+@click.option(
+    "--schema",
+    type=click.Path(exists=True, dir_okay=False, path_type=Path),
+    help="JSON schema file: the reply must be JSON matching it.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object (reply, usage, timing).")
 @pass_app
-def llm(app: AppContext, prompt: str, system: str | None, max_tokens: int, temperature: float, n: int,
-        seed: int, schema: Path | None, as_json: bool) -> None:
+def llm(
+    app: AppContext,
+    prompt: str,
+    system: str | None,
+    max_tokens: int,
+    temperature: float,
+    n: int,
+    seed: int,
+    schema: Path | None,
+    as_json: bool,
+) -> None:
     """Send PROMPT to the configured LLM once; print the reply, tokens and time."""
     model = open_llm(app.settings, module="cli")
-    request = ChatRequest.of(prompt, system=system, max_tokens=max_tokens, temperature=temperature, n=n, seed=seed)
+    request = ChatRequest.of(
+        prompt, system=system, max_tokens=max_tokens, temperature=temperature, n=n, seed=seed
+    )
     parsed = None
     if schema is not None:
         try:
@@ -41,21 +57,39 @@ def llm(app: AppContext, prompt: str, system: str | None, max_tokens: int, tempe
         response = model.chat(request)
     usage = response.usage
     if as_json:
-        click.echo(json.dumps({
-            "backend": response.backend, "model": response.model, "choices": list(response.choices),
-            "parsed": parsed, "cached": response.cached,
-            "usage": {"prompt_tokens": usage.prompt_tokens, "completion_tokens": usage.completion_tokens,
-                      "latency_s": round(usage.latency_s, 3), "cost_usd": usage.cost_usd},
-        }, indent=2))
+        click.echo(
+            json.dumps(
+                {
+                    "backend": response.backend,
+                    "model": response.model,
+                    "choices": list(response.choices),
+                    "parsed": parsed,
+                    "cached": response.cached,
+                    "usage": {
+                        "prompt_tokens": usage.prompt_tokens,
+                        "completion_tokens": usage.completion_tokens,
+                        "latency_s": round(usage.latency_s, 3),
+                        "cost_usd": usage.cost_usd,
+                    },
+                },
+                indent=2,
+            )
+        )
         return
     for i, choice in enumerate(response.choices):
         if n > 1:
             click.secho(f"--- completion {i + 1}", dim=True)
         click.echo(choice.strip())
-    rate = f", {usage.completion_tokens / usage.latency_s:.1f} tok/s" if usage.latency_s > 0 and not response.cached else ""
+    rate = (
+        f", {usage.completion_tokens / usage.latency_s:.1f} tok/s"
+        if usage.latency_s > 0 and not response.cached
+        else ""
+    )
     click.secho(
-        f"[{response.backend}:{response.model}] tokens: {usage.prompt_tokens} in, {usage.completion_tokens} out"
+        f"[{response.backend}:{response.model}]"
+        f" tokens: {usage.prompt_tokens} in, {usage.completion_tokens} out"
         f" | {usage.latency_s:.2f} s{rate} | {'cached' if response.cached else 'fresh'}"
         f" | cost ${usage.cost_usd:.6f}",
-        dim=True, err=True,
+        dim=True,
+        err=True,
     )

@@ -25,9 +25,22 @@ pass_app = click.make_pass_decorator(AppContext)
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
 @click.version_option(__version__, prog_name="conceptbot")
-@click.option("--home", type=click.Path(path_type=Path), help="Home directory (default: $CONCEPTBOT_HOME or the user cache dir).")
-@click.option("--llm", "llm", metavar="SPEC", help="LLM backend, e.g. llamacpp:qwen2.5-coder-1.5b, openai:gpt-4o-mini, openai-compatible:URL#MODEL.")
-@click.option("--embedder", metavar="SPEC", help="Embedder backend, e.g. sentence-transformers:all-MiniLM-L6-v2, openai:text-embedding-ada-002.")
+@click.option(
+    "--home",
+    type=click.Path(path_type=Path),
+    help="Home directory (default: $CONCEPTBOT_HOME or the user cache dir).",
+)
+@click.option(
+    "--llm",
+    "llm",
+    metavar="SPEC",
+    help="LLM backend, e.g. llamacpp:qwen2.5-coder-1.5b, openai:gpt-4o-mini, openai-compatible:URL#MODEL.",
+)
+@click.option(
+    "--embedder",
+    metavar="SPEC",
+    help="Embedder backend, e.g. sentence-transformers:all-MiniLM-L6-v2, openai:text-embedding-ada-002.",
+)
 @click.option("--no-cache", is_flag=True, help="Neither read nor write the LLM and embedding caches.")
 @click.pass_context
 def cli(ctx: click.Context, home: Path | None, llm: str | None, embedder: str | None, no_cache: bool) -> None:
@@ -50,7 +63,10 @@ _register()
 def main() -> None:
     """Entry point: run the CLI, turning user errors into a message and a non-zero exit."""
     try:
-        cli.main(standalone_mode=False)
+        # With standalone_mode=False click returns the exit code of ctx.exit()/Exit instead of exiting.
+        code = cli.main(standalone_mode=False)
+        if isinstance(code, int) and code != 0:
+            sys.exit(code)
     except ConceptBotError as exc:
         click.secho(f"Error: {exc.message}", fg="red", err=True)
         if exc.hint:

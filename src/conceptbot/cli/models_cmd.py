@@ -53,12 +53,18 @@ def install_model(app: AppContext, name: str, force: bool) -> None:
     """Join NAME's parts into the models folder and verify its sha256."""
     entry = store.get_entry(name)
     with Progress(
-        "[progress.description]{task.description}", BarColumn(), DownloadColumn(), TransferSpeedColumn(),
-        TimeRemainingColumn(), transient=False,
+        "[progress.description]{task.description}",
+        BarColumn(),
+        DownloadColumn(),
+        TransferSpeedColumn(),
+        TimeRemainingColumn(),
+        transient=False,
     ) as progress:
         task = progress.add_task(f"joining {name}", total=None)
         path = store.install(
-            app.settings.models_dir, name, force=force,
+            app.settings.models_dir,
+            name,
+            force=force,
             progress=lambda n: progress.advance(task, n),
             on_total=lambda total: progress.update(task, total=total),
         )

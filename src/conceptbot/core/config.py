@@ -24,9 +24,10 @@ from __future__ import annotations
 
 import os
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 import platformdirs
 
@@ -111,9 +112,7 @@ def _coerce(name: str, value: Any, kind: type, origin: str) -> Any:
     try:
         return kind(value)
     except (TypeError, ValueError):
-        raise ConfigError(
-            f"{origin}: {name} must be a {kind.__name__}, got {value!r}"
-        ) from None
+        raise ConfigError(f"{origin}: {name} must be a {kind.__name__}, got {value!r}") from None
 
 
 def load_settings(env: Mapping[str, str] | None = None, **overrides: Any) -> Settings:

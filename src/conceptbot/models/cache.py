@@ -13,9 +13,10 @@ import json
 import sqlite3
 import threading
 import time
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -57,9 +58,7 @@ class CacheStore:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._lock = threading.Lock()
-        self._conn = sqlite3.connect(
-            self.path, timeout=30.0, isolation_level=None, check_same_thread=False
-        )
+        self._conn = sqlite3.connect(self.path, timeout=30.0, isolation_level=None, check_same_thread=False)
         self._conn.execute("PRAGMA journal_mode=WAL")
         self._conn.execute("PRAGMA synchronous=NORMAL")
         self._conn.execute("PRAGMA busy_timeout=30000")
@@ -77,9 +76,7 @@ class CacheStore:
                 # the same migration.
                 self._conn.execute("BEGIN IMMEDIATE")
                 try:
-                    done = self._conn.execute(
-                        "SELECT 1 FROM _migrations WHERE id = ?", (number,)
-                    ).fetchone()
+                    done = self._conn.execute("SELECT 1 FROM _migrations WHERE id = ?", (number,)).fetchone()
                     if not done:
                         for statement in sql.split(";"):
                             if statement.strip():
@@ -158,7 +155,7 @@ class CacheStore:
         now = time.time()
         rows = [
             (model, text, int(vec.shape[0]), np.asarray(vec, dtype="<f4").tobytes(), now)
-            for text, vec in zip(texts, vectors)
+            for text, vec in zip(texts, vectors, strict=False)
         ]
         with self._lock:
             self._conn.execute("BEGIN IMMEDIATE")
@@ -202,9 +199,17 @@ class CacheStore:
             ).fetchall()
         return [
             CallRecord(
-                kind=r[0], module=r[1], backend=r[2], model=r[3], prompt_tokens=r[4],
-                completion_tokens=r[5], latency_s=r[6], cost_usd=r[7], cached=bool(r[8]),
-                error=r[9], ts=r[10],
+                kind=r[0],
+                module=r[1],
+                backend=r[2],
+                model=r[3],
+                prompt_tokens=r[4],
+                completion_tokens=r[5],
+                latency_s=r[6],
+                cost_usd=r[7],
+                cached=bool(r[8]),
+                error=r[9],
+                ts=r[10],
             )
             for r in rows
         ]

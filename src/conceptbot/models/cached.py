@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import asdict, replace
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -49,14 +50,23 @@ class CachedLLM:
     def _log(self, kind: str, usage: Usage, cached: bool, error: str | None = None) -> None:
         if self.store is None:
             return
-        cost = 0.0 if cached else estimate_cost(
-            self.backend, self.model, usage.prompt_tokens, usage.completion_tokens
+        cost = (
+            0.0
+            if cached
+            else estimate_cost(self.backend, self.model, usage.prompt_tokens, usage.completion_tokens)
         )
         self.store.log_call(
             CallRecord(
-                kind=kind, module=self.module, backend=self.backend, model=self.model,
-                prompt_tokens=usage.prompt_tokens, completion_tokens=usage.completion_tokens,
-                latency_s=usage.latency_s, cost_usd=cost, cached=cached, error=error,
+                kind=kind,
+                module=self.module,
+                backend=self.backend,
+                model=self.model,
+                prompt_tokens=usage.prompt_tokens,
+                completion_tokens=usage.completion_tokens,
+                latency_s=usage.latency_s,
+                cost_usd=cost,
+                cached=cached,
+                error=error,
             )
         )
 
@@ -80,20 +90,32 @@ class CachedLLM:
             usage = Usage(hit["usage"]["prompt_tokens"], hit["usage"]["completion_tokens"], lookup_s, 0.0, 0)
             self._log("chat", usage, cached=True)
             return ChatResponse(
-                choices=tuple(hit["choices"]), usage=usage, backend=self.backend, model=self.model,
-                cached=True, finish_reasons=tuple(hit.get("finish_reasons", ())),
+                choices=tuple(hit["choices"]),
+                usage=usage,
+                backend=self.backend,
+                model=self.model,
+                cached=True,
+                finish_reasons=tuple(hit.get("finish_reasons", ())),
             )
         try:
             response = self.inner.chat(request)
         except Exception as exc:
             self._log("chat", Usage(calls=1), cached=False, error=f"{type(exc).__name__}: {exc}"[:500])
             raise
-        cost = estimate_cost(self.backend, self.model, response.usage.prompt_tokens, response.usage.completion_tokens)
+        cost = estimate_cost(
+            self.backend, self.model, response.usage.prompt_tokens, response.usage.completion_tokens
+        )
         response = replace(response, usage=replace(response.usage, cost_usd=cost or 0.0))
-        self._store(key, "chat", canonical, {
-            "choices": list(response.choices), "usage": _usage_dict(response.usage),
-            "finish_reasons": list(response.finish_reasons),
-        })
+        self._store(
+            key,
+            "chat",
+            canonical,
+            {
+                "choices": list(response.choices),
+                "usage": _usage_dict(response.usage),
+                "finish_reasons": list(response.finish_reasons),
+            },
+        )
         self._log("chat", response.usage, cached=False)
         return response
 
@@ -105,18 +127,28 @@ class CachedLLM:
             usage = Usage(hit["usage"]["prompt_tokens"], 0, lookup_s, 0.0, 0)
             self._log("score", usage, cached=True)
             return ScoreResponse(
-                logprobs=tuple(hit["logprobs"]), token_counts=tuple(hit["token_counts"]), usage=usage,
-                backend=self.backend, model=self.model, cached=True,
+                logprobs=tuple(hit["logprobs"]),
+                token_counts=tuple(hit["token_counts"]),
+                usage=usage,
+                backend=self.backend,
+                model=self.model,
+                cached=True,
             )
         try:
             response = self.inner.score(request)
         except Exception as exc:
             self._log("score", Usage(calls=1), cached=False, error=f"{type(exc).__name__}: {exc}"[:500])
             raise
-        self._store(key, "score", canonical, {
-            "logprobs": list(response.logprobs), "token_counts": list(response.token_counts),
-            "usage": _usage_dict(response.usage),
-        })
+        self._store(
+            key,
+            "score",
+            canonical,
+            {
+                "logprobs": list(response.logprobs),
+                "token_counts": list(response.token_counts),
+                "usage": _usage_dict(response.usage),
+            },
+        )
         self._log("score", response.usage, cached=False)
         return response
 
@@ -156,16 +188,24 @@ class CachedEmbedder:
             started = time.perf_counter()
             vectors = self.inner.embed(missing)
             latency = time.perf_counter() - started
-            known.update(zip(missing, vectors))
+            known.update(zip(missing, vectors, strict=False))
             if self.store is not None:
                 if self.use_cache:
                     self.store.put_embeddings(self.model, missing, vectors)
                 tokens = sum(len(t.split()) for t in missing)  # word count: a cheap token estimate
-                self.store.log_call(CallRecord(
-                    kind="embed", module=self.module, backend=self.backend, model=self.model,
-                    prompt_tokens=tokens, completion_tokens=0, latency_s=latency,
-                    cost_usd=estimate_cost(self.backend, self.model, tokens, 0), cached=False,
-                ))
+                self.store.log_call(
+                    CallRecord(
+                        kind="embed",
+                        module=self.module,
+                        backend=self.backend,
+                        model=self.model,
+                        prompt_tokens=tokens,
+                        completion_tokens=0,
+                        latency_s=latency,
+                        cost_usd=estimate_cost(self.backend, self.model, tokens, 0),
+                        cached=False,
+                    )
+                )
         if self.use_cache:
             self._memory.update(known)
         return np.stack([known[t] for t in texts]).astype(np.float32)

@@ -144,7 +144,10 @@ class LlamaCppLLM:
             choices *= request.n
             reasons *= request.n
         return ChatResponse(
-            choices=tuple(choices), usage=usage, backend=self.backend, model=self.model,
+            choices=tuple(choices),
+            usage=usage,
+            backend=self.backend,
+            model=self.model,
             finish_reasons=tuple(reasons),
         )
 
@@ -166,7 +169,9 @@ class LlamaCppLLM:
         started = time.perf_counter()
         with self._lock:
             prompt = self._prompt_tokens(request)
-            options = [list(llama.tokenize(o.encode("utf-8"), add_bos=False, special=False)) for o in request.options]
+            options = [
+                list(llama.tokenize(o.encode("utf-8"), add_bos=False, special=False)) for o in request.options
+            ]
             needed = len(prompt) + max(len(o) for o in options)
             if needed > self.n_ctx:
                 raise BackendRequestError(
@@ -189,7 +194,7 @@ class LlamaCppLLM:
                     results[index] = 0.0
                     continue
                 shared = 0
-                for a, b in zip(previous, tokens[:-1]):
+                for a, b in zip(previous, tokens[:-1], strict=False):
                     if a != b:
                         break
                     shared += 1
@@ -217,7 +222,7 @@ class LlamaCppLLM:
 def _evaluated_prefix(llama: Any, tokens: list[int]) -> int:
     """Length of the prefix of ``tokens`` already evaluated in the llama context."""
     common = 0
-    for a, b in zip(llama._input_ids, tokens):  # _input_ids = input_ids[:n_tokens]
+    for a, b in zip(llama._input_ids, tokens, strict=False):  # _input_ids = input_ids[:n_tokens]
         if a != b:
             break
         common += 1

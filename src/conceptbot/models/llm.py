@@ -15,8 +15,9 @@ backend.
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal, Mapping, Protocol, Sequence, runtime_checkable
+from typing import Any, Literal, Protocol, runtime_checkable
 
 from conceptbot.core.usage import Usage
 
@@ -73,9 +74,7 @@ class ChatRequest:
         if isinstance(messages, str):
             messages = [Message("user", messages)]
         msgs = ([Message("system", system)] if system else []) + list(messages)
-        return cls(
-            messages=tuple(msgs), json_schema=_freeze_schema(json_schema), stop=tuple(stop), **params
-        )
+        return cls(messages=tuple(msgs), json_schema=_freeze_schema(json_schema), stop=tuple(stop), **params)
 
     def schema(self) -> dict[str, Any] | None:
         """The JSON schema as a dict, or ``None``."""
@@ -178,7 +177,7 @@ class ScoreResponse:
 
     def mean_logprobs(self) -> tuple[float, ...]:
         """Per-token average log-probability (length-normalised)."""
-        return tuple(lp / max(n, 1) for lp, n in zip(self.logprobs, self.token_counts))
+        return tuple(lp / max(n, 1) for lp, n in zip(self.logprobs, self.token_counts, strict=False))
 
 
 @dataclass(frozen=True)

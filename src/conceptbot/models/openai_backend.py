@@ -137,19 +137,16 @@ class OpenAILLM:
             kwargs["response_format"] = fmt
         try:
             return self._client.chat.completions.create(**kwargs)
-        except (openai.BadRequestError, openai.UnprocessableEntityError) as exc:
-            if fmt is not None and self._json_mode == "json_schema" and self.backend == "openai-compatible":
+        except openai.APIStatusError as exc:
+            if (
+                fmt is not None
+                and self.backend == "openai-compatible"
+                and self._json_mode == "json_schema"
+                and _rejects_json_schema(exc)
+            ):
                 self._json_mode = "json_object"  # llama.cpp-server style; remember for later calls
                 return self._create(request, n, seed)
-            raise BackendRequestError(f"{self._where()} rejected the request: {_message(exc)}") from None
-        except openai.AuthenticationError:
-            raise BackendRequestError(
-                f"{self._where()} refused the API key", hint="check OPENAI_API_KEY / CONCEPTBOT_API_KEY"
-            ) from None
-        except openai.NotFoundError as exc:
-            raise BackendRequestError(
-                f"{self._where()} does not know model {self.model!r} or the URL path is wrong: {_message(exc)}"
-            ) from None
+            raise self._status_error(exc) from None
         except openai.APITimeoutError:
             raise BackendUnavailableError(
                 f"{self._where()} did not answer in time", hint="raise CONCEPTBOT_TIMEOUT or check the server"
@@ -158,10 +155,22 @@ class OpenAILLM:
             raise BackendUnavailableError(
                 f"cannot connect to {self._where()}", hint="is the server running and the URL right?"
             ) from None
-        except openai.APIStatusError as exc:
-            raise BackendRequestError(
-                f"{self._where()} answered HTTP {exc.status_code}: {_message(exc)}"
-            ) from None
+
+    def _status_error(self, exc: Any) -> BackendRequestError:
+        import openai
+
+        if isinstance(exc, openai.AuthenticationError):
+            return BackendRequestError(
+                f"{self._where()} refused the API key", hint="check OPENAI_API_KEY / CONCEPTBOT_API_KEY"
+            )
+        if isinstance(exc, openai.NotFoundError):
+            return BackendRequestError(
+                f"{self._where()} does not know model {self.model!r} or the URL path is wrong: "
+                f"{_message(exc)}"
+            )
+        if isinstance(exc, (openai.BadRequestError, openai.UnprocessableEntityError)):
+            return BackendRequestError(f"{self._where()} rejected the request: {_message(exc)}")
+        return BackendRequestError(f"{self._where()} answered HTTP {exc.status_code}: {_message(exc)}")
 
     def chat(self, request: ChatRequest) -> ChatResponse:
         """Chat completion; see :meth:`conceptbot.models.llm.LLM.chat`.
@@ -186,7 +195,10 @@ class OpenAILLM:
                 completion_tokens += out.usage.completion_tokens or 0
         usage = Usage(prompt_tokens, completion_tokens, time.perf_counter() - started, 0.0, calls)
         return ChatResponse(
-            choices=tuple(choices), usage=usage, backend=self.backend, model=self.model,
+            choices=tuple(choices),
+            usage=usage,
+            backend=self.backend,
+            model=self.model,
             finish_reasons=tuple(reasons),
         )
 
@@ -196,6 +208,17 @@ class OpenAILLM:
             f"the {self.backend} backend cannot score options by log-probability",
             hint="use the llamacpp backend for log-probability scoring, or the vote-based planner",
         )
+
+
+def _rejects_json_schema(exc: Any) -> bool:
+    """Whether an HTTP error says the server does not take ``response_format.type=json_schema``.
+
+    vLLM-style servers answer 400/422; llama.cpp's server answers 500 with a validation message.
+    """
+    message = _message(exc)
+    if exc.status_code in (400, 422):
+        return True
+    return "json_schema" in message or "response_format" in message
 
 
 def _message(exc: Any) -> str:

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -44,8 +45,10 @@ class OpenAIEmbedder:
             import openai
 
             client = openai.OpenAI(
-                api_key=api_key, base_url=validate_base_url(base_url) if base_url else None,
-                timeout=timeout_s, max_retries=max_retries,
+                api_key=api_key,
+                base_url=validate_base_url(base_url) if base_url else None,
+                timeout=timeout_s,
+                max_retries=max_retries,
             )
         self._client = client
 
@@ -56,7 +59,9 @@ class OpenAIEmbedder:
         rows: list[list[float]] = []
         for start in range(0, len(texts), BATCH):
             try:
-                out = self._client.embeddings.create(model=self.model, input=list(texts[start : start + BATCH]))
+                out = self._client.embeddings.create(
+                    model=self.model, input=list(texts[start : start + BATCH])
+                )
             except openai.APIConnectionError:
                 raise BackendUnavailableError("cannot connect to the embeddings endpoint") from None
             except openai.APIStatusError as exc:

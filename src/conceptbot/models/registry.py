@@ -17,8 +17,8 @@ Embedder specs (``CONCEPTBOT_EMBEDDER`` or ``--embedder``)::
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConfigError
@@ -113,16 +113,24 @@ def _llamacpp(argument: str, settings: Settings) -> LLM:
 
     name = argument or "qwen2.5-coder-1.5b"
     path = store.resolve(settings.models_dir, name)
-    return LlamaCppLLM(path, model=name if name in store.catalogue() else path.name,
-                       n_ctx=settings.n_ctx, n_threads=settings.n_threads)
+    return LlamaCppLLM(
+        path,
+        model=name if name in store.catalogue() else path.name,
+        n_ctx=settings.n_ctx,
+        n_threads=settings.n_threads,
+    )
 
 
 def _openai(argument: str, settings: Settings) -> LLM:
     from conceptbot.models.openai_backend import OpenAILLM
 
     return OpenAILLM(
-        argument, backend="openai", base_url=settings.openai_base_url, api_key=settings.openai_api_key,
-        timeout_s=settings.timeout_s, max_retries=settings.max_retries,
+        argument,
+        backend="openai",
+        base_url=settings.openai_base_url,
+        api_key=settings.openai_api_key,
+        timeout_s=settings.timeout_s,
+        max_retries=settings.max_retries,
     )
 
 
@@ -136,9 +144,12 @@ def _openai_compatible(argument: str, settings: Settings) -> LLM:
             hint="e.g. openai-compatible:http://127.0.0.1:8000/v1#qwen2.5-coder-1.5b",
         )
     return OpenAILLM(
-        model, backend="openai-compatible", base_url=url,
+        model,
+        backend="openai-compatible",
+        base_url=url,
         api_key=settings.compatible_api_key or settings.openai_api_key,
-        timeout_s=settings.timeout_s, max_retries=settings.max_retries,
+        timeout_s=settings.timeout_s,
+        max_retries=settings.max_retries,
     )
 
 
@@ -167,8 +178,11 @@ def _openai_embedder(argument: str, settings: Settings) -> Embedder:
     from conceptbot.models.openai_embedder import OpenAIEmbedder
 
     return OpenAIEmbedder(
-        argument or "text-embedding-ada-002", api_key=settings.openai_api_key,
-        base_url=settings.openai_base_url, timeout_s=settings.timeout_s, max_retries=settings.max_retries,
+        argument or "text-embedding-ada-002",
+        api_key=settings.openai_api_key,
+        base_url=settings.openai_base_url,
+        timeout_s=settings.timeout_s,
+        max_retries=settings.max_retries,
     )
 
 

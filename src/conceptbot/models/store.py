@@ -15,10 +15,11 @@ import importlib
 import importlib.util
 import json
 import os
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Any, BinaryIO, Callable, Iterator
+from typing import Any, BinaryIO
 
 from conceptbot.core.errors import ConfigError, ModelCorruptError, ModelNotInstalledError
 
@@ -60,7 +61,8 @@ def get_entry(name: str) -> ModelEntry:
     entries = catalogue()
     if name not in entries:
         raise ConfigError(
-            f"unknown model {name!r}", hint=f"known models: {', '.join(entries)} (see `conceptbot models list`)"
+            f"unknown model {name!r}",
+            hint=f"known models: {', '.join(entries)} (see `conceptbot models list`)",
         )
     return entries[name]
 
@@ -218,7 +220,8 @@ def verify(models_dir: Path, name: str, *, full: bool = False, progress: Progres
     fix = f"conceptbot models install {name} --force"
     if not path.is_file():
         raise ModelNotInstalledError(
-            f"model {name!r} is not installed (expected {path})", hint=f"run `conceptbot models install {name}`"
+            f"model {name!r} is not installed (expected {path})",
+            hint=f"run `conceptbot models install {name}`",
         )
     stat = path.stat()
     if stat.st_size != entry.size:
@@ -228,7 +231,11 @@ def verify(models_dir: Path, name: str, *, full: bool = False, progress: Progres
     if not full:
         try:
             stamp = json.loads(_stamp_path(path).read_text(encoding="utf-8"))
-            if (stamp["sha256"], stamp["size"], stamp["mtime_ns"]) == (entry.sha256, stat.st_size, stat.st_mtime_ns):
+            if (stamp["sha256"], stamp["size"], stamp["mtime_ns"]) == (
+                entry.sha256,
+                stat.st_size,
+                stat.st_mtime_ns,
+            ):
                 return path
         except (OSError, ValueError, KeyError):
             pass

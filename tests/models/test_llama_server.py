@@ -1,0 +1,96 @@
+"""The HTTP backend against a real OpenAI-compatible server: llama.cpp's server with SmolLM2 on loopback."""
+
+from __future__ import annotations
+
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from conceptbot.models.cache import CacheStore
+from conceptbot.models.cached import CachedLLM
+from conceptbot.models.llm import ChatRequest
+from conceptbot.models.openai_backend import OpenAILLM
+from conceptbot.models.structured import chat_json
+
+pytestmark = pytest.mark.slow
+
+
+def _free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+@pytest.fixture(scope="module")
+def server_url(smollm2_path: Path, tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+    port = _free_port()
+    log = tmp_path_factory.mktemp("server") / "server.log"
+    with open(log, "wb") as out:
+        proc = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "llama_cpp.server",
+                "--model",
+                str(smollm2_path),
+                "--model_alias",
+                "smollm2",
+                "--host",
+                "127.0.0.1",
+                "--port",
+                str(port),
+                "--n_ctx",
+                "1024",
+                "--verbose",
+                "false",
+            ],
+            stdout=out,
+            stderr=subprocess.STDOUT,
+        )
+    url = f"http://127.0.0.1:{port}/v1"
+    try:
+        deadline = time.time() + 120
+        while True:
+            try:
+                urllib.request.urlopen(url + "/models", timeout=2).read()
+                break
+            except OSError:
+                if proc.poll() is not None or time.time() > deadline:
+                    pytest.fail(f"llama_cpp.server did not start:\n{log.read_text()[-2000:]}")
+                time.sleep(0.5)
+        yield url
+    finally:
+        proc.terminate()
+        proc.wait(30)
+
+
+def test_chat_through_a_real_server(server_url: str) -> None:
+    llm = OpenAILLM("smollm2", backend="openai-compatible", base_url=server_url, timeout_s=60, max_retries=1)
+    response = llm.chat(ChatRequest.of("Name one fruit.", max_tokens=10))
+    assert response.text.strip()
+    assert response.usage.prompt_tokens > 0 and 0 < response.usage.completion_tokens <= 10
+
+
+def test_n_and_json_schema_through_a_real_server(server_url: str) -> None:
+    llm = OpenAILLM("smollm2", backend="openai-compatible", base_url=server_url, timeout_s=60, max_retries=1)
+    response = llm.chat(ChatRequest.of("Write a word.", n=2, temperature=1.0, max_tokens=6, seed=5))
+    assert len(response.choices) == 2
+    schema = {"type": "object", "properties": {"fruit": {"type": "string"}}, "required": ["fruit"]}
+    value, _ = chat_json(llm, ChatRequest.of("Name a fruit as JSON.", max_tokens=40), schema)
+    assert isinstance(value["fruit"], str)
+
+
+def test_cache_in_front_of_a_real_server(server_url: str, tmp_path: Path) -> None:
+    inner = OpenAILLM(
+        "smollm2", backend="openai-compatible", base_url=server_url, timeout_s=60, max_retries=1
+    )
+    llm = CachedLLM(inner, CacheStore(tmp_path / "cache.db"), module="test")
+    first = llm.chat(ChatRequest.of("Say yes.", max_tokens=4))
+    second = llm.chat(ChatRequest.of("Say yes.", max_tokens=4))
+    assert not first.cached and second.cached and first.text == second.text
