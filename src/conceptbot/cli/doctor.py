@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import ctypes
+import importlib
 import importlib.metadata
+import os
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -84,11 +88,27 @@ def check_knowledge(settings: Settings) -> Check:
     )
 
 
+def _import_silently(module: str) -> None:
+    """Import a module whose C code writes to the process's stdout/stderr (pybullet's build time)."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = [os.dup(1), os.dup(2)]
+    try:
+        with open(os.devnull, "wb") as devnull:
+            os.dup2(devnull.fileno(), 1)
+            os.dup2(devnull.fileno(), 2)
+            importlib.import_module(module)
+            ctypes.CDLL(None).fflush(None)  # C stdio buffers, or the text appears at exit
+    finally:
+        for fd, copy in zip((1, 2), saved, strict=True):
+            os.dup2(copy, fd)
+            os.close(copy)
+
+
 def check_pybullet() -> Check:
     """The simulator imports."""
     try:
-        import pybullet  # noqa: F401
-
+        _import_silently("pybullet")
         return Check("pybullet", True, f"pybullet {_version('pybullet')}")
     except Exception as exc:
         return Check("pybullet", False, f"cannot import pybullet ({exc})")

@@ -54,7 +54,9 @@ class SentenceTransformerEmbedder:
         source = str(path) if path is not None else self.model
         try:
             from sentence_transformers import SentenceTransformer
+            from transformers.utils import logging as hf_logging
 
+            hf_logging.disable_progress_bar()  # a weights-loading bar on every CLI call is noise
             self._model = SentenceTransformer(source, device="cpu")
         except Exception as exc:  # the library raises many types (OSError, ValueError, HF errors)
             raise BackendUnavailableError(
