@@ -80,15 +80,10 @@ def llm(
         if n > 1:
             click.secho(f"--- completion {i + 1}", dim=True)
         click.echo(choice.strip())
-    rate = (
-        f", {usage.completion_tokens / usage.latency_s:.1f} tok/s"
-        if usage.latency_s > 0 and not response.cached
-        else ""
-    )
     click.secho(
         f"[{response.backend}:{response.model}]"
         f" tokens: {usage.prompt_tokens} in, {usage.completion_tokens} out"
-        f" | {usage.latency_s:.2f} s{rate} | {'cached' if response.cached else 'fresh'}"
+        f" | {usage.latency_s:.2f} s | {'cached' if response.cached else 'fresh'}"
         f" | cost ${usage.cost_usd:.6f}",
         dim=True,
         err=True,
