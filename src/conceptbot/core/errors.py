@@ -59,3 +59,11 @@ class NotSupportedError(ConceptBotError):
 
 class FakeExhaustedError(ConceptBotError):
     """A fake backend was asked for more replies than were scripted (tests only)."""
+
+
+class KnowledgeUnavailableError(ConceptBotError):
+    """The knowledge graph is missing, corrupt or unreachable."""
+
+
+class ImportDataError(ConceptBotError):
+    """An importer could not read its input (missing file, wrong format)."""
