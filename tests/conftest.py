@@ -9,6 +9,8 @@ import pytest
 
 from conceptbot.core.config import Settings, load_settings
 
+pytest_plugins = ["tests.kg_sources"]
+
 _VARS = ("CONCEPTBOT_", "OPENAI_")
 
 

@@ -15,9 +15,13 @@ import pytest
 from conceptbot.models import store
 
 
-def run(*args: str, home: Path, check_exit: int | None = 0) -> subprocess.CompletedProcess[str]:
+def run(
+    *args: str, home: Path, check_exit: int | None = 0, extra_env: dict[str, str] | None = None
+) -> subprocess.CompletedProcess[str]:
+    """Run ``python -m conceptbot ARGS`` with an isolated home; check the exit code."""
     env = {k: v for k, v in os.environ.items() if not k.startswith(("CONCEPTBOT_", "OPENAI_"))}
     env["CONCEPTBOT_HOME"] = str(home)
+    env.update(extra_env or {})
     result = subprocess.run(
         [sys.executable, "-m", "conceptbot", *args], capture_output=True, text=True, env=env, timeout=600
     )

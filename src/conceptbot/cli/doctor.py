@@ -16,6 +16,8 @@ import click
 from conceptbot.cli.main import AppContext, pass_app
 from conceptbot.core.config import DEFAULT_EMBEDDER, DEFAULT_LLM, Settings
 from conceptbot.core.errors import ConceptBotError
+from conceptbot.knowledge.registry import create_graph
+from conceptbot.knowledge.sqlite_store import SQLiteGraph
 from conceptbot.models import store
 from conceptbot.models.registry import create_embedder, open_store, split_spec
 
@@ -78,14 +80,18 @@ def check_embedder(settings: Settings) -> Check:
 
 
 def check_knowledge(settings: Settings) -> Check:
-    """The knowledge graph database is present."""
-    path = settings.home / "kg" / "conceptnet.db"
-    if path.is_file():
-        return Check("knowledge graph", True, str(path))
-    # Until the knowledge layer lands (issue 3) a missing graph is a warning, not a failure.
-    return Check(
-        "knowledge graph", False, "not installed yet (arrives with `conceptbot kg install`)", required=False
-    )
+    """The configured knowledge graph opens and knows about a common object."""
+    try:
+        graph = create_graph(settings.kg, settings)
+        found = graph.edges("knife", limit=100)
+    except ConceptBotError as exc:
+        return Check("knowledge graph", False, str(exc).replace("\n", " "))
+    detail = f"{settings.kg}: 'knife' has {len(found.edges)} edges"
+    if isinstance(graph, SQLiteGraph):
+        stats = graph.stats()
+        per_source = ", ".join(f"{s['name']} {s['edges']:,}" for s in stats["sources"])
+        detail = f"{stats['edges']:,} edges ({per_source}); " + detail
+    return Check("knowledge graph", bool(found.edges), detail)
 
 
 def _import_silently(module: str) -> None:

@@ -41,18 +41,33 @@ pass_app = click.make_pass_decorator(AppContext)
     metavar="SPEC",
     help="Embedder backend, e.g. sentence-transformers:all-MiniLM-L6-v2, openai:text-embedding-ada-002.",
 )
+@click.option(
+    "--kg",
+    metavar="SPEC",
+    help="Knowledge graph: sqlite (default), conceptnet-api[:URL], conceptnet-api-cache.",
+)
 @click.option("--no-cache", is_flag=True, help="Neither read nor write the LLM and embedding caches.")
 @click.pass_context
-def cli(ctx: click.Context, home: Path | None, llm: str | None, embedder: str | None, no_cache: bool) -> None:
+def cli(
+    ctx: click.Context,
+    home: Path | None,
+    llm: str | None,
+    embedder: str | None,
+    kg: str | None,
+    no_cache: bool,
+) -> None:
     """ConceptBot: turn a request to a robot into a safe, feasible plan, grounded in ConceptNet."""
-    settings = load_settings(home=home, llm=llm, embedder=embedder, use_cache=False if no_cache else None)
+    settings = load_settings(
+        home=home, llm=llm, embedder=embedder, kg=kg, use_cache=False if no_cache else None
+    )
     ctx.obj = AppContext(settings=settings)
 
 
 def _register() -> None:
-    from conceptbot.cli import doctor, llm_cmd, models_cmd
+    from conceptbot.cli import doctor, kg_cmd, llm_cmd, models_cmd
 
     cli.add_command(models_cmd.models)
+    cli.add_command(kg_cmd.kg)
     cli.add_command(llm_cmd.llm)
     cli.add_command(doctor.doctor)
 

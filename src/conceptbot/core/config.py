@@ -18,6 +18,10 @@ Environment variables:
     CONCEPTBOT_MAX_RETRIES bounded retries for HTTP backends (default 3, exponential backoff)
     CONCEPTBOT_THREADS     CPU threads for the embedded LLM (default: all cores)
     CONCEPTBOT_N_CTX       context window of the embedded LLM (default 4096)
+    CONCEPTBOT_KG          knowledge graph: ``sqlite`` (default, offline), ``conceptnet-api[:URL]``,
+                           ``conceptnet-api-cache`` (the API's local cache only, no network)
+    CONCEPTBOT_KG_FALLBACK ``1``/``0``: ask Wikipedia when the graph knows too little (default 1)
+    CONCEPTBOT_WIKIPEDIA_URL  MediaWiki API of the fallback (default English Wikipedia)
 """
 
 from __future__ import annotations
@@ -53,6 +57,9 @@ class Settings:
         max_retries: Retries after a failed HTTP request (exponential backoff).
         n_threads: CPU threads for the embedded LLM (None: all cores).
         n_ctx: Context window of the embedded LLM in tokens.
+        kg: Knowledge graph backend spec.
+        kg_fallback: Whether the Wikipedia fallback is consulted.
+        wikipedia_url: MediaWiki API endpoint of the fallback.
     """
 
     home: Path
@@ -66,6 +73,9 @@ class Settings:
     max_retries: int = 3
     n_threads: int | None = None
     n_ctx: int = 4096
+    kg: str = "sqlite"
+    kg_fallback: bool = True
+    wikipedia_url: str = "https://en.wikipedia.org/w/api.php"
 
     @property
     def models_dir(self) -> Path:
@@ -76,6 +86,11 @@ class Settings:
     def cache_db(self) -> Path:
         """The SQLite file holding LLM/embedding caches and the call log."""
         return self.home / "cache.db"
+
+    @property
+    def kg_path(self) -> Path:
+        """The SQLite knowledge graph."""
+        return self.home / "kg" / "conceptnet.db"
 
     @property
     def config_file(self) -> Path:
@@ -97,6 +112,9 @@ _ENV: dict[str, tuple[str, type]] = {
     "CONCEPTBOT_MAX_RETRIES": ("max_retries", int),
     "CONCEPTBOT_THREADS": ("n_threads", int),
     "CONCEPTBOT_N_CTX": ("n_ctx", int),
+    "CONCEPTBOT_KG": ("kg", str),
+    "CONCEPTBOT_KG_FALLBACK": ("kg_fallback", bool),
+    "CONCEPTBOT_WIKIPEDIA_URL": ("wikipedia_url", str),
 }
 
 
@@ -109,6 +127,11 @@ def default_home(env: Mapping[str, str] | None = None) -> Path:
 
 
 def _coerce(name: str, value: Any, kind: type, origin: str) -> Any:
+    if kind is bool and isinstance(value, str):
+        lowered = value.strip().lower()
+        if lowered not in ("1", "0", "true", "false", "yes", "no", "on", "off"):
+            raise ConfigError(f"{origin}: {name} must be 1/0 or true/false, got {value!r}")
+        return lowered in ("1", "true", "yes", "on")
     try:
         return kind(value)
     except (TypeError, ValueError):

