@@ -23,8 +23,8 @@ OMCS_LINES = [
 # WordNet 3.0 format: offset lex_filenum ss_type w_cnt(hex) word lex_id ... p_cnt ptr... | gloss
 WN_DATA = [
     "  1 This software and database is being provided to you, the LICENSEE, by  ",
-    "00000001 06 n 01 knife 0 002 @ 00000002 n 0000 %p 00000003 n 0000 | edge tool used as a cutting instrument; "
-    '"he cut it with a knife"  ',
+    "00000001 06 n 01 knife 0 002 @ 00000002 n 0000 %p 00000003 n 0000 | "
+    'edge tool used as a cutting instrument; "he cut it with a knife"  ',
     "00000002 06 n 02 edge_tool 0 cutter 0 000 | any cutting tool with a sharp cutting edge  ",
     "00000003 06 n 01 blade 0 001 @ 00000002 n 0000 | the flat part of a knife  ",
     "00000004 13 n 01 hollandaise 0 001 @ 00000005 n 0000 | eggs and butter with lemon juice  ",

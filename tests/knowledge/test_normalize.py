@@ -1,7 +1,7 @@
 import pytest
 
 from conceptbot.knowledge.base import Edge
-from conceptbot.knowledge.normalize import candidates, lookup, normalize, singular
+from conceptbot.knowledge.normalize import candidates, lookup, modifiers, normalize, singular
 
 
 @pytest.mark.parametrize(
@@ -78,3 +78,18 @@ def test_lookup_modifier_only_and_nothing() -> None:
     assert (result.matched, result.match) == ("aluminum", "modifier")
     empty = lookup("zzyzx", fetch, None, 10)
     assert (empty.matched, empty.match, empty.edges, bool(empty)) == (None, "none", (), False)
+
+
+def test_compound_modifiers_are_tried_whole_first() -> None:
+    assert modifiers("Black Widow Spider") == ["black widow", "black", "widow"]
+    assert modifiers("ceramic bowl") == ["ceramic"]
+    fetch = _fetcher(
+        {
+            "spider": _edges("spider", 10),
+            "black widow": _edges("black widow", 10),
+            "black": _edges("black", 10),
+        }
+    )
+    result = lookup("Black Widow Spider", fetch, None, 10)
+    assert result.matched == "spider + black widow"
+    assert {e.head for e in result.edges} == {"spider", "black widow"}

@@ -10,7 +10,8 @@ Hellebore" -> "green hellebore").
 2. ``lemma``  the phrase with its last word singularised ("ceramic bowls" -> "ceramic bowl");
 3. ``head``   the head noun, i.e. the last word, singularised ("ceramic bowl" -> "bowl"); the
               modifiers ("ceramic") then fill up to half of the limit with their own edges, so a
-              material or colour is not lost (``head+modifier``);
+              material or colour is not lost (``head+modifier``); a multi-word modifier phrase is
+              tried whole before its words ("death cap mushroom" -> "death cap", then "death");
 4. ``modifier`` only the modifiers, when the head noun is unknown.
 
 English compounds put the head noun last, which is why the last word is the head.
@@ -143,9 +144,11 @@ def candidates(text: str) -> list[tuple[str, str]]:
 
 
 def modifiers(text: str) -> list[str]:
-    """The words before the head noun ("green hellebore" -> ["green"])."""
-    words = normalize(text).split(" ")
-    return [w for w in words[:-1] if w not in ("of", "and", "with", "for")]
+    """The modifiers before the head noun: the whole modifier phrase first when it has several
+    words (a compound such as "black widow" or "death cap" names a concept of its own), then each
+    word ("black widow spider" -> ["black widow", "black", "widow"])."""
+    words = [w for w in normalize(text).split(" ")[:-1] if w not in ("of", "and", "with", "for")]
+    return ([" ".join(words)] if len(words) > 1 else []) + words
 
 
 def lookup(text: str, fetch: Fetch, relations: Sequence[str] | None, limit: int) -> ConceptEdges:
