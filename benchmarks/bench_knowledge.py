@@ -87,10 +87,24 @@ def _word(rng: random.Random) -> str:
     return "".join(rng.choice(syllables) for _ in range(rng.randint(2, 4)))
 
 
+def _base36(n: int) -> str:
+    digits = "0123456789abcdefghijklmnopqrstuvwxyz"
+    out = ""
+    while True:
+        n, rem = divmod(n, 36)
+        out = digits[rem] + out
+        if n == 0:
+            return out
+
+
 def generate_dump(path: Path, lines: int, english_share: float = 0.1, seed: int = 1) -> None:
     """Write a ConceptNet 5.7 assertions dump in the exact format (gzip, via a `gzip -1` child)."""
     rng = random.Random(seed)
-    english = [_word(rng) + ("_" + _word(rng) if rng.random() < 0.3 else "") for _ in range(1_200_000)]
+    # 1.5M distinct English concepts (the real dump has about that many): random syllables plus a
+    # base-36 serial keep them unique; 30% are two-word phrases like "ice_cream".
+    english = [
+        _word(rng) + ("_" + _word(rng) if rng.random() < 0.3 else "") + _base36(i) for i in range(1_500_000)
+    ]
     foreign = [_word(rng) for _ in range(200_000)]
     tmp = path.with_suffix(".partial")
     with open(tmp, "wb") as out:
@@ -100,7 +114,8 @@ def generate_dump(path: Path, lines: int, english_share: float = 0.1, seed: int 
         for _i in range(lines):
             rel = rng.choice(RELATIONS)
             if rng.random() < english_share:
-                start = f"/c/en/{english[int(rng.paretovariate(1.2)) % len(english)]}"
+                # Heads are Zipf-like (a few concepts have thousands of edges), tails uniform.
+                start = f"/c/en/{english[int(len(english) * rng.random() ** 3)]}"
                 end = f"/c/en/{english[rng.randrange(len(english))]}"
                 if rng.random() < 0.4:
                     start += "/n"
@@ -143,7 +158,7 @@ def _import_child(dump: str, db: str, queue: multiprocessing.Queue) -> None:
 
 def bench_import(work: Path, lines: int) -> dict[str, float]:
     work.mkdir(parents=True, exist_ok=True)
-    dump = work / f"conceptnet-assertions-synthetic-{lines}.csv.gz"
+    dump = work / f"conceptnet-assertions-synthetic-v2-{lines}.csv.gz"
     if not dump.is_file():
         print(f"generating {lines:,}-line dump at {dump} (once) ...", flush=True)
         started = time.perf_counter()
