@@ -140,12 +140,20 @@ def test_doctor_fails_when_the_default_model_is_missing(isolated_home: Path) -> 
 
 
 @pytest.mark.slow
-def test_doctor_is_green_with_a_real_model_and_embedder(isolated_home: Path, smollm2_path: Path) -> None:
+def test_doctor_is_green_with_a_real_model_and_embedder(
+    isolated_home: Path, smollm2_path: Path, omcs_file: Path, wordnet_dir: Path
+) -> None:
     entry = store.get_entry("smollm2-135m")
     (isolated_home / "models").mkdir(parents=True)
     shutil.copy(smollm2_path, isolated_home / "models" / entry.filename)
+    assert (
+        "[FAIL] knowledge graph"
+        in run("--embedder", "fake", "doctor", home=isolated_home, check_exit=1).stdout
+    )
+    run("kg", "install", "--file", str(omcs_file), "--wordnet-dir", str(wordnet_dir), home=isolated_home)
     result = run("--llm", "llamacpp:smollm2-135m", "doctor", home=isolated_home)
     assert "[ok  ] model smollm2-135m: sha256 ok" in result.stdout
+    assert "[ok  ] knowledge graph" in result.stdout and "omcs" in result.stdout
     assert "[ok  ] embedder" in result.stdout and "dim 384" in result.stdout
     assert "[FAIL]" not in result.stdout
     answer = run(
