@@ -64,12 +64,14 @@ def cli(
 
 
 def _register() -> None:
-    from conceptbot.cli import doctor, kg_cmd, llm_cmd, models_cmd
+    from conceptbot.cli import calibrate_cmd, doctor, kg_cmd, llm_cmd, models_cmd, plan_cmd
 
     cli.add_command(models_cmd.models)
     cli.add_command(kg_cmd.kg)
     cli.add_command(llm_cmd.llm)
     cli.add_command(doctor.doctor)
+    cli.add_command(calibrate_cmd.calibrate)
+    cli.add_command(plan_cmd.plan)
 
 
 _register()

@@ -132,6 +132,23 @@ class CacheStore:
                 ),
             )
 
+    # -- derived values (e.g. OPE properties per object, mode, model and graph version) ---------
+    def get_value(self, namespace: str, key: str) -> Any | None:
+        """A cached JSON value, or None."""
+        with self._lock:
+            row = self._conn.execute(
+                "SELECT value FROM value_cache WHERE namespace = ? AND key = ?", (namespace, key)
+            ).fetchone()
+        return None if row is None else json.loads(row[0])
+
+    def put_value(self, namespace: str, key: str, value: Any) -> None:
+        """Store a JSON value (last writer wins)."""
+        with self._lock:
+            self._conn.execute(
+                "INSERT OR REPLACE INTO value_cache VALUES (?, ?, ?, ?)",
+                (namespace, key, json.dumps(value, ensure_ascii=False), time.time()),
+            )
+
     # -- embeddings -----------------------------------------------------------------------------
     def get_embeddings(self, model: str, texts: Iterable[str]) -> dict[str, np.ndarray]:
         """Cached vectors for those of ``texts`` that have one."""

@@ -45,4 +45,17 @@ MIGRATIONS: list[tuple[int, str, str]] = [
         CREATE INDEX calls_ts ON calls (ts);
         """,
     ),
+    (
+        2,
+        "values",
+        """
+        CREATE TABLE value_cache (
+            namespace TEXT NOT NULL,       -- e.g. 'ope-properties'
+            key TEXT NOT NULL,             -- sha256 of what the value depends on
+            value TEXT NOT NULL,           -- JSON
+            created_at REAL NOT NULL,
+            PRIMARY KEY (namespace, key)
+        );
+        """,
+    ),
 ]

@@ -1,0 +1,151 @@
+"""``conceptbot plan``: plan a request in a scene and show why."""
+
+from __future__ import annotations
+
+import json
+
+import click
+from rich.console import Console
+from rich.table import Table
+
+from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.core.plan import Plan
+from conceptbot.pipeline.conceptbot import CONFIGS
+from conceptbot.pipeline.factory import build_conceptbot
+from conceptbot.pipeline.planner import METHODS
+from conceptbot.scenes import resolve_scene
+
+
+@click.command("plan")
+@click.argument("request")
+@click.option(
+    "--scene",
+    "-s",
+    "scene_ref",
+    default="kitchen",
+    show_default=True,
+    help="A scene file (JSON) or a demo scene name (see `conceptbot scenes`).",
+)
+@click.option(
+    "--config",
+    "-c",
+    type=click.Choice(CONFIGS),
+    default="conceptbot",
+    show_default=True,
+    help="System: conceptbot (URP&OPE), urp, ope, nokg (no graph relations).",
+)
+@click.option("--risk", is_flag=True, help="Use the Risk Index (danger 1-5, DangerousWith) in OPE.")
+@click.option(
+    "--method",
+    type=click.Choice(METHODS),
+    default="auto",
+    show_default=True,
+    help="Planner LLM score: logprob (one pass) or vote (n completions); auto picks by backend.",
+)
+@click.option(
+    "-n", "n", default=5, show_default=True, type=click.IntRange(1, 20), help="Completions for vote."
+)
+@click.option("--theta", type=click.FloatRange(-1.0, 1.0), help="Cosine threshold (default: per embedder).")
+@click.option("--fallback/--no-fallback", default=None, help="Wikipedia fallback (default: settings).")
+@click.option("--json", "as_json", is_flag=True, help="Print the plan as one JSON object.")
+@pass_app
+def plan(
+    app: AppContext,
+    request: str,
+    scene_ref: str,
+    config: str,
+    risk: bool,
+    method: str,
+    n: int,
+    theta: float | None,
+    fallback: bool | None,
+    as_json: bool,
+) -> None:
+    """Plan REQUEST in a scene; print properties, relations, reasoning, step scores and the plan."""
+    scene = resolve_scene(scene_ref)
+    bot = build_conceptbot(app.settings, config, theta=theta, planner_method=method, n=n, fallback=fallback)
+    result = bot.plan(request, scene, risk=risk)
+    if as_json:
+        click.echo(json.dumps(result.to_dict(), indent=2, ensure_ascii=False))
+        return
+    show(result, Console())
+
+
+def show(result: Plan, console: Console) -> None:
+    """The readable trace of a plan."""
+    trace = result.trace
+    console.print(
+        f"[bold]Request:[/bold] {trace['request']}   [dim](scene {trace['scene']}, {trace['config']})[/dim]"
+    )
+    ope = trace.get("ope")
+    if ope:
+        console.print(f"\n[bold]Object properties[/bold] (OPE, {ope['mode']}: {ope['why']})")
+        objects = ope["objects"]
+        keys = [k for k in next(iter(objects.values()))["values"] if k != "object"] if objects else []
+        table = Table("object", *keys, "cached")
+        for name, info in objects.items():
+            values = info["values"]
+            cells = []
+            for key in keys:
+                value = values.get(key)
+                if isinstance(value, list):
+                    value = ", ".join(
+                        f"{v['object']} ({v['score']})" if isinstance(v, dict) else str(v) for v in value
+                    )
+                cells.append(str(value)[:60])
+            table.add_row(name, *cells, "yes" if info["cached"] else "")
+        console.print(table)
+        _relations(console, "Kept relations per object (similarity, source)", ope["retrieval"])
+    urp = trace.get("urp")
+    if urp:
+        console.print(f"\n[bold]Request keywords:[/bold] {', '.join(urp['keywords']) or '(none)'}")
+        _relations(console, "Kept relations of the keywords (vs the request)", urp["keyword_relations"])
+        console.print(f"\n[bold]Reasoning (URP):[/bold] {urp['reasoning']}")
+        console.print(f"[bold]Commands:[/bold] {', '.join(urp['commands']) or '(none)'}")
+        for rejected in urp["rejected_commands"]:
+            console.print(f"  [yellow]rejected:[/yellow] {rejected}")
+    for step in result.steps:
+        table = Table(
+            "action", "S_LLM", "S_aff", "combined", "factors", title=f"Step {step.index} ({step.method})"
+        )
+        for c in step.candidates:
+            mark = "[bold green]" if c.action == step.chosen else ""
+            factors = " ".join(f"{k}={v:.2f}" for k, v in c.factors.items())
+            table.add_row(
+                f"{mark}{c.action}", f"{c.llm:.3f}", f"{c.affordance:.2f}", f"{c.combined:.3f}", factors
+            )
+        console.print(table)
+        for rejected in step.rejected:
+            console.print(f"  [yellow]rejected LLM output:[/yellow] {rejected}")
+    if result.refused:
+        console.print(f"\n[bold red]Refused:[/bold red] {result.reason}")
+    console.print("\n[bold]Plan:[/bold]")
+    for i, action in enumerate(result.actions, 1):
+        console.print(f"  {i}. {action}")
+    table = Table("module", "time (s)", "tokens in", "tokens out", "LLM calls", "cost (USD)", title="Usage")
+    for module, usage in result.usage.items():
+        table.add_row(
+            module,
+            f"{usage.latency_s:.2f}",
+            str(usage.prompt_tokens),
+            str(usage.completion_tokens),
+            str(usage.calls),
+            f"{usage.cost_usd:.6f}",
+        )
+    console.print(table)
+
+
+def _relations(console: Console, title: str, retrievals: dict, per_concept: int = 5) -> None:
+    lines = []
+    for name, info in retrievals.items():
+        kept = [e for e in info["edges"] if e["kept"]]
+        kept.sort(key=lambda e: -e["similarity"])
+        shown = "; ".join(
+            f"{e['relation']} ({e['similarity']:.2f}, {e['source']})" for e in kept[:per_concept]
+        )
+        note = f" [dim]{'; '.join(info['notes'])}[/dim]" if info["notes"] else ""
+        lines.append(f"  {name} [{info['match']}: {info['matched']}] {len(kept)} kept: {shown or '-'}{note}")
+    if lines:
+        console.print(f"\n[bold]{title}[/bold]")
+        for line in lines:
+            console.print(line)

@@ -1,0 +1,166 @@
+"""Actions, plans and the trace that explains them.
+
+Actions are written as the paper writes them: ``pick_and_place(object, destination)`` and
+``done()``. :func:`parse_action` reads one from text and checks it against a scene, so an object
+that is not in the scene, a self-placement or a malformed command never reaches a plan.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from typing import Any
+
+from conceptbot.core.scene import Scene
+from conceptbot.core.usage import Usage
+
+DONE = "done()"
+_PICK = re.compile(r"pick_and_place\s*\(\s*([^,()]+?)\s*,\s*([^,()]+?)\s*\)", re.IGNORECASE)
+_DONE = re.compile(r"done\s*\(\s*\)", re.IGNORECASE)
+
+
+@dataclass(frozen=True)
+class Action:
+    """``pick_and_place(obj, target)`` or ``done()`` (obj and target None)."""
+
+    obj: str | None = None
+    target: str | None = None
+
+    @property
+    def is_done(self) -> bool:
+        """True for ``done()``."""
+        return self.obj is None
+
+    def __str__(self) -> str:
+        return DONE if self.obj is None else f"pick_and_place({self.obj}, {self.target})"
+
+
+class InvalidActionError(ValueError):
+    """Text that is not a valid action in the scene; the message says why."""
+
+
+def _clean(name: str) -> str:
+    return name.strip().strip("'\"`").strip()
+
+
+def parse_action(text: str, scene: Scene) -> Action:
+    """The first action in ``text``, with names mapped to the scene's exact spelling.
+
+    Raises:
+        InvalidActionError: No action, an unknown object, a non-pickable object, a target that is not a
+            destination, or an object placed on itself.
+    """
+    pick = _PICK.search(text)
+    done = _DONE.search(text)
+    if pick is None and done is None:
+        raise InvalidActionError(f"not an action: {text.strip()[:80]!r}")
+    if pick is None or (done is not None and done.start() < pick.start()):
+        return Action()
+    obj_name, target_name = _clean(pick.group(1)), _clean(pick.group(2))
+    obj, target = scene.get(obj_name), scene.get(target_name)
+    if obj is None:
+        raise InvalidActionError(f"object not in the scene: {obj_name!r}")
+    if target is None:
+        raise InvalidActionError(f"destination not in the scene: {target_name!r}")
+    if not obj.pickable:
+        raise InvalidActionError(f"{obj.name!r} cannot be picked")
+    if not target.destination:
+        raise InvalidActionError(f"{target.name!r} is not a destination")
+    if obj.name == target.name:
+        raise InvalidActionError(f"cannot place {obj.name!r} on itself")
+    return Action(obj.name, target.name)
+
+
+def valid_actions(scene: Scene, include_done: bool = True) -> list[Action]:
+    """Every valid ``pick_and_place`` in the scene (no self-placement), then ``done()``."""
+    actions = [Action(o, d) for o in scene.pickable for d in scene.destinations if o != d]
+    return [*actions, Action()] if include_done else actions
+
+
+@dataclass(frozen=True)
+class CandidateScore:
+    """One candidate's scores at one step.
+
+    Attributes:
+        action: The action text.
+        llm: S_LLM (normalised over the candidates).
+        affordance: S_aff = S_pick * S_place * S_bbox * S_prop.
+        combined: S_LLM * S_aff.
+        factors: The affordance factors by name, for the trace.
+    """
+
+    action: str
+    llm: float
+    affordance: float
+    combined: float
+    factors: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Step:
+    """One planner step: the chosen action, the best candidates, and rejected LLM outputs."""
+
+    index: int
+    chosen: str
+    candidates: tuple[CandidateScore, ...]
+    rejected: tuple[str, ...] = ()
+    method: str = "logprob"
+
+
+@dataclass
+class Plan:
+    """A plan with everything needed to explain it.
+
+    Attributes:
+        actions: The action texts, ending with ``done()``.
+        steps: Per-step scores.
+        refused: True when the planner judged the request unsafe.
+        reason: Why it refused (or None).
+        trace: Everything retrieved and decided on the way (JSON-able).
+        usage: Per-module tokens, time and cost.
+    """
+
+    actions: list[str]
+    steps: list[Step] = field(default_factory=list)
+    refused: bool = False
+    reason: str | None = None
+    trace: dict[str, Any] = field(default_factory=dict)
+    usage: dict[str, Usage] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON contract of ``conceptbot plan --json``."""
+        return {
+            "plan": list(self.actions),
+            "steps": [
+                {
+                    "index": s.index,
+                    "chosen": s.chosen,
+                    "method": s.method,
+                    "rejected": list(s.rejected),
+                    "candidates": [
+                        {
+                            "action": c.action,
+                            "llm": round(c.llm, 4),
+                            "affordance": round(c.affordance, 4),
+                            "combined": round(c.combined, 4),
+                            "factors": {k: round(v, 4) for k, v in c.factors.items()},
+                        }
+                        for c in s.candidates
+                    ],
+                }
+                for s in self.steps
+            ],
+            "refused": self.refused,
+            "reason": self.reason,
+            "trace": self.trace,
+            "usage": {
+                module: {
+                    "prompt_tokens": u.prompt_tokens,
+                    "completion_tokens": u.completion_tokens,
+                    "latency_s": round(u.latency_s, 3),
+                    "cost_usd": u.cost_usd,
+                    "calls": u.calls,
+                }
+                for module, u in self.usage.items()
+            },
+        }

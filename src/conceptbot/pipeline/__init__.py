@@ -1,0 +1,1 @@
+"""The ConceptBot pipeline: relation retrieval and filtering, calibration."""

@@ -1,0 +1,109 @@
+"""Affordance score (paper III-C): S_aff = S_pick * S_place * S_bbox * S_prop.
+
+* S_pick, S_place: detection confidences of the object and the destination (1.0 when unknown).
+* S_bbox: the object's grasp width (the narrower horizontal side of ``size_m``, or of the pixel box
+  at ``PX_PER_M``) against the gripper opening: 1 up to 75% of the opening, falling linearly to 0.5
+  at the full opening; wider objects can only be grasped by a rim or edge: 0.5 * opening / width,
+  never below 0.1. Unknown size: 1.
+* S_prop: penalties from OPE. Yes/No properties are fixed: fragile x0.8, dangerous x0.7 (x0.4 when
+  handed to a person). Risk scores are scaled: danger d -> x(1 - 0.12 (d - 1)); an interaction score
+  s between the object and the destination -> x(1 - 0.2 (s - 1)).
+* An action already executed scores 0 (the object is already there); ``done()`` scores 1.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from conceptbot.core.plan import Action
+from conceptbot.core.scene import Scene, SceneObject
+from conceptbot.pipeline import modes
+from conceptbot.pipeline.ope import ObjectProperties
+
+PX_PER_M = 800.0  # a 640x480 camera about 1 m above the table sees roughly 0.8 m across
+PEOPLE = ("user", "child", "person", "human", "son", "daughter", "kid", "baby")
+
+
+@dataclass(frozen=True)
+class Gripper:
+    """The gripper's maximum opening in metres (Franka Panda: 0.08)."""
+
+    opening_m: float = 0.08
+
+
+def grasp_width(obj: SceneObject) -> float | None:
+    """The object's narrower horizontal side in metres, or None when unknown."""
+    if obj.size_m is not None:
+        return min(obj.size_m[0], obj.size_m[1])
+    if obj.bbox_px is not None:
+        x0, y0, x1, y1 = obj.bbox_px
+        return min(abs(x1 - x0), abs(y1 - y0)) / PX_PER_M
+    return None
+
+
+def bbox_score(obj: SceneObject, gripper: Gripper) -> float:
+    """S_bbox (see the module docstring)."""
+    width = grasp_width(obj)
+    if width is None or width <= 0:
+        return 1.0
+    ratio = width / gripper.opening_m
+    if ratio <= 0.75:
+        return 1.0
+    if ratio <= 1.0:
+        return 1.0 - 2.0 * (ratio - 0.75)
+    return max(0.1, 0.5 / ratio)
+
+
+def property_score(obj: str, target: str, properties: dict[str, ObjectProperties]) -> float:
+    """S_prop (see the module docstring)."""
+    found = properties.get(obj)
+    if found is None:
+        return 1.0
+    values = found.values
+    score = 1.0
+    to_person = target.lower() in PEOPLE
+    if found.mode == modes.RISK:
+        danger = int(values.get("dangerous", 1))
+        score *= 1.0 - 0.12 * (danger - 1)
+        for item in values.get("dangerous_with", []):
+            if item["object"] == target:
+                score *= 1.0 - 0.2 * (int(item["score"]) - 1)
+        # Interactions are judged from both sides: the destination may name the object.
+        partner = properties.get(target)
+        if partner is not None and partner.mode == modes.RISK:
+            for item in partner.values.get("dangerous_with", []):
+                if item["object"] == obj:
+                    score *= 1.0 - 0.2 * (int(item["score"]) - 1)
+    elif found.mode == modes.PROPERTIES:
+        if values.get("fragile") == "Yes":
+            score *= 0.8
+        if values.get("dangerous") == "Yes":
+            score *= 0.4 if to_person else 0.7
+    return max(score, 0.0)
+
+
+def affordance(
+    action: Action,
+    scene: Scene,
+    properties: dict[str, ObjectProperties],
+    executed: list[str],
+    gripper: Gripper | None = None,
+) -> tuple[float, dict[str, float]]:
+    """``(S_aff, factors)`` for one candidate action."""
+    if action.is_done:
+        return 1.0, {}
+    assert action.obj is not None and action.target is not None
+    if str(action) in executed:
+        return 0.0, {"repeat": 0.0}
+    obj, target = scene.get(action.obj), scene.get(action.target)
+    assert obj is not None and target is not None
+    factors = {
+        "pick": obj.confidence,
+        "place": target.confidence,
+        "bbox": bbox_score(obj, gripper or Gripper()),
+        "prop": property_score(action.obj, action.target, properties),
+    }
+    total = 1.0
+    for value in factors.values():
+        total *= value
+    return total, factors

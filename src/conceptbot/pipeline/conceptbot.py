@@ -1,0 +1,172 @@
+"""ConceptBot composed: OPE -> URP -> Planner, with the paper's ablations.
+
+Configurations:
+
+* ``conceptbot`` — URP & OPE: object properties, request interpretation, both with graph relations.
+* ``urp``        — URP only: the planner gets URP's commands but no object properties.
+* ``ope``        — OPE only: the planner gets object properties but no URP.
+* ``nokg``       — the full pipeline with no knowledge-graph relations anywhere.
+
+A refusal from URP (an unsafe request) makes the plan just ``done()`` with ``refused: true``.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Any
+
+from conceptbot.core.plan import Plan
+from conceptbot.core.scene import Scene
+from conceptbot.core.usage import Usage
+from conceptbot.models.cache import CacheStore
+from conceptbot.models.llm import LLM
+from conceptbot.pipeline import modes
+from conceptbot.pipeline.ope import ObjectPropertiesExtractor
+from conceptbot.pipeline.planner import Planner
+from conceptbot.pipeline.retrieval import RelationRetriever, Retrieval, edge_text
+from conceptbot.pipeline.urp import URPResult, UserRequestProcessor
+
+CONFIGS = ("conceptbot", "urp", "ope", "nokg")
+
+
+@dataclass(frozen=True)
+class ConfigSwitches:
+    """Which parts a configuration uses."""
+
+    ope: bool
+    urp: bool
+    knowledge: bool
+
+
+SWITCHES = {
+    "conceptbot": ConfigSwitches(ope=True, urp=True, knowledge=True),
+    "urp": ConfigSwitches(ope=False, urp=True, knowledge=True),
+    "ope": ConfigSwitches(ope=True, urp=False, knowledge=True),
+    "nokg": ConfigSwitches(ope=True, urp=True, knowledge=False),
+}
+
+
+def _retrieval_trace(retrievals: dict[str, Retrieval]) -> dict[str, Any]:
+    return {
+        name: {
+            "matched": r.matched,
+            "match": r.match,
+            "notes": list(r.notes),
+            "edges": [
+                {
+                    "relation": edge_text(s.edge),
+                    "source": s.edge.source,
+                    "similarity": round(s.similarity, 4),
+                    "target": s.target,
+                    "kept": s.kept,
+                }
+                for s in r.edges
+            ],
+        }
+        for name, r in retrievals.items()
+    }
+
+
+def guidance_from(urp: URPResult) -> str:
+    """What the planner is told about URP's interpretation."""
+    if not urp.commands:
+        return f"Analysis: {urp.reasoning}\nThe analysis found nothing to move."
+    steps = " ".join(f"{i}. {c};" for i, c in enumerate(urp.commands, 1))
+    return f"Analysis: {urp.reasoning}\nPlan from the analysis: {steps}"
+
+
+class ConceptBot:
+    """The planner system of the paper.
+
+    Args:
+        llm: The LLM behind the cache/log (its ``with_module`` labels calls by module, if present).
+        retriever: Relation retrieval (graph + embedder + theta).
+        config: One of :data:`CONFIGS`.
+        store: Cache database for OPE results, or None.
+        graph_version: Identifies the graph's contents in OPE cache keys.
+        planner_method: ``auto``, ``logprob`` or ``vote``.
+        n: Completions per step for ``vote``.
+    """
+
+    def __init__(
+        self,
+        llm: LLM,
+        retriever: RelationRetriever | None,
+        config: str = "conceptbot",
+        store: CacheStore | None = None,
+        graph_version: str = "",
+        planner_method: str = "auto",
+        n: int = 5,
+    ) -> None:
+        if config not in SWITCHES:
+            raise ValueError(f"config must be one of {CONFIGS}")
+        self.config = config
+        self.switches = SWITCHES[config]
+        retriever = retriever if self.switches.knowledge else None
+        module = getattr(llm, "with_module", None)
+        self._llm_for = (lambda name: module(name)) if module else (lambda name: llm)
+        self.ope = ObjectPropertiesExtractor(self._llm_for("ope"), retriever, store, graph_version)
+        self.urp = UserRequestProcessor(self._llm_for("urp"), retriever)
+        self.planner = Planner(self._llm_for("planner"), method=planner_method, n=n)
+
+    def plan(self, request: str, scene: Scene, risk: bool = False) -> Plan:
+        """Plan ``request`` in ``scene``.
+
+        Args:
+            request: What the person said.
+            scene: What the robot sees.
+            risk: Force the Risk Index variant of OPE.
+        """
+        started = time.perf_counter()
+        if not request.strip():
+            raise ValueError("the request is empty")
+        trace: dict[str, Any] = {"config": self.config, "request": request, "scene": scene.name}
+        usage: dict[str, Usage] = {}
+        properties = {}
+        mode, why = modes.choose_mode(request, scene.names, force_risk=risk)
+        if self.switches.ope:
+            properties, retrievals, usage["ope"] = self.ope.run(scene.names, mode, request)
+            trace["ope"] = {
+                "mode": mode,
+                "why": why,
+                "objects": {
+                    n: {"values": p.values, "cached": p.cached, "relations_used": p.relations}
+                    for n, p in properties.items()
+                },
+                "retrieval": _retrieval_trace(retrievals),
+            }
+        guidance = ""
+        if self.switches.urp:
+            urp, usage["urp"] = self.urp.run(request, scene, properties)
+            trace["urp"] = {
+                "keywords": urp.keywords,
+                "keyword_relations": _retrieval_trace(urp.keyword_retrievals),
+                "object_relations": _retrieval_trace(urp.object_retrievals),
+                "reasoning": urp.reasoning,
+                "commands": urp.commands,
+                "rejected_commands": urp.rejected_commands,
+                "refused": urp.refused,
+                "refusal_reason": urp.refusal_reason,
+            }
+            if urp.refused:
+                usage["total"] = _total(usage, started)
+                return Plan(["done()"], [], True, urp.refusal_reason or "judged unsafe", trace, usage)
+            guidance = guidance_from(urp)
+        steps, actions, usage["planner"] = self.planner.plan(request, scene, properties, guidance)
+        trace["planner"] = {"method": self.planner.method, "steps": len(steps)}
+        usage["total"] = _total(usage, started)
+        return Plan(actions, steps, False, None, trace, usage)
+
+
+def _total(usage: dict[str, Usage], started: float) -> Usage:
+    total = Usage(calls=0)
+    for part in usage.values():
+        total = total + part
+    return Usage(
+        total.prompt_tokens,
+        total.completion_tokens,
+        time.perf_counter() - started,
+        total.cost_usd,
+        total.calls,
+    )

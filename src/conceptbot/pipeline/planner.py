@@ -1,0 +1,178 @@
+"""Planner (paper III-C): greedy steps, each choosing argmax S_LLM(a) * S_aff(a) over every valid
+``pick_and_place(object, destination)`` in the scene plus ``done()``.
+
+S_LLM comes from one of two methods:
+
+* ``logprob`` — one pass: the log-probability of each candidate as the assistant's reply, turned
+  into a distribution with a softmax (needs a backend that scores, e.g. llama.cpp);
+* ``vote`` — the paper's method: ``n`` completions, S_LLM(a) = share of completions choosing a.
+  Completions that are not valid actions in the scene are rejected, kept in the trace, and the
+  step is asked again once with a reminder; if none is valid then, the planner stops (``done()``).
+
+``auto`` uses ``logprob`` when the backend can score and ``vote`` otherwise. Executed actions go
+into the prompt; the loop ends at ``done()`` or after ``max_steps`` (default: one move per pickable
+object plus one, at most 12).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import Counter
+
+from conceptbot.core.plan import Action, CandidateScore, InvalidActionError, Step, parse_action, valid_actions
+from conceptbot.core.scene import Scene
+from conceptbot.core.usage import Usage
+from conceptbot.models.llm import LLM, ChatRequest, Message, ScoreRequest
+from conceptbot.pipeline import prompts
+from conceptbot.pipeline.affordance import Gripper, affordance
+from conceptbot.pipeline.ope import ObjectProperties
+
+METHODS = ("auto", "logprob", "vote")
+TOP_K = 8  # candidates kept in the trace per step
+
+
+def softmax(logprobs: list[float]) -> list[float]:
+    """Normalise log-probabilities into probabilities (numerically stable)."""
+    top = max(logprobs)
+    exps = [math.exp(lp - top) for lp in logprobs]
+    total = sum(exps)
+    return [e / total for e in exps]
+
+
+class Planner:
+    """Greedy LLM x affordance planner.
+
+    Args:
+        llm: The LLM (labelled ``planner``).
+        method: ``auto``, ``logprob`` or ``vote``.
+        n: Completions per step for ``vote`` (paper: 5).
+        temperature: Sampling temperature for ``vote`` (paper: 0).
+        max_steps: Step limit (None: pickable objects + 1, at most 12).
+        gripper: Gripper opening for the affordance.
+    """
+
+    def __init__(
+        self,
+        llm: LLM,
+        method: str = "auto",
+        n: int = 5,
+        temperature: float = 0.0,
+        max_steps: int | None = None,
+        gripper: Gripper | None = None,
+    ) -> None:
+        if method not in METHODS:
+            raise ValueError(f"method must be one of {METHODS}")
+        self.llm = llm
+        self.method = ("logprob" if llm.capabilities.scoring else "vote") if method == "auto" else method
+        self.n = n
+        self.temperature = temperature
+        self.max_steps = max_steps
+        self.gripper = gripper or Gripper()
+
+    def messages(
+        self,
+        request: str,
+        scene: Scene,
+        properties: dict[str, ObjectProperties],
+        guidance: str,
+        history: list[str],
+    ) -> tuple[Message, Message]:
+        """The system and user messages for one step."""
+        props = "\n".join(f"- {p.summary()}" for p in properties.values())
+        system = prompts.render(
+            "planner_system",
+            pickable=", ".join(scene.pickable),
+            destinations=", ".join(scene.destinations),
+            properties=f"Object properties:\n{props}" if props else "",
+        )
+        user = prompts.render(
+            "planner_user",
+            request=request,
+            guidance=guidance,
+            history=", ".join(history) if history else "none",
+        )
+        return Message("system", system), Message("user", user)
+
+    def _llm_scores(
+        self, candidates: list[Action], messages: tuple[Message, Message], scene: Scene, step: int
+    ) -> tuple[list[float], list[str], Usage]:
+        if self.method == "logprob":
+            scored = self.llm.score(
+                ScoreRequest(options=tuple(str(a) for a in candidates), messages=messages)
+            )
+            return softmax(list(scored.logprobs)), [], scored.usage
+        usage = Usage(calls=0)
+        rejected: list[str] = []
+        votes: Counter[str] = Counter()
+        request = ChatRequest(
+            messages=messages,
+            n=self.n,
+            temperature=self.temperature,
+            max_tokens=40,
+            stop=("\n",),
+            seed=step * 101,
+        )
+        for attempt in range(2):
+            response = self.llm.chat(request)
+            usage = usage + response.usage
+            for text in response.choices:
+                try:
+                    votes[str(parse_action(text, scene))] += 1
+                except InvalidActionError as exc:
+                    rejected.append(f"{text.strip()[:80]!r}: {exc}")
+            if votes or attempt == 1:
+                break
+            reminder = Message("user", "Answer with exactly one of: " + "; ".join(str(a) for a in candidates))
+            request = ChatRequest(
+                messages=(*messages, reminder),
+                n=self.n,
+                temperature=self.temperature,
+                max_tokens=40,
+                stop=("\n",),
+                seed=step * 101 + 1,
+            )
+        if not votes:
+            rejected.append("no valid action in any completion: stopping")
+            return [1.0 if a.is_done else 0.0 for a in candidates], rejected, usage
+        total = sum(votes.values())
+        return [votes.get(str(a), 0) / total for a in candidates], rejected, usage
+
+    def plan(
+        self,
+        request: str,
+        scene: Scene,
+        properties: dict[str, ObjectProperties],
+        guidance: str = "",
+    ) -> tuple[list[Step], list[str], Usage]:
+        """Plan greedily; returns the steps, the action texts (ending with ``done()``) and usage."""
+        started = time.perf_counter()
+        usage = Usage(calls=0)
+        candidates = valid_actions(scene)
+        limit = self.max_steps or min(len(scene.pickable) + 1, 12)
+        history: list[str] = []
+        steps: list[Step] = []
+        for index in range(limit):
+            messages = self.messages(request, scene, properties, guidance, history)
+            llm_scores, rejected, used = self._llm_scores(candidates, messages, scene, index)
+            usage = usage + used
+            scored = []
+            for action, s_llm in zip(candidates, llm_scores, strict=True):
+                s_aff, factors = affordance(action, scene, properties, history, self.gripper)
+                scored.append(CandidateScore(str(action), s_llm, s_aff, s_llm * s_aff, factors))
+            best = max(scored, key=lambda c: c.combined)  # first of equals: deterministic
+            ranked = sorted(scored, key=lambda c: -c.combined)
+            shown = ranked[:TOP_K] + [c for c in ranked[TOP_K:] if c.action == "done()"]
+            steps.append(Step(index + 1, best.action, tuple(shown), tuple(rejected), self.method))
+            if best.action == "done()":
+                break
+            history.append(best.action)
+        actions = [*history, "done()"]
+        usage = Usage(
+            usage.prompt_tokens,
+            usage.completion_tokens,
+            time.perf_counter() - started,
+            usage.cost_usd,
+            usage.calls,
+        )
+        return steps, actions, usage

@@ -1,0 +1,151 @@
+"""User Request Processing (paper III-B, Algorithm 1).
+
+1. Keywords K from the request (LLM, JSON).
+2. Edges of each keyword, filtered by cosine similarity to the request embedding (R_k,fil).
+3. Edges of each object, filtered by cosine similarity to the keyword embeddings (R_o,fil).
+4. M_sys = robot capabilities + object properties + R_k,fil + R_o,fil + few-shot examples.
+5. The LLM answers with reasoning (R_urp) and structured commands (A_urp), or a refusal.
+
+Commands naming objects that are not in the scene (or invalid moves) are dropped and recorded.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+from conceptbot.core.plan import InvalidActionError, parse_action
+from conceptbot.core.scene import Scene
+from conceptbot.core.usage import Usage
+from conceptbot.models.llm import LLM, ChatRequest
+from conceptbot.models.structured import chat_json
+from conceptbot.pipeline import prompts
+from conceptbot.pipeline.ope import ObjectProperties
+from conceptbot.pipeline.retrieval import RelationRetriever, Retrieval, edge_text
+
+KEYWORDS_SCHEMA = {
+    "type": "object",
+    "properties": {
+        "keywords": {"type": "array", "items": {"type": "string", "maxLength": 40}, "maxItems": 6}
+    },
+    "required": ["keywords"],
+}
+RESPONSE_SCHEMA = {
+    "type": "object",
+    "properties": {
+        # Length caps keep small models from rambling past max_tokens (grammar-enforced in llama.cpp).
+        "reasoning": {"type": "string", "maxLength": 400},
+        "refuse": {"type": "boolean"},
+        "refusal_reason": {"type": "string", "maxLength": 200},
+        "commands": {"type": "array", "items": {"type": "string", "maxLength": 80}, "maxItems": 12},
+    },
+    "required": ["reasoning", "refuse", "refusal_reason", "commands"],
+}
+
+
+@dataclass
+class URPResult:
+    """What URP concluded."""
+
+    keywords: list[str]
+    reasoning: str
+    commands: list[str]
+    refused: bool
+    refusal_reason: str
+    rejected_commands: list[str] = field(default_factory=list)
+    keyword_retrievals: dict[str, Retrieval] = field(default_factory=dict)
+    object_retrievals: dict[str, Retrieval] = field(default_factory=dict)
+    system_message: str = ""
+
+
+class UserRequestProcessor:
+    """Runs URP.
+
+    Args:
+        llm: The LLM (labelled ``urp``).
+        retriever: Relation retrieval; None for the no-knowledge-graph ablation.
+        max_relations: Kept relations per keyword/object put in the system message.
+    """
+
+    def __init__(self, llm: LLM, retriever: RelationRetriever | None, max_relations: int = 8) -> None:
+        self.llm = llm
+        self.retriever = retriever
+        self.max_relations = max_relations
+
+    def keywords(self, request: str) -> tuple[list[str], Usage]:
+        """Keywords of the request (lower case, unique, at most 6)."""
+        value, response = chat_json(
+            self.llm,
+            ChatRequest.of(f"Request: {request}", system=prompts.render("urp_keywords"), max_tokens=80),
+            KEYWORDS_SCHEMA,
+        )
+        words = list(dict.fromkeys(k.strip().lower() for k in value["keywords"] if k.strip()))[:6]
+        return words, response.usage
+
+    def run(
+        self, request: str, scene: Scene, properties: dict[str, ObjectProperties]
+    ) -> tuple[URPResult, Usage]:
+        """Interpret ``request`` in ``scene`` given OPE's ``properties`` (may be empty)."""
+        started = time.perf_counter()
+        usage = Usage(calls=0)
+        keyword_retrievals: dict[str, Retrieval] = {}
+        object_retrievals: dict[str, Retrieval] = {}
+        keywords: list[str] = []
+        if self.retriever is not None:
+            keywords, used = self.keywords(request)
+            usage = usage + used
+            if keywords:
+                keyword_retrievals = self.retriever.retrieve_many(keywords, [request])
+                object_retrievals = self.retriever.retrieve_many(scene.names, keywords)
+        relation_lines = []
+        for retrievals in (keyword_retrievals, object_retrievals):
+            for retrieval in retrievals.values():
+                for scored in retrieval.kept[: self.max_relations]:
+                    relation_lines.append(f"- {edge_text(scored.edge)}")
+        relation_lines = list(dict.fromkeys(relation_lines))
+        props = "\n".join(f"- {p.summary()}" for p in properties.values())
+        system = prompts.render(
+            "urp_system",
+            properties=f"Object properties:\n{props}\n" if props else "",
+            relations=("Commonsense facts that may help:\n" + "\n".join(relation_lines) + "\n")
+            if relation_lines
+            else "",
+            examples=prompts.render("urp_examples"),
+        )
+        states = "".join(f"\nState: {name} {state}." for name, state in scene.entity_states.items())
+        user = (
+            f"Objects you can pick: {', '.join(scene.pickable)}. "
+            f"Destinations: {', '.join(scene.destinations)}.{states}\nRequest: {request}"
+        )
+        value, response = chat_json(
+            self.llm, ChatRequest.of(user, system=system, max_tokens=300), RESPONSE_SCHEMA
+        )
+        usage = usage + response.usage
+        commands, rejected = [], []
+        for text in value["commands"]:
+            try:
+                action = parse_action(text, scene)
+            except InvalidActionError as exc:
+                rejected.append(f"{text} ({exc})")
+                continue
+            if not action.is_done and str(action) not in commands:
+                commands.append(str(action))
+        result = URPResult(
+            keywords=keywords,
+            reasoning=value["reasoning"].strip(),
+            commands=commands,
+            refused=bool(value["refuse"]),
+            refusal_reason=value["refusal_reason"].strip(),
+            rejected_commands=rejected,
+            keyword_retrievals=keyword_retrievals,
+            object_retrievals=object_retrievals,
+            system_message=system,
+        )
+        usage = Usage(
+            usage.prompt_tokens,
+            usage.completion_tokens,
+            time.perf_counter() - started,
+            usage.cost_usd,
+            usage.calls,
+        )
+        return result, usage
