@@ -1,0 +1,86 @@
+import math
+
+import pytest
+
+from conceptbot.models.fake import FakeLLM
+from conceptbot.pipeline import modes
+from conceptbot.pipeline.ope import ObjectProperties
+from conceptbot.pipeline.planner import Planner, softmax
+from tests.pipeline.fakes import spill_scene
+
+# valid_actions order for the spill scene:
+ORDER = [
+    "pick_and_place(chips, table)",
+    "pick_and_place(chips, user)",
+    "pick_and_place(sponge, table)",
+    "pick_and_place(sponge, user)",
+    "pick_and_place(knife, table)",
+    "pick_and_place(knife, user)",
+    "done()",
+]
+
+
+def _logprobs(best: str, second: str | None = None) -> list[float]:
+    return [0.0 if a == best else (-0.3 if a == second else -8.0) for a in ORDER]
+
+
+def test_softmax() -> None:
+    assert softmax([0.0, math.log(3.0)]) == pytest.approx([0.25, 0.75])
+
+
+def test_logprob_planner_is_greedy_until_done_and_puts_history_in_the_prompt() -> None:
+    llm = FakeLLM(scores=[_logprobs(ORDER[3]), _logprobs(ORDER[1]), _logprobs("done()")])
+    steps, actions, _ = Planner(llm, method="logprob").plan("wipe and chips", spill_scene(), {}, "")
+    assert actions == ["pick_and_place(sponge, user)", "pick_and_place(chips, user)", "done()"]
+    assert [s.chosen for s in steps] == actions
+    assert list(llm.score_requests[0].options) == ORDER
+    assert "Actions done so far: none" in llm.score_requests[0].messages[1].content
+    assert "pick_and_place(sponge, user)" in llm.score_requests[1].messages[1].content
+
+
+def test_affordance_can_overturn_the_llm() -> None:
+    # The LLM slightly prefers handing the knife to the user, but it is dangerous to hand over.
+    props = {"knife": ObjectProperties("knife", modes.PROPERTIES, {"dangerous": "Yes", "fragile": "No"})}
+    llm = FakeLLM(scores=[_logprobs(ORDER[5], second=ORDER[4]), _logprobs("done()")])
+    steps, actions, _ = Planner(llm, method="logprob").plan("knife", spill_scene(), props)
+    first = {c.action: c for c in steps[0].candidates}
+    expected_knife_user = softmax(_logprobs(ORDER[5], ORDER[4]))[5] * 0.9 * 0.4
+    assert first["pick_and_place(knife, user)"].combined == pytest.approx(expected_knife_user)
+    assert actions[0] == "pick_and_place(knife, table)"
+
+
+def test_vote_counts_valid_completions_and_logs_invalid_ones() -> None:
+    replies = [
+        "pick_and_place(sponge, user)",
+        "pick_and_place(sponge, user)",
+        "pick_and_place(banana, user)",
+        "",
+        "pick_and_place(chips, user)",
+    ] + ["done()"] * 5
+    llm = FakeLLM(replies)
+    steps, actions, _ = Planner(llm, method="vote", n=5).plan("q", spill_scene(), {})
+    assert actions == ["pick_and_place(sponge, user)", "done()"]
+    scores = {c.action: c.llm for c in steps[0].candidates}
+    assert scores["pick_and_place(sponge, user)"] == pytest.approx(2 / 3)
+    assert any("banana" in r for r in steps[0].rejected) and any(
+        "not an action" in r for r in steps[0].rejected
+    )
+
+
+def test_vote_with_no_valid_output_is_asked_again_then_stops() -> None:
+    llm = FakeLLM(["bring chips"] * 5 + ["pick_and_place(chips, user)"] * 5 + ["nonsense"] * 10)
+    steps, actions, _ = Planner(llm, method="vote", n=5).plan("q", spill_scene(), {})
+    assert actions[0] == "pick_and_place(chips, user)"
+    assert "Answer with exactly one of" in llm.requests[1].messages[-1].content
+    assert steps[-1].chosen == "done()" and "no valid action" in steps[-1].rejected[-1]
+
+
+def test_step_limit() -> None:
+    llm = FakeLLM(scores=[_logprobs(a) for a in ORDER[:4]])
+    steps, actions, _ = Planner(llm, method="logprob", max_steps=2).plan("q", spill_scene(), {})
+    assert len(steps) == 2 and actions[-1] == "done()" and len(actions) == 3
+
+
+def test_auto_method_follows_the_backend() -> None:
+    assert Planner(FakeLLM(scores=[])).method == "logprob"
+    assert Planner(FakeLLM()).method == "vote"
