@@ -1,0 +1,112 @@
+"""`conceptbot plan` as a user runs it: the fake LLM for the contract, the real small model for plumbing."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from tests.cli.test_cli import run
+from tests.pipeline.fakes import urp_reply
+
+SCENE = {
+    "name": "tiny",
+    "objects": ["apple", "sponge", "user"],
+    "pickable_objects": ["apple", "sponge"],
+    "destinations": ["user"],
+}
+
+
+@pytest.fixture
+def graph_home(isolated_home: Path, omcs_file: Path, wordnet_dir: Path) -> Path:
+    run("kg", "install", "--file", str(omcs_file), "--wordnet-dir", str(wordnet_dir), home=isolated_home)
+    return isolated_home
+
+
+def test_plan_json_contract_with_the_fake_llm(graph_home: Path, tmp_path: Path) -> None:
+    scene = tmp_path / "scene.json"
+    scene.write_text(json.dumps(SCENE))
+    props = json.dumps(
+        {
+            "object": "x",
+            "fragile": "No",
+            "hold_liquid": "No",
+            "dangerous": "No",
+            "safe": "Yes",
+            "deformable": "No",
+            "stable": "Yes",
+            "poisonous": "No",
+        }
+    )
+    replies = [props] * 3 + ['{"keywords": ["apple"]}', urp_reply(["pick_and_place(apple, user)"])]
+    replies += ["pick_and_place(apple, user)"] * 5 + ["pick_and_place(pear, user)"] + ["done()"] * 4
+    replies_file = tmp_path / "replies.json"
+    replies_file.write_text(json.dumps(replies))
+    out = run(
+        "--llm",
+        f"fake:{replies_file}",
+        "--embedder",
+        "fake",
+        "plan",
+        "Bring me an apple",
+        "--scene",
+        str(scene),
+        "--json",
+        "--no-fallback",
+        home=graph_home,
+    )
+    data = json.loads(out.stdout)
+    assert data["plan"] == ["pick_and_place(apple, user)", "done()"]
+    assert data["refused"] is False and data["steps"][0]["method"] == "vote"
+    assert any("pear" in r for r in data["steps"][1]["rejected"])
+    assert set(data["usage"]) == {"ope", "urp", "planner", "total"}
+    assert data["trace"]["urp"]["commands"] == ["pick_and_place(apple, user)"]
+
+
+def test_plan_readable_output_and_bad_scene(graph_home: Path, tmp_path: Path) -> None:
+    bad = run("--embedder", "fake", "plan", "hi", "--scene", "no-such-scene", home=graph_home, check_exit=2)
+    assert "unknown demo scene" in bad.stderr and "kitchen" in bad.stderr
+    broken = tmp_path / "broken.json"
+    broken.write_text('{"objects": "apple"}')
+    bad_file = run("--embedder", "fake", "plan", "hi", "--scene", str(broken), home=graph_home, check_exit=2)
+    assert "must be a list" in bad_file.stderr
+
+
+@pytest.mark.slow
+def test_plan_end_to_end_with_the_real_small_model(
+    graph_home: Path, smollm2_path: Path, tmp_path: Path
+) -> None:
+    scene = tmp_path / "scene.json"
+    scene.write_text(json.dumps(SCENE))
+    out = run(
+        "--llm",
+        f"llamacpp:{smollm2_path}",
+        "plan",
+        "Bring me an apple",
+        "--scene",
+        str(scene),
+        "--json",
+        "--no-fallback",
+        home=graph_home,
+    )
+    data = json.loads(out.stdout)
+    valid = {"pick_and_place(apple, user)", "pick_and_place(sponge, user)", "done()"}
+    assert data["plan"][-1] == "done()" and set(data["plan"]) <= valid
+    # A 135M model may well refuse; either way the output must follow the contract.
+    if data["refused"]:
+        assert data["plan"] == ["done()"] and data["steps"] == [] and data["reason"]
+    else:
+        assert data["steps"][0]["method"] == "logprob" and len(data["steps"][0]["candidates"]) == 3
+    assert data["usage"]["total"]["prompt_tokens"] > 0
+    readable = run(
+        "--llm",
+        f"llamacpp:{smollm2_path}",
+        "plan",
+        "Bring me an apple",
+        "--scene",
+        str(scene),
+        "--no-fallback",
+        home=graph_home,
+    )
+    assert (
+        "Object properties" in readable.stdout and "Plan:" in readable.stdout and "Usage" in readable.stdout
+    )
