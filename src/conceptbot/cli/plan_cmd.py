@@ -64,7 +64,9 @@ def plan(
     """Plan REQUEST in a scene; print properties, relations, reasoning, step scores and the plan."""
     scene = resolve_scene(scene_ref)
     bot = build_conceptbot(app.settings, config, theta=theta, planner_method=method, n=n, fallback=fallback)
-    result = bot.plan(request, scene, risk=risk)
+    result = bot.plan(
+        request, scene, risk=risk, progress=lambda message: click.secho(message, dim=True, err=True)
+    )
     if as_json:
         click.echo(json.dumps(result.to_dict(), indent=2, ensure_ascii=False))
         return

@@ -22,7 +22,7 @@ from conceptbot.core.usage import Usage
 from conceptbot.models.cache import CacheStore
 from conceptbot.models.llm import LLM
 from conceptbot.pipeline import modes
-from conceptbot.pipeline.ope import ObjectPropertiesExtractor
+from conceptbot.pipeline.ope import ObjectPropertiesExtractor, Progress
 from conceptbot.pipeline.planner import Planner
 from conceptbot.pipeline.retrieval import RelationRetriever, Retrieval, edge_text
 from conceptbot.pipeline.urp import URPResult, UserRequestProcessor
@@ -110,13 +110,14 @@ class ConceptBot:
         self.urp = UserRequestProcessor(self._llm_for("urp"), retriever)
         self.planner = Planner(self._llm_for("planner"), method=planner_method, n=n)
 
-    def plan(self, request: str, scene: Scene, risk: bool = False) -> Plan:
+    def plan(self, request: str, scene: Scene, risk: bool = False, progress: Progress | None = None) -> Plan:
         """Plan ``request`` in ``scene``.
 
         Args:
             request: What the person said.
             scene: What the robot sees.
             risk: Force the Risk Index variant of OPE.
+            progress: Called with a short message as each piece of work starts (LLM calls take seconds).
         """
         started = time.perf_counter()
         if not request.strip():
@@ -126,7 +127,7 @@ class ConceptBot:
         properties = {}
         mode, why = modes.choose_mode(request, scene.names, force_risk=risk)
         if self.switches.ope:
-            properties, retrievals, usage["ope"] = self.ope.run(scene.names, mode, request)
+            properties, retrievals, usage["ope"] = self.ope.run(scene.names, mode, request, progress)
             trace["ope"] = {
                 "mode": mode,
                 "why": why,
@@ -138,7 +139,7 @@ class ConceptBot:
             }
         guidance = ""
         if self.switches.urp:
-            urp, usage["urp"] = self.urp.run(request, scene, properties)
+            urp, usage["urp"] = self.urp.run(request, scene, properties, progress)
             trace["urp"] = {
                 "keywords": urp.keywords,
                 "keyword_relations": _retrieval_trace(urp.keyword_retrievals),
@@ -153,7 +154,7 @@ class ConceptBot:
                 usage["total"] = _total(usage, started)
                 return Plan(["done()"], [], True, urp.refusal_reason or "judged unsafe", trace, usage)
             guidance = guidance_from(urp)
-        steps, actions, usage["planner"] = self.planner.plan(request, scene, properties, guidance)
+        steps, actions, usage["planner"] = self.planner.plan(request, scene, properties, guidance, progress)
         trace["planner"] = {"method": self.planner.method, "steps": len(steps)}
         usage["total"] = _total(usage, started)
         return Plan(actions, steps, False, None, trace, usage)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import hashlib
 import json
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -22,6 +23,7 @@ from conceptbot.models.structured import chat_json
 from conceptbot.pipeline import modes, prompts
 from conceptbot.pipeline.retrieval import TARGET_PROPERTIES, RelationRetriever, Retrieval, edge_text
 
+Progress = Callable[[str], None]
 YES_NO = {"type": "string", "enum": ["Yes", "No"]}
 PROPERTY_NAMES = ("fragile", "hold_liquid", "dangerous", "safe", "deformable", "stable", "poisonous")
 MATERIALS = [
@@ -152,7 +154,7 @@ class ObjectPropertiesExtractor:
         return hashlib.sha256(json.dumps(payload).encode()).hexdigest()
 
     def run(
-        self, objects: list[str], mode: str, request: str = ""
+        self, objects: list[str], mode: str, request: str = "", progress: Progress | None = None
     ) -> tuple[dict[str, ObjectProperties], dict[str, Retrieval], Usage]:
         """Properties for every object, the retrievals behind them, and the module's usage."""
         started = time.perf_counter()

@@ -26,7 +26,7 @@ from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, ChatRequest, Message, ScoreRequest
 from conceptbot.pipeline import prompts
 from conceptbot.pipeline.affordance import Gripper, affordance
-from conceptbot.pipeline.ope import ObjectProperties
+from conceptbot.pipeline.ope import ObjectProperties, Progress
 
 METHODS = ("auto", "logprob", "vote")
 TOP_K = 8  # candidates kept in the trace per step
@@ -144,6 +144,7 @@ class Planner:
         scene: Scene,
         properties: dict[str, ObjectProperties],
         guidance: str = "",
+        progress: Progress | None = None,
     ) -> tuple[list[Step], list[str], Usage]:
         """Plan greedily; returns the steps, the action texts (ending with ``done()``) and usage."""
         started = time.perf_counter()
@@ -153,6 +154,8 @@ class Planner:
         history: list[str] = []
         steps: list[Step] = []
         for index in range(limit):
+            if progress:
+                progress(f"Planner: step {index + 1} ({len(candidates)} candidates, {self.method})")
             messages = self.messages(request, scene, properties, guidance, history)
             llm_scores, rejected, used = self._llm_scores(candidates, messages, scene, index)
             usage = usage + used

@@ -20,7 +20,7 @@ from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, ChatRequest
 from conceptbot.models.structured import chat_json
 from conceptbot.pipeline import prompts
-from conceptbot.pipeline.ope import ObjectProperties
+from conceptbot.pipeline.ope import ObjectProperties, Progress
 from conceptbot.pipeline.retrieval import RelationRetriever, Retrieval, edge_text
 
 KEYWORDS_SCHEMA = {
@@ -83,15 +83,21 @@ class UserRequestProcessor:
         return words, response.usage
 
     def run(
-        self, request: str, scene: Scene, properties: dict[str, ObjectProperties]
+        self,
+        request: str,
+        scene: Scene,
+        properties: dict[str, ObjectProperties],
+        progress: Progress | None = None,
     ) -> tuple[URPResult, Usage]:
         """Interpret ``request`` in ``scene`` given OPE's ``properties`` (may be empty)."""
+        say = progress or (lambda message: None)
         started = time.perf_counter()
         usage = Usage(calls=0)
         keyword_retrievals: dict[str, Retrieval] = {}
         object_retrievals: dict[str, Retrieval] = {}
         keywords: list[str] = []
         if self.retriever is not None:
+            say("URP: keywords")
             keywords, used = self.keywords(request)
             usage = usage + used
             if keywords:
