@@ -140,7 +140,9 @@ class ObjectPropertiesExtractor:
         self.max_relations = max_relations
 
     def _key(self, name: str, mode: str, context: str) -> str:
-        theta = self.retriever.theta if self.retriever else None
+        # Everything the answer depends on: the prompt text and the retrieval settings included, so
+        # editing a prompt or the relation list never serves a stale answer.
+        retrieval = [self.retriever.theta, list(self.retriever.relations)] if self.retriever else None
         payload = [
             name,
             mode,
@@ -148,8 +150,9 @@ class ObjectPropertiesExtractor:
             self.llm.backend,
             self.llm.model,
             self.graph_version,
-            theta,
-            self.retriever is None,
+            retrieval,
+            prompts.render(f"ope_{mode}"),
+            self.max_relations,
         ]
         return hashlib.sha256(json.dumps(payload).encode()).hexdigest()
 

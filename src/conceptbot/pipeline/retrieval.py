@@ -52,6 +52,12 @@ DEFAULT_THETA: dict[str, float] = {
 #: The model whose threshold applies to embedders with no entry in :data:`DEFAULT_THETA`.
 FALLBACK_MODEL = "all-MiniLM-L6-v2"
 
+#: Relations retrieved by default: the paper's seven, plus ``DefinedAs``. The offline graph's WordNet
+#: glosses ("hollandaise DefinedAs eggs and butter with lemon juice") carry the facts that
+#: ConceptNet 5 states as RelatedTo edges (its "hollandaise sauce RelatedTo egg"), so leaving them out
+#: would hide exactly the knowledge the paper relies on.
+RETRIEVAL_RELATIONS: tuple[str, ...] = (*PAPER_RELATIONS, "DefinedAs")
+
 #: Spoken forms of the paper's relations, for :func:`edge_text`.
 RELATION_TEXT: dict[str, str] = {
     "IsA": "is a",
@@ -61,6 +67,7 @@ RELATION_TEXT: dict[str, str] = {
     "UsedFor": "is used for",
     "CapableOf": "can",
     "RelatedTo": "is related to",
+    "DefinedAs": "means",
 }
 
 _CAMEL = re.compile(r"(?<=[a-z0-9])(?=[A-Z])|(?<=[A-Z])(?=[A-Z][a-z])")
@@ -159,7 +166,7 @@ class RelationRetriever:
         graph: KnowledgeGraph,
         embedder: Embedder,
         theta: float,
-        relations: Sequence[str] = PAPER_RELATIONS,
+        relations: Sequence[str] = RETRIEVAL_RELATIONS,
         limit: int = DEFAULT_LIMIT,
     ) -> None:
         if not -1.0 <= theta <= 1.0:
