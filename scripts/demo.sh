@@ -6,8 +6,7 @@ bash scripts/install.sh
 echo
 .venv/bin/conceptbot doctor
 echo
-echo '$ conceptbot llm --system "You are a kitchen robot..." "I would like a hollandaise sauce. ..."'
-.venv/bin/conceptbot llm \
-  --system "You are a kitchen robot. You can pick up objects and place them somewhere. Be brief." \
-  "I would like a hollandaise sauce. Which of these should you bring me: eggs, butter, lemon, chips, sponge?" \
-  --max-tokens 120
+echo '$ conceptbot plan "I would like a hollandaise sauce" --scene kitchen'
+echo '(first run: every object of the 25-object kitchen is analysed by the embedded LLM, a few minutes on'
+echo ' 2 cores; later runs come from the cache in seconds)'
+.venv/bin/conceptbot plan "I would like a hollandaise sauce" --scene kitchen

@@ -110,8 +110,10 @@ class ObjectProperties:
             return (
                 f"{self.name}: made of {', '.join(self.values.get('materials', [])) or 'unknown'} ({single})"
             )
-        shown = ", ".join(f"{p.replace('_', ' ')} {self.values.get(p)}" for p in PROPERTY_NAMES)
-        return f"{self.name}: {shown}"
+        # Only the properties that hold: half the tokens of "fragile No, hold liquid No, ..." and
+        # the prompt of a 25-object scene stays short enough to evaluate quickly on a CPU.
+        held = [p.replace("_", " ") for p in PROPERTY_NAMES if self.values.get(p) == "Yes"]
+        return f"{self.name}: {', '.join(held) if held else 'none of the listed properties'}"
 
 
 class ObjectPropertiesExtractor:
