@@ -20,9 +20,9 @@ def test_full_pipeline_with_relations_properties_and_refusal_free_plan() -> None
     replies = [risk_reply(4, [("user", 3)]) if i == 2 else risk_reply(1) for i in range(SCENE_OBJECTS)]
     replies += [
         '{"keywords": ["chips", "spill"]}',
-        urp_reply(
-            ["pick_and_place(chips, user)", "pick_and_place(banana, user)", "pick_and_place(sponge, user)"]
-        ),
+        # Not in the scene's action list: fails the schema, so URP retries with constrained decoding.
+        urp_reply(["pick_and_place(chips, user)", "pick_and_place(banana, user)"]),
+        urp_reply(["pick_and_place(chips, user)", "pick_and_place(sponge, user)"]),
     ]
     scores = [[-5.0] * 7 for _ in range(3)]
     scores[0][1], scores[1][3], scores[2][6] = 0.0, 0.0, 0.0  # chips->user, sponge->user, done
@@ -42,7 +42,12 @@ def test_full_pipeline_with_relations_properties_and_refusal_free_plan() -> None
     urp = plan.trace["urp"]
     assert urp["keywords"] == ["chips", "spill"]
     assert urp["commands"] == ["pick_and_place(chips, user)", "pick_and_place(sponge, user)"]
-    assert "banana" in urp["rejected_commands"][0]
+    assert urp["rejected_commands"] == []
+    enum = json.loads(llm.requests[SCENE_OBJECTS + 1].json_schema or "{}")["properties"]["commands"]["items"][
+        "enum"
+    ]
+    assert "pick_and_place(sponge, user)" in enum and "pick_and_place(banana, user)" not in enum
+    assert "not valid JSON for the required schema" in llm.requests[SCENE_OBJECTS + 2].messages[-1].content
     system = llm.requests[SCENE_OBJECTS + 1].messages[0].content
     assert (
         "knife: danger 4/5, dangerous with user (3)" in system and "sponge is used for wipe spill" in system
@@ -85,3 +90,19 @@ def test_nokg_uses_no_graph_and_urp_config_skips_ope() -> None:
 def test_empty_request_is_rejected() -> None:
     with pytest.raises(ValueError, match="empty"):
         _bot(FakeLLM())[0].plan("   ", spill_scene())
+
+
+def test_free_text_commands_are_checked_and_invalid_ones_logged(monkeypatch) -> None:
+    from conceptbot.pipeline import urp
+
+    monkeypatch.setattr(urp, "MAX_ENUM", 0)  # as for a scene too large for an enum
+    replies = [risk_reply(1) for _ in range(SCENE_OBJECTS)] + [
+        '{"keywords": ["chips"]}',
+        urp_reply(
+            ["pick_and_place(banana, user)", "pick_and_place(chips, user)", "pick_and_place(chips, user)"]
+        ),
+    ]
+    llm = FakeLLM(replies, scores=[[-9.0, 0.0] + [-9.0] * 5, [-9.0] * 6 + [0.0]])
+    plan = _bot(llm)[0].plan("chips", spill_scene())
+    assert plan.trace["urp"]["commands"] == ["pick_and_place(chips, user)"]
+    assert "object not in the scene: 'banana'" in plan.trace["urp"]["rejected_commands"][0]

@@ -11,10 +11,11 @@ Commands naming objects that are not in the scene (or invalid moves) are dropped
 
 from __future__ import annotations
 
+import json
 import time
 from dataclasses import dataclass, field
 
-from conceptbot.core.plan import InvalidActionError, parse_action
+from conceptbot.core.plan import InvalidActionError, parse_action, valid_actions
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, ChatRequest
@@ -30,6 +31,7 @@ KEYWORDS_SCHEMA = {
     },
     "required": ["keywords"],
 }
+MAX_ENUM = 400
 RESPONSE_SCHEMA = {
     "type": "object",
     "properties": {
@@ -41,6 +43,20 @@ RESPONSE_SCHEMA = {
     },
     "required": ["reasoning", "refuse", "refusal_reason", "commands"],
 }
+
+
+def response_schema(scene: Scene) -> dict:
+    """The URP reply schema, with the commands limited to the scene's valid actions.
+
+    Constrained decoding then cannot name an object that is not in the scene (small models do this
+    often, e.g. "pick_and_place(hollandaise, trash can)"); very large scenes fall back to free text,
+    checked by :func:`parse_action` afterwards.
+    """
+    options = [str(a) for a in valid_actions(scene, include_done=False)]
+    schema = json.loads(json.dumps(RESPONSE_SCHEMA))
+    if 0 < len(options) <= MAX_ENUM:
+        schema["properties"]["commands"]["items"] = {"type": "string", "enum": options}
+    return schema
 
 
 @dataclass
@@ -124,7 +140,7 @@ class UserRequestProcessor:
             f"Destinations: {', '.join(scene.destinations)}.{states}\nRequest: {request}"
         )
         value, response = chat_json(
-            self.llm, ChatRequest.of(user, system=system, max_tokens=300), RESPONSE_SCHEMA
+            self.llm, ChatRequest.of(user, system=system, max_tokens=400), response_schema(scene)
         )
         usage = usage + response.usage
         commands, rejected = [], []
