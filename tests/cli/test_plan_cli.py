@@ -110,3 +110,10 @@ def test_plan_end_to_end_with_the_real_small_model(
     assert (
         "Object properties" in readable.stdout and "Plan:" in readable.stdout and "Usage" in readable.stdout
     )
+
+
+def test_scenes_lists_and_prints_demo_scenes(isolated_home: Path) -> None:
+    listing = run("scenes", home=isolated_home).stdout
+    assert "kitchen" in listing and "risk-5-scissors" in listing
+    scene = json.loads(run("scenes", "kitchen", home=isolated_home).stdout)
+    assert "ceramic bowl" in scene["destinations"] and "egg" in scene["pickable_objects"]

@@ -64,7 +64,7 @@ def cli(
 
 
 def _register() -> None:
-    from conceptbot.cli import calibrate_cmd, doctor, kg_cmd, llm_cmd, models_cmd, plan_cmd
+    from conceptbot.cli import calibrate_cmd, doctor, kg_cmd, llm_cmd, models_cmd, plan_cmd, scenes_cmd
 
     cli.add_command(models_cmd.models)
     cli.add_command(kg_cmd.kg)
@@ -72,6 +72,7 @@ def _register() -> None:
     cli.add_command(doctor.doctor)
     cli.add_command(calibrate_cmd.calibrate)
     cli.add_command(plan_cmd.plan)
+    cli.add_command(scenes_cmd.scenes)
 
 
 _register()
