@@ -84,3 +84,10 @@ def test_step_limit() -> None:
 def test_auto_method_follows_the_backend() -> None:
     assert Planner(FakeLLM(scores=[])).method == "logprob"
     assert Planner(FakeLLM()).method == "vote"
+
+
+def test_when_nothing_wanted_is_feasible_the_planner_stops() -> None:
+    # A one-hot vote for an action already done: every combined score is 0, so done() is chosen.
+    llm = FakeLLM(["pick_and_place(chips, user)"] * 10)
+    steps, actions, _ = Planner(llm, method="vote", n=5).plan("q", spill_scene(), {})
+    assert actions == ["pick_and_place(chips, user)", "done()"] and steps[1].chosen == "done()"

@@ -164,6 +164,9 @@ class Planner:
                 s_aff, factors = affordance(action, scene, properties, history, self.gripper)
                 scored.append(CandidateScore(str(action), s_llm, s_aff, s_llm * s_aff, factors))
             best = max(scored, key=lambda c: c.combined)  # first of equals: deterministic
+            if best.combined <= 0.0:
+                # Nothing the LLM wants is feasible (e.g. a one-hot vote for a repeat): stop.
+                best = next(c for c in scored if c.action == "done()")
             ranked = sorted(scored, key=lambda c: -c.combined)
             shown = ranked[:TOP_K] + [c for c in ranked[TOP_K:] if c.action == "done()"]
             steps.append(Step(index + 1, best.action, tuple(shown), tuple(rejected), self.method))
