@@ -7,10 +7,11 @@ from pathlib import Path
 
 import pytest
 
+from conceptbot.knowledge.base import TARGET_PROPERTIES
 from conceptbot.knowledge.sqlite_store import SQLiteGraph
 from conceptbot.models.fake import FakeEmbedder
 from conceptbot.pipeline.calibrate import rows_for, thetas_between
-from conceptbot.pipeline.retrieval import TARGET_PROPERTIES, RelationRetriever
+from conceptbot.pipeline.retrieval import RelationRetriever
 from tests.cli.test_cli import run
 
 

@@ -7,11 +7,10 @@ from collections.abc import Sequence
 import numpy as np
 import pytest
 
-from conceptbot.knowledge.base import PAPER_RELATIONS, ConceptEdges, Edge, KnowledgeGraph
+from conceptbot.knowledge.base import PAPER_RELATIONS, TARGET_PROPERTIES, ConceptEdges, Edge, KnowledgeGraph
 from conceptbot.models.fake import FakeEmbedder
 from conceptbot.pipeline.retrieval import (
     DEFAULT_THETA,
-    TARGET_PROPERTIES,
     RelationRetriever,
     Retrieval,
     default_theta,

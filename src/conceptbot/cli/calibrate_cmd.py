@@ -11,6 +11,7 @@ from rich.console import Console
 from rich.table import Table
 
 from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.knowledge.base import TARGET_PROPERTIES
 from conceptbot.knowledge.registry import open_graph
 from conceptbot.models.registry import open_embedder
 from conceptbot.pipeline.calibrate import (
@@ -23,7 +24,7 @@ from conceptbot.pipeline.calibrate import (
     rows_for,
     thetas_between,
 )
-from conceptbot.pipeline.retrieval import TARGET_PROPERTIES, RelationRetriever, default_theta
+from conceptbot.pipeline.retrieval import RelationRetriever, default_theta
 
 PAPER_LINE = "paper (text-embedding-ada-002): " + ", ".join(
     f"~{kept:g} kept at >{theta:.2f}" for theta, kept in PAPER_REFERENCE.items()

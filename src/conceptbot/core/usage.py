@@ -32,6 +32,10 @@ class Usage:
             calls=self.calls + other.calls,
         )
 
+    def with_latency(self, seconds: float) -> Usage:
+        """The same counts with the wall time of the whole module instead of the LLM calls' sum."""
+        return Usage(self.prompt_tokens, self.completion_tokens, seconds, self.cost_usd, self.calls)
+
     @property
     def total_tokens(self) -> int:
         """Prompt plus completion tokens."""

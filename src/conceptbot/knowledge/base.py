@@ -17,6 +17,17 @@ PAPER_RELATIONS: tuple[str, ...] = (
     "RelatedTo",
 )
 
+#: The paper's target properties (OPE): relations are kept for being close to one of these.
+TARGET_PROPERTIES: tuple[str, ...] = (
+    "fragile",
+    "hold liquid",
+    "dangerous",
+    "safe",
+    "deformable",
+    "stable",
+    "poisonous",
+)
+
 #: Source labels of edges.
 SOURCES: tuple[str, ...] = ("omcs", "wordnet", "conceptnet5", "conceptnet-api", "wikipedia")
 

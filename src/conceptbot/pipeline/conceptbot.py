@@ -164,10 +164,4 @@ def _total(usage: dict[str, Usage], started: float) -> Usage:
     total = Usage(calls=0)
     for part in usage.values():
         total = total + part
-    return Usage(
-        total.prompt_tokens,
-        total.completion_tokens,
-        time.perf_counter() - started,
-        total.cost_usd,
-        total.calls,
-    )
+    return total.with_latency(time.perf_counter() - started)

@@ -17,11 +17,12 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from conceptbot.core.usage import Usage
+from conceptbot.knowledge.base import TARGET_PROPERTIES
 from conceptbot.models.cache import CacheStore
 from conceptbot.models.llm import LLM, ChatRequest
 from conceptbot.models.structured import chat_json
 from conceptbot.pipeline import modes, prompts
-from conceptbot.pipeline.retrieval import TARGET_PROPERTIES, RelationRetriever, Retrieval, edge_text
+from conceptbot.pipeline.retrieval import RelationRetriever, Retrieval, edge_text
 
 Progress = Callable[[str], None]
 YES_NO = {"type": "string", "enum": ["Yes", "No"]}
@@ -191,13 +192,7 @@ class ObjectPropertiesExtractor:
             if self.store:
                 self.store.put_value("ope", key, value)
             results[name] = ObjectProperties(name, mode, value, kept)
-        usage = Usage(
-            usage.prompt_tokens,
-            usage.completion_tokens,
-            time.perf_counter() - started,
-            usage.cost_usd,
-            usage.calls,
-        )
+        usage = usage.with_latency(time.perf_counter() - started)
         return results, retrievals, usage
 
 

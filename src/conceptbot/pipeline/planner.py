@@ -174,11 +174,5 @@ class Planner:
                 break
             history.append(best.action)
         actions = [*history, "done()"]
-        usage = Usage(
-            usage.prompt_tokens,
-            usage.completion_tokens,
-            time.perf_counter() - started,
-            usage.cost_usd,
-            usage.calls,
-        )
+        usage = usage.with_latency(time.perf_counter() - started)
         return steps, actions, usage

@@ -7,7 +7,7 @@ any target; it is kept when that similarity is strictly above ``theta``::
 
     R_fil = {r in R_i : max_t cos(v_r, v_t) > theta}
 
-Targets are the paper's object properties (:data:`TARGET_PROPERTIES`) in the OPE module; in URP the
+Targets are the paper's object properties (``TARGET_PROPERTIES``) in the OPE module; in URP the
 keyword edges are compared with the request text, and the object edges with the keywords.
 
 ``theta`` depends on the embedding model: the paper's 0.75 is for ``text-embedding-ada-002``, whose
@@ -24,21 +24,10 @@ from dataclasses import dataclass
 from conceptbot.knowledge.base import DEFAULT_LIMIT, PAPER_RELATIONS, Edge, KnowledgeGraph
 from conceptbot.models.embedder import Embedder, cosine_matrix
 
-#: The paper's OPE target properties: edges are kept for being close to one of these.
-TARGET_PROPERTIES: tuple[str, ...] = (
-    "fragile",
-    "hold liquid",
-    "dangerous",
-    "safe",
-    "deformable",
-    "stable",
-    "poisonous",
-)
-
 #: Similarity threshold per embedding model name. Each value transfers the paper's choice to its
 #: model: about 20 kept relations per object, as the paper's theta = 0.75 gives with ada-002 (about
 #: 35 at 0.70, 3 at 0.80). Measured with ``conceptbot calibrate`` over the paper's 112 objects, the
-#: :data:`TARGET_PROPERTIES` and the offline graph (OMCS + WordNet, 5,672 edges of the paper's
+#: ``TARGET_PROPERTIES`` and the offline graph (OMCS + WordNet, 5,672 edges of the paper's
 #: relations, 5 objects unknown), as ``theta | mean | median | min | max | objects with none``.
 DEFAULT_THETA: dict[str, float] = {
     # 0.25 | 21.8 | 9.5 | 0 | 92 | 18  (0.20: 35.5 mean; 0.30: 11.1; a 0.01 sweep gives 0.26: 19.3)

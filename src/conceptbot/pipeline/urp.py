@@ -163,11 +163,5 @@ class UserRequestProcessor:
             object_retrievals=object_retrievals,
             system_message=system,
         )
-        usage = Usage(
-            usage.prompt_tokens,
-            usage.completion_tokens,
-            time.perf_counter() - started,
-            usage.cost_usd,
-            usage.calls,
-        )
+        usage = usage.with_latency(time.perf_counter() - started)
         return result, usage
