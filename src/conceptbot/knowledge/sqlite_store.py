@@ -15,7 +15,6 @@ half-built one. Re-installing builds a fresh file and swaps it in (idempotent).
 
 from __future__ import annotations
 
-import json
 import os
 import sqlite3
 import time
@@ -286,8 +285,3 @@ class SQLiteGraph:
     def close(self) -> None:
         """Close the connection."""
         self._conn.close()
-
-
-def describe(stats: dict[str, object]) -> str:
-    """One JSON line of the stats (for logs)."""
-    return json.dumps(stats, sort_keys=True)
