@@ -53,9 +53,9 @@ def test_full_pipeline_with_relations_properties_and_refusal_free_plan() -> None
         "knife: danger 4/5, dangerous with user (3)" in system and "sponge is used for wipe spill" in system
     )
     # The planner saw URP's plan.
-    assert (
-        "Plan from the analysis: 1. pick_and_place(chips, user);" in llm.score_requests[0].messages[1].content
-    )
+    prompt = llm.score_requests[0].prompt or ""
+    assert "# suggested plan: pick_and_place(chips, user); pick_and_place(sponge, user)" in prompt
+    assert "# properties: knife: danger 4/5, dangerous with user (3)" in prompt
     assert set(plan.usage) == {"ope", "urp", "planner", "total"}
     json.dumps(plan.to_dict())  # the contract is JSON-able
 

@@ -30,12 +30,18 @@ def test_softmax() -> None:
 
 def test_logprob_planner_is_greedy_until_done_and_puts_history_in_the_prompt() -> None:
     llm = FakeLLM(scores=[_logprobs(ORDER[3]), _logprobs(ORDER[1]), _logprobs("done()")])
-    steps, actions, _ = Planner(llm, method="logprob").plan("wipe and chips", spill_scene(), {}, "")
+    steps, actions, _ = Planner(llm, method="logprob").plan(
+        "wipe and chips", spill_scene(), {}, "", commands=["pick_and_place(sponge, user)"]
+    )
     assert actions == ["pick_and_place(sponge, user)", "pick_and_place(chips, user)", "done()"]
     assert [s.chosen for s in steps] == actions
-    assert list(llm.score_requests[0].options) == ORDER
-    assert "Actions done so far: none" in llm.score_requests[0].messages[1].content
-    assert "pick_and_place(sponge, user)" in llm.score_requests[1].messages[1].content
+    first = llm.score_requests[0]
+    assert list(first.options) == [f"robot.{a}" if a != "done()" else a for a in ORDER]
+    assert first.prompt is not None and first.prompt.endswith(
+        "objects = [chips, sponge, knife, table, user]\n# properties: none notable\n"
+        "# suggested plan: pick_and_place(sponge, user)\n# wipe and chips\n"
+    )
+    assert llm.score_requests[1].prompt.endswith("# wipe and chips\nrobot.pick_and_place(sponge, user)\n")
 
 
 def test_affordance_can_overturn_the_llm() -> None:

@@ -138,6 +138,7 @@ class ConceptBot:
                 "retrieval": _retrieval_trace(retrievals),
             }
         guidance = ""
+        commands: list[str] = []
         if self.switches.urp:
             urp, usage["urp"] = self.urp.run(request, scene, properties, progress)
             trace["urp"] = {
@@ -154,7 +155,10 @@ class ConceptBot:
                 usage["total"] = _total(usage, started)
                 return Plan(["done()"], [], True, urp.refusal_reason or "judged unsafe", trace, usage)
             guidance = guidance_from(urp)
-        steps, actions, usage["planner"] = self.planner.plan(request, scene, properties, guidance, progress)
+            commands = urp.commands
+        steps, actions, usage["planner"] = self.planner.plan(
+            request, scene, properties, guidance, progress, commands
+        )
         trace["planner"] = {"method": self.planner.method, "steps": len(steps)}
         usage["total"] = _total(usage, started)
         return Plan(actions, steps, False, None, trace, usage)

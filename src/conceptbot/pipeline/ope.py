@@ -99,6 +99,15 @@ class ObjectProperties:
     relations: list[str] = field(default_factory=list)
     cached: bool = False
 
+    def notable(self) -> bool:
+        """Whether the object has something worth telling the planner (a risk, a material, or a
+        property other than the "safe"/"stable" that hold for most things)."""
+        if self.mode == modes.RISK:
+            return int(self.values.get("dangerous", 1)) > 1 or bool(self.values.get("dangerous_with"))
+        if self.mode == modes.MATERIALS:
+            return True
+        return any(self.values.get(p) == "Yes" for p in PROPERTY_NAMES if p not in ("safe", "stable"))
+
     def summary(self) -> str:
         """One line for prompts: ``knife: fragile No, dangerous Yes, ...``."""
         if self.mode == modes.RISK:

@@ -94,13 +94,42 @@ class Planner:
         )
         return Message("system", system), Message("user", user)
 
+    def completion_prompt(
+        self,
+        request: str,
+        scene: Scene,
+        properties: dict[str, ObjectProperties],
+        commands: list[str],
+        history: list[str],
+    ) -> str:
+        """The one-pass scoring prompt: a few-shot robot script (``prompts/planner_context.txt``) in
+        which the object properties (OPE) and the suggested plan (URP) are comment lines; the
+        candidates are scored as the next line. Code-trained models score this script form far
+        better than a chat reply."""
+        notable = [p.summary() for p in properties.values() if p.notable()]
+        lines = [
+            prompts.load("planner_context").template.rstrip("\n"),
+            "",
+            f"objects = [{', '.join(scene.names)}]",
+            f"# properties: {'; '.join(notable) if notable else 'none notable'}",
+        ]
+        if commands:
+            lines.append(f"# suggested plan: {'; '.join(commands)}")
+        lines.append(f"# {request.strip()}")
+        lines += [f"robot.{h}" for h in history]
+        return "\n".join(lines) + "\n"
+
     def _llm_scores(
-        self, candidates: list[Action], messages: tuple[Message, Message], scene: Scene, step: int
+        self,
+        candidates: list[Action],
+        messages: tuple[Message, Message],
+        scene: Scene,
+        step: int,
+        prompt: str = "",
     ) -> tuple[list[float], list[str], Usage]:
         if self.method == "logprob":
-            scored = self.llm.score(
-                ScoreRequest(options=tuple(str(a) for a in candidates), messages=messages)
-            )
+            options = tuple("done()" if a.is_done else f"robot.{a}" for a in candidates)
+            scored = self.llm.score(ScoreRequest(options=options, prompt=prompt))
             return softmax(list(scored.logprobs)), [], scored.usage
         usage = Usage(calls=0)
         rejected: list[str] = []
@@ -145,6 +174,7 @@ class Planner:
         properties: dict[str, ObjectProperties],
         guidance: str = "",
         progress: Progress | None = None,
+        commands: list[str] | None = None,
     ) -> tuple[list[Step], list[str], Usage]:
         """Plan greedily; returns the steps, the action texts (ending with ``done()``) and usage."""
         started = time.perf_counter()
@@ -157,7 +187,8 @@ class Planner:
             if progress:
                 progress(f"Planner: step {index + 1} ({len(candidates)} candidates, {self.method})")
             messages = self.messages(request, scene, properties, guidance, history)
-            llm_scores, rejected, used = self._llm_scores(candidates, messages, scene, index)
+            prompt = self.completion_prompt(request, scene, properties, commands or [], history)
+            llm_scores, rejected, used = self._llm_scores(candidates, messages, scene, index, prompt)
             usage = usage + used
             scored = []
             for action, s_llm in zip(candidates, llm_scores, strict=True):

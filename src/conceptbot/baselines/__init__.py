@@ -1,0 +1,1 @@
+"""Baselines the product is compared with (SayCan)."""

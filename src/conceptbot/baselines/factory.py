@@ -1,0 +1,44 @@
+"""Every planner system by configuration name: the ConceptBot configurations and SayCan."""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+from conceptbot.baselines.saycan import SayCan
+from conceptbot.core.config import Settings
+from conceptbot.core.errors import ConfigError, NotSupportedError
+from conceptbot.core.plan import Plan
+from conceptbot.core.scene import Scene
+from conceptbot.models.registry import open_llm, open_store
+from conceptbot.pipeline.conceptbot import CONFIGS as CONCEPTBOT_CONFIGS
+from conceptbot.pipeline.factory import build_conceptbot
+
+SYSTEMS = ("saycan", *CONCEPTBOT_CONFIGS)
+
+
+class PlannerSystem(Protocol):
+    """Anything that plans a request in a scene."""
+
+    def plan(self, request: str, scene: Scene, risk: bool = False, progress=None) -> Plan:
+        """Plan ``request`` in ``scene``."""
+        ...
+
+
+def build_system(settings: Settings, config: str, **options) -> PlannerSystem:
+    """The system called ``config`` (``saycan``, ``conceptbot``, ``urp``, ``ope``, ``nokg``).
+
+    Raises:
+        ConfigError: Unknown configuration.
+        NotSupportedError: SayCan with a backend that cannot score options.
+    """
+    if config == "saycan":
+        llm = open_llm(settings, open_store(settings), module="saycan")
+        if not llm.capabilities.scoring:
+            raise NotSupportedError(
+                f"SayCan scores options by log-probability, which the {llm.backend} backend cannot do",
+                hint="use the llamacpp backend for SayCan",
+            )
+        return SayCan(llm)
+    if config in CONCEPTBOT_CONFIGS:
+        return build_conceptbot(settings, config, **options)
+    raise ConfigError(f"unknown configuration {config!r}", hint=f"use one of {', '.join(SYSTEMS)}")

@@ -1,0 +1,112 @@
+"""SayCan baseline, after Google's open-source SayCan pick-and-place notebook.
+
+Per step, every candidate option (each valid ``robot.pick_and_place(object, destination)`` in the
+scene, and ``done()``) is scored by the LLM's token log-probability of the option after a few-shot
+prompt (``prompts/saycan_context.txt``, then ``objects = [...]``, ``# <instruction>`` and the steps
+so far). The affordance is binary, as ViLD's detections are: 1 when both the object and the
+destination are detected (confidence > 0), else 0; ``done()`` has a fixed affordance of 0.2. The
+combined score exp(log p) * affordance is normalised over the options and the best one is taken,
+greedily, until ``done()`` or the step limit. Same LLM as ConceptBot; no knowledge graph, no OPE/URP.
+
+The scene's objects are listed in the prompt (as the notebook does): without that line ``done()``
+wins the first step most of the time.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from importlib import resources
+
+from conceptbot.core.plan import Action, CandidateScore, Plan, Step, valid_actions
+from conceptbot.core.scene import Scene
+from conceptbot.core.usage import Usage
+from conceptbot.models.llm import LLM, ScoreRequest
+
+DONE_AFFORDANCE = 0.2
+TOP_K = 8
+
+
+def _context() -> str:
+    return (
+        resources.files("conceptbot.baselines")
+        .joinpath("prompts/saycan_context.txt")
+        .read_text(encoding="utf-8")
+    )
+
+
+def option_text(action: Action) -> str:
+    """The option as SayCan writes it."""
+    return "done()" if action.is_done else f"robot.pick_and_place({action.obj}, {action.target})"
+
+
+class SayCan:
+    """The SayCan planner.
+
+    Args:
+        llm: An LLM that can score options (``capabilities.scoring``), e.g. the llama.cpp backend.
+        max_steps: Step limit (None: pickable objects + 1, at most 12).
+    """
+
+    config = "saycan"
+
+    def __init__(self, llm: LLM, max_steps: int | None = None) -> None:
+        self.llm = llm
+        self.max_steps = max_steps
+
+    def prompt(self, request: str, scene: Scene, history: list[str]) -> str:
+        """The scoring prompt for the next step."""
+        lines = [_context().rstrip("\n"), "", f"objects = [{', '.join(scene.names)}]", f"# {request.strip()}"]
+        lines += [option_text(_parse(h)) for h in history]
+        return "\n".join(lines) + "\n"
+
+    def plan(self, request: str, scene: Scene, risk: bool = False, progress=None) -> Plan:
+        """Plan greedily (``risk`` is ignored: SayCan has no risk assessment)."""
+        started = time.perf_counter()
+        candidates = valid_actions(scene)
+        limit = self.max_steps or min(len(scene.pickable) + 1, 12)
+        history: list[str] = []
+        steps: list[Step] = []
+        usage = Usage(calls=0)
+        for index in range(limit):
+            if progress:
+                progress(f"SayCan: step {index + 1} ({len(candidates)} options)")
+            scored = self.llm.score(
+                ScoreRequest(
+                    options=tuple(option_text(a) for a in candidates),
+                    prompt=self.prompt(request, scene, history),
+                )
+            )
+            usage = usage + scored.usage
+            top = max(scored.logprobs)
+            raw = []
+            for action, logprob in zip(candidates, scored.logprobs, strict=True):
+                affordance = DONE_AFFORDANCE if action.is_done else _detected(scene, action)
+                raw.append((action, math.exp(logprob - top), affordance))
+            llm_total = sum(p for _, p, _ in raw)
+            combined_total = sum(p * a for _, p, a in raw) or 1.0
+            cands = [
+                CandidateScore(str(a), p / llm_total, aff, p * aff / combined_total, {"detected": aff})
+                for a, p, aff in raw
+            ]
+            best = max(cands, key=lambda c: c.combined)
+            ranked = sorted(cands, key=lambda c: -c.combined)
+            shown = ranked[:TOP_K] + [c for c in ranked[TOP_K:] if c.action == "done()"]
+            steps.append(Step(index + 1, best.action, tuple(shown), (), "saycan"))
+            if best.action == "done()":
+                break
+            history.append(best.action)
+        total = usage.with_latency(time.perf_counter() - started)
+        trace = {"config": self.config, "request": request, "scene": scene.name}
+        return Plan([*history, "done()"], steps, False, None, trace, {"planner": total, "total": total})
+
+
+def _detected(scene: Scene, action: Action) -> float:
+    obj, target = scene.get(action.obj or ""), scene.get(action.target or "")
+    return 1.0 if obj and target and obj.confidence > 0 and target.confidence > 0 else 0.0
+
+
+def _parse(text: str) -> Action:
+    inner = text[text.index("(") + 1 : text.rindex(")")]
+    obj, _, target = inner.partition(",")
+    return Action(obj.strip(), target.strip())
