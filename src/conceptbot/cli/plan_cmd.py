@@ -8,10 +8,9 @@ import click
 from rich.console import Console
 from rich.table import Table
 
+from conceptbot.baselines.factory import SYSTEMS, build_system
 from conceptbot.cli.main import AppContext, pass_app
 from conceptbot.core.plan import Plan
-from conceptbot.pipeline.conceptbot import CONFIGS
-from conceptbot.pipeline.factory import build_conceptbot
 from conceptbot.pipeline.planner import METHODS
 from conceptbot.scenes import resolve_scene
 
@@ -29,10 +28,10 @@ from conceptbot.scenes import resolve_scene
 @click.option(
     "--config",
     "-c",
-    type=click.Choice(CONFIGS),
+    type=click.Choice(SYSTEMS),
     default="conceptbot",
     show_default=True,
-    help="System: conceptbot (URP&OPE), urp, ope, nokg (no graph relations).",
+    help="System: conceptbot (URP&OPE), urp, ope, nokg (no graph relations), saycan (baseline).",
 )
 @click.option("--risk", is_flag=True, help="Use the Risk Index (danger 1-5, DangerousWith) in OPE.")
 @click.option(
@@ -63,7 +62,10 @@ def plan(
 ) -> None:
     """Plan REQUEST in a scene; print properties, relations, reasoning, step scores and the plan."""
     scene = resolve_scene(scene_ref)
-    bot = build_conceptbot(app.settings, config, theta=theta, planner_method=method, n=n, fallback=fallback)
+    options = (
+        {} if config == "saycan" else {"theta": theta, "planner_method": method, "n": n, "fallback": fallback}
+    )
+    bot = build_system(app.settings, config, **options)
     result = bot.plan(
         request, scene, risk=risk, progress=lambda message: click.secho(message, dim=True, err=True)
     )
