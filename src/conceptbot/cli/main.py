@@ -64,7 +64,16 @@ def cli(
 
 
 def _register() -> None:
-    from conceptbot.cli import calibrate_cmd, doctor, kg_cmd, llm_cmd, models_cmd, plan_cmd, scenes_cmd
+    from conceptbot.cli import (
+        bench_cmd,
+        calibrate_cmd,
+        doctor,
+        kg_cmd,
+        llm_cmd,
+        models_cmd,
+        plan_cmd,
+        scenes_cmd,
+    )
 
     cli.add_command(models_cmd.models)
     cli.add_command(kg_cmd.kg)
@@ -73,6 +82,7 @@ def _register() -> None:
     cli.add_command(calibrate_cmd.calibrate)
     cli.add_command(plan_cmd.plan)
     cli.add_command(scenes_cmd.scenes)
+    cli.add_command(bench_cmd.bench)
 
 
 _register()

@@ -1,0 +1,139 @@
+"""Benchmark report: the paper's success table (categories x configurations) with the published
+numbers beside ours, per-module time/tokens/cost, as Markdown, JSON and a bar chart PNG."""
+
+from __future__ import annotations
+
+import json
+from collections import defaultdict
+from pathlib import Path
+from typing import Any
+
+from conceptbot.bench.grading import CATEGORIES, PAPER_RESULTS
+from conceptbot.core.errors import ConfigError
+
+CONFIG_ORDER = ("saycan", "nokg", "urp", "ope", "conceptbot")
+
+
+def load_records(path: Path) -> list[dict[str, Any]]:
+    """The records of a results file (torn lines skipped).
+
+    Raises:
+        ConfigError: The file does not exist or holds no records.
+    """
+    if not Path(path).is_file():
+        raise ConfigError(f"no results file {path}", hint="run `conceptbot bench run` first")
+    records = []
+    for line in Path(path).read_text(encoding="utf-8").splitlines():
+        try:
+            records.append(json.loads(line))
+        except ValueError:
+            continue
+    if not records:
+        raise ConfigError(f"{path} holds no benchmark records")
+    return records
+
+
+def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
+    """Success rates per category and configuration, plus usage and failure reasons."""
+    cells: dict[tuple[str, str], list[bool]] = defaultdict(list)
+    usage: dict[str, dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
+    failures: dict[str, list[str]] = defaultdict(list)
+    for r in records:
+        cells[(r["category"], r["config"])].append(bool(r["ok"]))
+        cells[("all", r["config"])].append(bool(r["ok"]))
+        usage[r["config"]]["seconds"].append(r.get("seconds", 0.0))
+        for module, u in (r.get("usage") or {}).items():
+            usage[r["config"]][f"{module}_s"].append(u["latency_s"])
+            usage[r["config"]][f"{module}_tokens"].append(u["prompt_tokens"] + u["completion_tokens"])
+            if module == "total":
+                usage[r["config"]]["cost_usd"].append(u["cost_usd"])
+        if not r["ok"]:
+            failures[r["config"]].append(f"{r['task']}: {r['reason']}")
+    configs = [c for c in CONFIG_ORDER if any(k[1] == c for k in cells)]
+    configs += sorted({k[1] for k in cells} - set(configs))
+    success = {
+        cfg: {
+            cat: (100.0 * sum(v) / len(v), len(v))
+            for cat in (*CATEGORIES, "all")
+            if (v := cells.get((cat, cfg)))
+        }
+        for cfg in configs
+    }
+    means = {cfg: {k: sum(v) / len(v) for k, v in parts.items() if v} for cfg, parts in usage.items()}
+    models = sorted({f"{r['backend']}:{r['model']}" for r in records})
+    return {
+        "configs": configs,
+        "success": success,
+        "usage": means,
+        "failures": failures,
+        "models": models,
+        "records": len(records),
+    }
+
+
+def markdown(summary: dict[str, Any]) -> str:
+    """The success table (ours, with the paper's published numbers in brackets) and usage."""
+    configs = summary["configs"]
+    lines = [f"Model: {', '.join(summary['models'])}; {summary['records']} graded plans.", ""]
+    lines.append("| category | " + " | ".join(configs) + " |")
+    lines.append("|---|" + "---|" * len(configs))
+    for cat in (*CATEGORIES, "all"):
+        row = [cat]
+        for cfg in configs:
+            cell = summary["success"][cfg].get(cat)
+            paper = PAPER_RESULTS.get(cfg, {}).get(cat)
+            text = f"{cell[0]:.0f}% (n={cell[1]})" if cell else "—"
+            if paper is not None:
+                text += f" [paper {paper:.0f}%]"
+            row.append(text)
+        lines.append("| " + " | ".join(row) + " |")
+    lines += [
+        "",
+        "| configuration | s/plan | OPE s | URP s | Planner s | tokens/plan | cost USD/plan |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for cfg in configs:
+        u = summary["usage"].get(cfg, {})
+        lines.append(
+            f"| {cfg} | {u.get('seconds', 0):.1f} | {u.get('ope_s', 0):.1f} | {u.get('urp_s', 0):.1f} | "
+            f"{u.get('planner_s', 0):.1f} | {u.get('total_tokens', 0):.0f} | {u.get('cost_usd', 0):.5f} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def bar_chart(summary: dict[str, Any], path: Path) -> None:
+    """Success per category and configuration as a grouped bar chart (PNG)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    configs = summary["configs"]
+    width = 0.8 / max(len(configs), 1)
+    fig, ax = plt.subplots(figsize=(10, 4.5))
+    for i, cfg in enumerate(configs):
+        values = [summary["success"][cfg].get(cat, (0.0, 0))[0] for cat in CATEGORIES]
+        ax.bar([x + i * width for x in range(len(CATEGORIES))], values, width, label=cfg)
+    ax.set_xticks([x + width * (len(configs) - 1) / 2 for x in range(len(CATEGORIES))], CATEGORIES)
+    ax.set_ylabel("success rate (%)")
+    ax.set_ylim(0, 100)
+    ax.set_title(f"ConceptBot benchmark ({', '.join(summary['models'])})")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def write_report(results: Path, out_dir: Path) -> dict[str, Path]:
+    """Write ``report.md``, ``report.json`` and ``success.png`` for a results file."""
+    summary = summarise(load_records(results))
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = {
+        "markdown": out_dir / "report.md",
+        "json": out_dir / "report.json",
+        "chart": out_dir / "success.png",
+    }
+    paths["markdown"].write_text(markdown(summary), encoding="utf-8")
+    paths["json"].write_text(json.dumps(summary, indent=2, default=list), encoding="utf-8")
+    bar_chart(summary, paths["chart"])
+    return paths

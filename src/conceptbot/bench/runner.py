@@ -1,0 +1,143 @@
+"""Benchmark runner: configurations x tasks x trials, graded, appended to a JSONL file.
+
+Resumable: a run whose (task, config, trial, backend, model) is already in the results file is
+skipped, so an interrupted run continues where it stopped. The embedded llama.cpp model runs in
+this process, one plan at a time; HTTP backends can run several plans at once (``workers``).
+Trials differ only where the planner samples (``--temperature`` > 0 with the vote method); with
+log-probability scoring every trial of a task is the same plan.
+"""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+import traceback
+from collections.abc import Callable, Iterable
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from conceptbot.baselines.factory import PlannerSystem
+from conceptbot.bench.grading import Task, grade
+from conceptbot.core.errors import ConceptBotError
+from conceptbot.scenes import resolve_scene
+
+
+@dataclass(frozen=True)
+class Job:
+    """One plan to make and grade."""
+
+    task: Task
+    config: str
+    trial: int
+
+    def key(self, backend: str, model: str) -> tuple[str, str, int, str, str]:
+        """Identity in the results file."""
+        return (self.task.id, self.config, self.trial, backend, model)
+
+
+def done_keys(path: Path) -> set[tuple[str, str, int, str, str]]:
+    """Keys of the records already in a results file (a torn last line is ignored)."""
+    keys = set()
+    if not path.is_file():
+        return keys
+    for line in path.read_text(encoding="utf-8").splitlines():
+        try:
+            r = json.loads(line)
+            keys.add((r["task"], r["config"], int(r["trial"]), r["backend"], r["model"]))
+        except (ValueError, KeyError):
+            continue
+    return keys
+
+
+def run_job(job: Job, system: PlannerSystem, backend: str, model: str) -> dict[str, Any]:
+    """Plan one task with one system, grade it, and return the record."""
+    scene = resolve_scene(job.task.scene)
+    started = time.perf_counter()
+    record: dict[str, Any] = {
+        "task": job.task.id,
+        "category": job.task.category,
+        "config": job.config,
+        "trial": job.trial,
+        "backend": backend,
+        "model": model,
+        "request": job.task.request,
+    }
+    try:
+        plan = system.plan(job.task.request, scene)
+    except ConceptBotError as exc:
+        record.update(plan=None, refused=False, ok=False, reason=f"error: {exc.message}", error=str(exc))
+    except Exception as exc:  # a bug must not lose the rest of a long run; it is recorded and reported
+        record.update(
+            plan=None,
+            refused=False,
+            ok=False,
+            reason=f"crash: {type(exc).__name__}: {exc}",
+            error=traceback.format_exc(limit=5),
+        )
+    else:
+        verdict = grade(job.task, plan.actions, plan.refused)
+        record.update(
+            plan=plan.actions,
+            refused=plan.refused,
+            refusal_reason=plan.reason,
+            ok=verdict.ok,
+            reason=verdict.reason,
+            usage={
+                m: {
+                    "latency_s": round(u.latency_s, 3),
+                    "prompt_tokens": u.prompt_tokens,
+                    "completion_tokens": u.completion_tokens,
+                    "cost_usd": u.cost_usd,
+                    "calls": u.calls,
+                }
+                for m, u in plan.usage.items()
+            },
+        )
+    record["seconds"] = round(time.perf_counter() - started, 3)
+    record["finished_at"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
+    return record
+
+
+def run(
+    jobs: Iterable[Job],
+    systems: Callable[[str], PlannerSystem],
+    out: Path,
+    backend: str,
+    model: str,
+    workers: int = 1,
+    on_record: Callable[[dict[str, Any]], None] | None = None,
+) -> list[dict[str, Any]]:
+    """Run the jobs not yet in ``out`` and append their records to it.
+
+    Args:
+        jobs: What to run.
+        systems: ``config -> system`` (built once per configuration by the caller).
+        out: The JSONL results file.
+        backend, model: Recorded with each result and part of the resume key.
+        workers: Plans at once (1 for in-process backends).
+        on_record: Called after each record is written (progress bars).
+    """
+    out.parent.mkdir(parents=True, exist_ok=True)
+    seen = done_keys(out)
+    todo = [j for j in jobs if j.key(backend, model) not in seen]
+    lock = threading.Lock()
+    records: list[dict[str, Any]] = []
+
+    def work(job: Job) -> None:
+        record = run_job(job, systems(job.config), backend, model)
+        with lock, open(out, "a", encoding="utf-8") as handle:
+            handle.write(json.dumps(record, ensure_ascii=False) + "\n")
+            records.append(record)
+        if on_record:
+            on_record(record)
+
+    if workers <= 1:
+        for job in todo:
+            work(job)
+    else:
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            list(pool.map(work, todo))
+    return records
