@@ -75,7 +75,8 @@ def run_cmd(
         workers = 1
     tasks = load_tasks(list(categories) or None)[:limit]
     configs = configs or ("saycan", "nokg", "conceptbot")
-    jobs = [Job(t, c, i) for c in configs for t in tasks for i in range(trials)]
+    # Task-major order: an interrupted run still compares every configuration on the same tasks.
+    jobs = [Job(t, c, i) for t in tasks for c in configs for i in range(trials)]
     systems: dict[str, object] = {}
 
     def system(config: str):
