@@ -1,9 +1,10 @@
+import json
 from pathlib import Path
 
 from conceptbot.models.cache import CacheStore
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline import modes
-from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
+from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor, _known_partners
 from conceptbot.pipeline.retrieval import RelationRetriever
 from tests.pipeline.fakes import DictGraph, properties_reply, risk_reply
 
@@ -37,7 +38,16 @@ def test_results_are_cached_per_object_and_mode(tmp_path: Path) -> None:
 
 
 def test_risk_mode_keeps_only_scene_partners_with_scene_spelling() -> None:
-    llm = FakeLLM([risk_reply(4, [("USER", 3), ("dragon", 5), ("knife", 2)]), risk_reply(1)])
+    llm = FakeLLM([risk_reply(4, [("user", 3)]), risk_reply(1)])
     result, _, _ = ObjectPropertiesExtractor(llm, None).run(["knife", "user"], modes.RISK, "give the knife")
     assert result["knife"].values["dangerous_with"] == [{"object": "user", "score": 3}]
     assert "User request: give the knife" in llm.requests[0].messages[-1].content
+    partners = json.loads(llm.requests[0].json_schema or "{}")["properties"]["dangerous_with"]
+    assert partners["maxItems"] == 1 and partners["items"]["properties"]["object"]["enum"] == ["user"]
+    # Unconstrained backends: names are mapped to the scene's spelling, unknown ones dropped.
+    items = [
+        {"object": "USER", "score": 3},
+        {"object": "dragon", "score": 5},
+        {"object": "knife", "score": 2},
+    ]
+    assert _known_partners(items, ["knife", "user"], "knife") == [{"object": "user", "score": 3}]

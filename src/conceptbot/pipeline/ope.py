@@ -84,6 +84,20 @@ SCHEMAS: dict[str, dict[str, Any]] = {
 }
 
 
+def schema_for(mode: str, name: str, objects: list[str]) -> dict[str, Any]:
+    """The reply schema; for the Risk Index, interaction partners are limited to the scene's other
+    objects (an enum, at most one entry each), so constrained decoding cannot invent objects or
+    repeat one until the token budget runs out (small models do both)."""
+    schema = json.loads(json.dumps(SCHEMAS[mode]))
+    others = [o for o in objects if o != name]
+    if mode == modes.RISK:
+        items = schema["properties"]["dangerous_with"]
+        items["maxItems"] = len(others)
+        if others:
+            items["items"]["properties"]["object"] = {"type": "string", "enum": others}
+    return schema
+
+
 def targets_for(mode: str) -> tuple[str, ...]:
     """The target texts relations are filtered against in a mode."""
     return {modes.RISK: RISK_TARGETS, modes.MATERIALS: MATERIAL_TARGETS}.get(mode, TARGET_PROPERTIES)
@@ -193,7 +207,7 @@ class ObjectPropertiesExtractor:
                 others = ", ".join(o for o in objects if o != name)
                 user += f"Other objects in the scene: {others}\nUser request: {request}\n"
             request_obj = ChatRequest.of(user, system=prompts.render(f"ope_{mode}"), max_tokens=200)
-            value, response = chat_json(self.llm, request_obj, SCHEMAS[mode])
+            value, response = chat_json(self.llm, request_obj, schema_for(mode, name, objects))
             value["object"] = name  # the model sometimes rewrites the name; the scene's name is the truth
             if mode == modes.RISK:
                 value["dangerous_with"] = _known_partners(value["dangerous_with"], objects, name)
