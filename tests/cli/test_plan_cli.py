@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 from tests.cli.test_cli import run
-from tests.pipeline.fakes import urp_reply
+from tests.pipeline.fakes import properties_reply, urp_reply
 
 SCENE = {
     "name": "tiny",
@@ -25,18 +25,7 @@ def graph_home(isolated_home: Path, omcs_file: Path, wordnet_dir: Path) -> Path:
 def test_plan_json_contract_with_the_fake_llm(graph_home: Path, tmp_path: Path) -> None:
     scene = tmp_path / "scene.json"
     scene.write_text(json.dumps(SCENE))
-    props = json.dumps(
-        {
-            "object": "x",
-            "fragile": "No",
-            "hold_liquid": "No",
-            "dangerous": "No",
-            "safe": "Yes",
-            "deformable": "No",
-            "stable": "Yes",
-            "poisonous": "No",
-        }
-    )
+    props = properties_reply()
     replies = [props] * 3 + ['{"keywords": ["apple"]}', urp_reply(["pick_and_place(apple, user)"])]
     replies += ["pick_and_place(apple, user)"] * 5 + ["pick_and_place(pear, user)"] + ["done()"] * 4
     replies_file = tmp_path / "replies.json"
