@@ -135,9 +135,11 @@ class UserRequestProcessor:
             examples=prompts.render("urp_examples"),
         )
         states = "".join(f"\nState: {name} {state}." for name, state in scene.entity_states.items())
+        # Worded so "destinations" cannot be read as where things are now (small models did).
+        targets = ", ".join(_describe_destinations(scene.destinations))
         user = (
-            f"Objects you can pick: {', '.join(scene.pickable)}. "
-            f"Destinations: {', '.join(scene.destinations)}.{states}\nRequest: {request}"
+            f"The robot can pick up: {', '.join(scene.pickable)}.\n"
+            f"It can put them on, in or at: {targets}.{states}\nRequest: {request}"
         )
         value, response = chat_json(
             self.llm, ChatRequest.of(user, system=system, max_tokens=400), response_schema(scene)
@@ -165,3 +167,12 @@ class UserRequestProcessor:
         )
         usage = usage.with_latency(time.perf_counter() - started)
         return result, usage
+
+
+PEOPLE = {"user": "the person asking", "child": "a child", "person": "a person"}
+
+
+def _describe_destinations(destinations: list[str]) -> list[str]:
+    """Destinations as shown to the LLM: people say who they are, so "user" reads as a recipient and
+    not as one more place (small models otherwise pick whichever place is listed first)."""
+    return [f"{d} ({PEOPLE[d.lower()]})" if d.lower() in PEOPLE else d for d in destinations]
