@@ -32,6 +32,7 @@ from typing import Any
 
 from conceptbot import __version__
 from conceptbot.core.errors import ConfigError, KnowledgeUnavailableError
+from conceptbot.core.urls import check_http_url
 from conceptbot.knowledge.base import DEFAULT_LIMIT, ConceptEdges, Edge
 from conceptbot.knowledge.normalize import lookup
 
@@ -293,18 +294,8 @@ class ConceptNetAPI:
 
 
 def _validate_base_url(base_url: str) -> str:
-    """The base URL without a trailing slash, or ConfigError if it is not an absolute http(s) URL."""
-    parts = urllib.parse.urlsplit(str(base_url).strip())
-    if parts.scheme not in ("http", "https") or not parts.hostname or parts.query or parts.fragment:
-        raise ConfigError(
-            f"ConceptNet API base URL {base_url!r} is not an absolute http(s) URL.",
-            hint=f"use e.g. {DEFAULT_BASE_URL}",
-        )
-    try:
-        parts.port  # noqa: B018 - raises ValueError for a non-numeric or out-of-range port
-    except ValueError as exc:
-        raise ConfigError(f"ConceptNet API base URL {base_url!r} has a bad port.") from exc
-    return urllib.parse.urlunsplit(parts).rstrip("/")
+    """The base URL without a trailing slash (no query string: paths are appended to it)."""
+    return check_http_url(base_url, "ConceptNet API base URL", DEFAULT_BASE_URL, allow_query=False)
 
 
 def _migrate(conn: sqlite3.Connection) -> None:

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from conceptbot.core.errors import ConfigError, KnowledgeUnavailableError
+from conceptbot.core.urls import check_http_url
 from conceptbot.knowledge.base import DEFAULT_LIMIT, ConceptEdges, Edge
 from conceptbot.knowledge.normalize import normalize, singular
 from conceptbot.knowledge.triples import (
@@ -115,28 +116,12 @@ class WikiPage:
 
 
 def validate_api_url(url: str) -> str:
-    """Return ``url`` if it is an absolute http(s) URL with a host.
-
-    Args:
-        url: The MediaWiki ``api.php`` URL.
-
-    Returns:
-        The URL unchanged.
+    """A MediaWiki ``api.php`` URL, checked (see :func:`conceptbot.core.urls.check_http_url`).
 
     Raises:
         ConfigError: Not an absolute http(s) URL with a host and a valid port.
     """
-    try:
-        parts = urllib.parse.urlsplit(url)
-        port_ok = parts.port is None or 0 < parts.port < 65536
-    except ValueError:
-        parts, port_ok = None, False
-    if parts is None or parts.scheme not in ("http", "https") or not parts.hostname or not port_ok:
-        raise ConfigError(
-            f"malformed Wikipedia API URL {url!r}",
-            hint=f"use an absolute http(s) URL such as {DEFAULT_BASE_URL}",
-        )
-    return url
+    return check_http_url(url, "Wikipedia API URL", DEFAULT_BASE_URL)
 
 
 class WikipediaClient:

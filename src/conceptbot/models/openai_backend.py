@@ -25,27 +25,14 @@ from conceptbot.core.errors import (
     ConfigError,
     NotSupportedError,
 )
+from conceptbot.core.urls import check_http_url
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import Capabilities, ChatRequest, ChatResponse, ScoreRequest, ScoreResponse
 
 
 def validate_base_url(url: str) -> str:
-    """Return ``url`` without a trailing slash if it is an absolute http(s) URL.
-
-    Raises:
-        ConfigError: Not an http(s) URL with a host.
-    """
-    try:
-        parts = urlsplit(url)
-        port_ok = parts.port is None or 0 < parts.port < 65536
-    except ValueError:
-        parts, port_ok = None, False
-    if parts is None or parts.scheme not in ("http", "https") or not parts.hostname or not port_ok:
-        raise ConfigError(
-            f"malformed base URL {url!r}",
-            hint="use an absolute http(s) URL such as http://127.0.0.1:8000/v1",
-        )
-    return url.rstrip("/")
+    """An OpenAI-compatible base URL, checked (see :func:`conceptbot.core.urls.check_http_url`)."""
+    return check_http_url(url, "base URL", "http://127.0.0.1:8000/v1")
 
 
 def _redact(url: str) -> str:
