@@ -85,7 +85,8 @@ def run_cmd(
             systems[config] = build_system(settings, config, **options)
         return systems[config]
 
-    todo = len([j for j in jobs if j.key(backend, model or "") not in done_keys(out)])
+    finished = done_keys(out)  # read the results file once, not once per job
+    todo = len([j for j in jobs if j.key(backend, model or "") not in finished])
     click.echo(
         f"{len(jobs)} plans ({len(tasks)} tasks x {len(configs)} configs x {trials} trials); "
         f"{len(jobs) - todo} already in {out}"
@@ -107,7 +108,7 @@ def run_cmd(
             )
 
         run(jobs, system, out, backend, model or "", workers, advance)
-    click.echo(markdown(summarise([r for r in load_records(out)])))
+    click.echo(markdown(summarise(load_records(out))))
 
 
 @bench.command("report")

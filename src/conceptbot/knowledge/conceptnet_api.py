@@ -32,6 +32,7 @@ from typing import Any
 
 from conceptbot import __version__
 from conceptbot.core.errors import ConfigError, KnowledgeUnavailableError
+from conceptbot.core.migrations import apply_migrations
 from conceptbot.core.urls import check_http_url
 from conceptbot.knowledge.base import DEFAULT_LIMIT, ConceptEdges, Edge
 from conceptbot.knowledge.normalize import lookup
@@ -249,7 +250,8 @@ class ConceptNetAPI:
             conn.execute("PRAGMA journal_mode=WAL")
             conn.execute("PRAGMA synchronous=NORMAL")
             conn.execute("PRAGMA busy_timeout=30000")
-            _migrate(conn)
+            # Its own migrations table, so this cache may share a file with the LLM cache.
+            apply_migrations(conn, MIGRATIONS, "conceptnet_migrations")
         except (OSError, sqlite3.Error) as exc:
             if conn is not None:
                 conn.close()
@@ -296,30 +298,6 @@ class ConceptNetAPI:
 def _validate_base_url(base_url: str) -> str:
     """The base URL without a trailing slash (no query string: paths are appended to it)."""
     return check_http_url(base_url, "ConceptNet API base URL", DEFAULT_BASE_URL, allow_query=False)
-
-
-def _migrate(conn: sqlite3.Connection) -> None:
-    """Apply pending :data:`MIGRATIONS`, each once, even with several processes opening the file."""
-    conn.execute(
-        "CREATE TABLE IF NOT EXISTS conceptnet_migrations "
-        "(id INTEGER PRIMARY KEY, name TEXT NOT NULL, applied_at REAL NOT NULL)"
-    )
-    for number, name, sql in MIGRATIONS:
-        # BEGIN IMMEDIATE takes the write lock first, so two processes cannot both apply it.
-        conn.execute("BEGIN IMMEDIATE")
-        try:
-            done = conn.execute("SELECT 1 FROM conceptnet_migrations WHERE id = ?", (number,)).fetchone()
-            if not done:
-                for statement in sql.split(";"):
-                    if statement.strip():
-                        conn.execute(statement)
-                conn.execute(
-                    "INSERT INTO conceptnet_migrations VALUES (?, ?, ?)", (number, name, time.time())
-                )
-            conn.execute("COMMIT")
-        except BaseException:
-            conn.execute("ROLLBACK")
-            raise
 
 
 def _parse(payload: Any, url: str) -> list[Edge]:

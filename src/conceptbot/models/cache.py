@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from conceptbot.core.migrations import apply_migrations
 from conceptbot.models.migrations import MIGRATIONS
 
 
@@ -67,27 +68,7 @@ class CacheStore:
     # -- schema ---------------------------------------------------------------------------------
     def _migrate(self) -> None:
         with self._lock:
-            self._conn.execute(
-                "CREATE TABLE IF NOT EXISTS _migrations "
-                "(id INTEGER PRIMARY KEY, name TEXT NOT NULL, applied_at REAL NOT NULL)"
-            )
-            for number, name, sql in MIGRATIONS:
-                # BEGIN IMMEDIATE takes the write lock first, so two processes cannot both apply
-                # the same migration.
-                self._conn.execute("BEGIN IMMEDIATE")
-                try:
-                    done = self._conn.execute("SELECT 1 FROM _migrations WHERE id = ?", (number,)).fetchone()
-                    if not done:
-                        for statement in sql.split(";"):
-                            if statement.strip():
-                                self._conn.execute(statement)
-                        self._conn.execute(
-                            "INSERT INTO _migrations VALUES (?, ?, ?)", (number, name, time.time())
-                        )
-                    self._conn.execute("COMMIT")
-                except BaseException:
-                    self._conn.execute("ROLLBACK")
-                    raise
+            apply_migrations(self._conn, MIGRATIONS, "_migrations")
 
     def applied_migrations(self) -> list[tuple[int, str]]:
         """``(number, name)`` of every applied migration."""
