@@ -7,7 +7,7 @@ from typing import Protocol
 from conceptbot.baselines.saycan import SayCan
 from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConfigError, NotSupportedError
-from conceptbot.core.plan import Plan
+from conceptbot.core.plan import Feedback, Plan
 from conceptbot.core.scene import Scene
 from conceptbot.models.registry import open_llm, open_store
 from conceptbot.pipeline.conceptbot import CONFIGS as CONCEPTBOT_CONFIGS
@@ -19,8 +19,10 @@ SYSTEMS = ("saycan", *CONCEPTBOT_CONFIGS)
 class PlannerSystem(Protocol):
     """Anything that plans a request in a scene."""
 
-    def plan(self, request: str, scene: Scene, risk: bool = False, progress=None) -> Plan:
-        """Plan ``request`` in ``scene``."""
+    def plan(
+        self, request: str, scene: Scene, risk: bool = False, progress=None, feedback: Feedback | None = None
+    ) -> Plan:
+        """Plan ``request`` in ``scene`` (continuing after ``feedback`` from an execution, if given)."""
         ...
 
 

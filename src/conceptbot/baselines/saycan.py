@@ -18,7 +18,7 @@ import math
 import time
 from importlib import resources
 
-from conceptbot.core.plan import Action, CandidateScore, Plan, Step, valid_actions
+from conceptbot.core.plan import Action, CandidateScore, Feedback, Plan, Step, valid_actions
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, ScoreRequest
@@ -60,15 +60,22 @@ class SayCan:
         lines += [option_text(_parse(h)) for h in history]
         return "\n".join(lines) + "\n"
 
-    def plan(self, request: str, scene: Scene, risk: bool = False, progress=None) -> Plan:
-        """Plan greedily (``risk`` is ignored: SayCan has no risk assessment)."""
+    def plan(
+        self, request: str, scene: Scene, risk: bool = False, progress=None, feedback: Feedback | None = None
+    ) -> Plan:
+        """Plan greedily (``risk`` is ignored: SayCan has no risk assessment).
+
+        With ``feedback`` the plan continues from the executed steps and failed actions are
+        infeasible (affordance 0), as SayCan's affordance would report after a failed attempt.
+        """
         started = time.perf_counter()
         candidates = valid_actions(scene)
         limit = self.max_steps or min(len(scene.pickable) + 1, 12)
-        history: list[str] = []
+        history: list[str] = list(feedback.executed) if feedback else []
+        failed = feedback.failed_actions if feedback else set()
         steps: list[Step] = []
         usage = Usage(calls=0)
-        for index in range(limit):
+        for index in range(len(history), max(limit, len(history) + 1)):
             if progress:
                 progress(f"SayCan: step {index + 1} ({len(candidates)} options)")
             scored = self.llm.score(
@@ -82,6 +89,8 @@ class SayCan:
             raw = []
             for action, logprob in zip(candidates, scored.logprobs, strict=True):
                 affordance = DONE_AFFORDANCE if action.is_done else _detected(scene, action)
+                if str(action) in failed:
+                    affordance = 0.0
                 raw.append((action, math.exp(logprob - top), affordance))
             llm_total = sum(p for _, p, _ in raw)
             combined_total = sum(p * a for _, p, a in raw) or 1.0

@@ -107,6 +107,28 @@ class Step:
     method: str = "logprob"
 
 
+@dataclass(frozen=True)
+class Feedback:
+    """What happened when part of a plan ran, given back to a planner so it can plan the rest.
+
+    Attributes:
+        executed: Actions that succeeded, in order (the new plan starts with them).
+        failed: ``(action, reason)`` for each action that failed; the planner will not choose them again.
+    """
+
+    executed: tuple[str, ...] | list[str] = ()
+    failed: tuple[tuple[str, str], ...] | list[tuple[str, str]] = ()
+
+    @property
+    def failed_actions(self) -> set[str]:
+        """The failed action texts."""
+        return {action for action, _ in self.failed}
+
+    def script_lines(self) -> list[str]:
+        """The failures as comment lines for a robot-script prompt."""
+        return [f"# failed: {action} ({reason})" for action, reason in self.failed]
+
+
 @dataclass
 class Plan:
     """A plan with everything needed to explain it.

@@ -16,7 +16,7 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
-from conceptbot.core.plan import Plan
+from conceptbot.core.plan import Feedback, Plan
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.models.cache import CacheStore
@@ -110,7 +110,14 @@ class ConceptBot:
         self.urp = UserRequestProcessor(self._llm_for("urp"), retriever)
         self.planner = Planner(self._llm_for("planner"), method=planner_method, n=n)
 
-    def plan(self, request: str, scene: Scene, risk: bool = False, progress: Progress | None = None) -> Plan:
+    def plan(
+        self,
+        request: str,
+        scene: Scene,
+        risk: bool = False,
+        progress: Progress | None = None,
+        feedback: Feedback | None = None,
+    ) -> Plan:
         """Plan ``request`` in ``scene``.
 
         Args:
@@ -118,6 +125,8 @@ class ConceptBot:
             scene: What the robot sees.
             risk: Force the Risk Index variant of OPE.
             progress: Called with a short message as each piece of work starts (LLM calls take seconds).
+            feedback: What happened when an earlier plan was executed (closed loop): the Planner
+                continues from the executed steps and avoids failed actions; OPE and URP are as before.
         """
         started = time.perf_counter()
         if not request.strip():
@@ -157,7 +166,7 @@ class ConceptBot:
             guidance = guidance_from(urp)
             commands = urp.commands
         steps, actions, usage["planner"] = self.planner.plan(
-            request, scene, properties, guidance, progress, commands
+            request, scene, properties, guidance, progress, commands, feedback
         )
         trace["planner"] = {"method": self.planner.method, "steps": len(steps)}
         usage["total"] = _total(usage, started)

@@ -20,7 +20,15 @@ import math
 import time
 from collections import Counter
 
-from conceptbot.core.plan import Action, CandidateScore, InvalidActionError, Step, parse_action, valid_actions
+from conceptbot.core.plan import (
+    Action,
+    CandidateScore,
+    Feedback,
+    InvalidActionError,
+    Step,
+    parse_action,
+    valid_actions,
+)
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, ChatRequest, Message, ScoreRequest
@@ -101,6 +109,7 @@ class Planner:
         properties: dict[str, ObjectProperties],
         commands: list[str],
         history: list[str],
+        feedback: Feedback | None = None,
     ) -> str:
         """The one-pass scoring prompt: a few-shot robot script (``prompts/planner_context.txt``) in
         which the object properties (OPE) and the suggested plan (URP) are comment lines; the
@@ -117,6 +126,8 @@ class Planner:
             lines.append(f"# suggested plan: {'; '.join(commands)}")
         lines.append(f"# {request.strip()}")
         lines += [f"robot.{h}" for h in history]
+        if feedback is not None:
+            lines += feedback.script_lines()
         return "\n".join(lines) + "\n"
 
     def _llm_scores(
@@ -175,24 +186,34 @@ class Planner:
         guidance: str = "",
         progress: Progress | None = None,
         commands: list[str] | None = None,
+        feedback: Feedback | None = None,
     ) -> tuple[list[Step], list[str], Usage]:
-        """Plan greedily; returns the steps, the action texts (ending with ``done()``) and usage."""
+        """Plan greedily; returns the steps, the action texts (ending with ``done()``) and usage.
+
+        With ``feedback`` (from executing an earlier plan) the plan starts with the executed steps, the
+        failures are shown to the LLM and failed actions get affordance 0.
+        """
         started = time.perf_counter()
         usage = Usage(calls=0)
         candidates = valid_actions(scene)
         limit = self.max_steps or min(len(scene.pickable) + 1, 12)
-        history: list[str] = []
+        history: list[str] = list(feedback.executed) if feedback else []
+        failed = feedback.failed_actions if feedback else set()
+        if feedback and feedback.failed:
+            guidance = "\n".join([guidance, *feedback.script_lines()]).strip()
         steps: list[Step] = []
-        for index in range(limit):
+        for index in range(len(history), max(limit, len(history) + 1)):
             if progress:
                 progress(f"Planner: step {index + 1} ({len(candidates)} candidates, {self.method})")
             messages = self.messages(request, scene, properties, guidance, history)
-            prompt = self.completion_prompt(request, scene, properties, commands or [], history)
+            prompt = self.completion_prompt(request, scene, properties, commands or [], history, feedback)
             llm_scores, rejected, used = self._llm_scores(candidates, messages, scene, index, prompt)
             usage = usage + used
             scored = []
             for action, s_llm in zip(candidates, llm_scores, strict=True):
                 s_aff, factors = affordance(action, scene, properties, history, self.gripper)
+                if str(action) in failed:
+                    s_aff, factors = 0.0, {**factors, "failed": 0.0}
                 scored.append(CandidateScore(str(action), s_llm, s_aff, s_llm * s_aff, factors))
             best = max(scored, key=lambda c: c.combined)  # first of equals: deterministic
             if best.combined <= 0.0:

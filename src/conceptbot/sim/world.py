@@ -1,0 +1,298 @@
+"""A PyBullet tabletop built from a scene: a table, a Panda, and every object as a body.
+
+Layout: the arm stands at the origin on the table top (z = 0); objects are placed by seeded rejection
+sampling in the arm's reach (a half-ring in front and to the sides), destinations first on the outer
+ring, without overlaps (footprint circles plus a margin). Same scene + same seed = same world.
+
+Where things are: :meth:`World.locate` says, for an object, which destination it is in or on (a
+container's floor, a zone pad, a plate, or the top of another object) or None (on the bare table).
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from dataclasses import dataclass, field
+
+import pybullet as pb
+
+from conceptbot.core.errors import ConfigError
+from conceptbot.core.scene import Scene
+from conceptbot.sim.catalogue import Catalogue, ObjectSpec
+from conceptbot.sim.robot import Panda, Vec3
+
+WALL_M = 0.008
+REACH_MIN_M = 0.32
+REACH_MAX_M = 0.78
+SIDE_ANGLE_RAD = math.radians(115)
+OUTER_EXTRA_ANGLE_RAD = math.radians(15)  # receptacles may stand a little behind the arm's sides
+MARGIN_M = 0.015
+ZONE_OVERHANG_M = 0.08
+TABLE_HALF = (0.75, 0.95, 0.02)
+TABLE_CENTRE = (0.1, 0.0)
+
+
+@dataclass
+class Body:
+    """One object in the world."""
+
+    name: str
+    spec: ObjectSpec
+    id: int
+    pickable: bool
+    destination: bool
+
+
+@dataclass
+class World:
+    """A running simulation built by :func:`build_world`. Call :meth:`close` when done."""
+
+    client: int
+    robot: Panda
+    bodies: dict[str, Body]
+    table_id: int
+    seed: int
+    warnings: list[str] = field(default_factory=list)
+
+    # -- state -------------------------------------------------------------------------------------
+    def pose(self, name: str) -> tuple[Vec3, tuple[float, float, float, float]]:
+        """Position and orientation (quaternion) of a body."""
+        pos, orn = pb.getBasePositionAndOrientation(self.bodies[name].id, physicsClientId=self.client)
+        return tuple(pos), tuple(orn)  # type: ignore[return-value]
+
+    def yaw(self, name: str) -> float:
+        """Rotation of a body about the vertical axis (radians)."""
+        return pb.getEulerFromQuaternion(self.pose(name)[1])[2]
+
+    def aabb(self, name: str) -> tuple[Vec3, Vec3]:
+        """Axis-aligned bounding box of a body (min corner, max corner)."""
+        lo, hi = pb.getAABB(self.bodies[name].id, physicsClientId=self.client)
+        return tuple(lo), tuple(hi)  # type: ignore[return-value]
+
+    def snapshot(self) -> dict[str, tuple[float, ...]]:
+        """Every body's position and orientation, rounded to 0.1 mm: compares two runs."""
+        return {n: tuple(round(v, 4) for v in (*self.pose(n)[0], *self.pose(n)[1])) for n in self.bodies}
+
+    def settle(self, steps: int = 120) -> None:
+        """Step the physics with the arm holding still."""
+        for _ in range(steps):
+            pb.stepSimulation(physicsClientId=self.client)
+
+    def floor_z(self, name: str) -> float:
+        """Height things rest at when placed in/on ``name``."""
+        body = self.bodies[name]
+        lo, hi = self.aabb(name)
+        if body.spec.shape == "container":
+            return lo[2] + WALL_M
+        return hi[2]
+
+    def region(self, name: str) -> tuple[float, float, float, float]:
+        """``(x0, y0, x1, y1)`` where things placed in/on ``name`` may rest (inside walls for containers)."""
+        lo, hi = self.aabb(name)
+        inset = WALL_M + 0.004 if self.bodies[name].spec.shape == "container" else 0.0
+        return lo[0] + inset, lo[1] + inset, hi[0] - inset, hi[1] - inset
+
+    def locate(self, name: str) -> str | None:
+        """The destination ``name`` is in or on, or None (on the table, in no destination).
+
+        A body counts as in/on a destination when its centre lies over the destination's footprint and
+        its bottom rests between the destination's floor and top (containers) or on its top surface
+        (zones, plates, other objects); the highest such destination wins (a block on a block on a plate
+        is on the block).
+        """
+        if self.bodies[name].spec.shape == "zone":
+            return None  # a pad on the table is never in/on something
+        (x, y, _), _ = self.pose(name)
+        lo, _ = self.aabb(name)
+        best: tuple[float, str] | None = None
+        for other, body in self.bodies.items():
+            if other == name:
+                continue
+            olo, ohi = self.aabb(other)
+            if not (olo[0] - 0.005 <= x <= ohi[0] + 0.005 and olo[1] - 0.005 <= y <= ohi[1] + 0.005):
+                continue
+            if body.spec.shape == "container":
+                resting = olo[2] - 0.01 <= lo[2] <= ohi[2] + 0.01
+            else:
+                resting = abs(lo[2] - ohi[2]) <= 0.02 and lo[2] > olo[2] + 0.001
+            if resting and (best is None or ohi[2] > best[0]):
+                best = (ohi[2], other)
+        return best[1] if best else None
+
+    def occupants(self, name: str) -> list[str]:
+        """Bodies currently in or on ``name``."""
+        return [other for other in self.bodies if other != name and self.locate(other) == name]
+
+    def close(self) -> None:
+        """Disconnect the physics client (idempotent)."""
+        if pb.isConnected(self.client):
+            pb.disconnect(self.client)
+
+    def __enter__(self) -> World:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _shapes(client: int, spec: ObjectSpec) -> tuple[int, int, float]:
+    """Collision shape, visual shape and the centre height above the table for one spec."""
+    w, d, h = spec.size_m
+    colour = list(spec.rgba)
+    if spec.shape == "sphere":
+        r = w / 2
+        return (
+            pb.createCollisionShape(pb.GEOM_SPHERE, radius=r, physicsClientId=client),
+            pb.createVisualShape(pb.GEOM_SPHERE, radius=r, rgbaColor=colour, physicsClientId=client),
+            r,
+        )
+    if spec.shape == "cylinder":
+        r = min(w, d) / 2
+        return (
+            pb.createCollisionShape(pb.GEOM_CYLINDER, radius=r, height=h, physicsClientId=client),
+            pb.createVisualShape(
+                pb.GEOM_CYLINDER, radius=r, length=h, rgbaColor=colour, physicsClientId=client
+            ),
+            h / 2,
+        )
+    if spec.shape == "container":
+        t = WALL_M
+        parts = [
+            ((w / 2, d / 2, t / 2), (0, 0, -h / 2 + t / 2)),
+            ((t / 2, d / 2, h / 2), (-w / 2 + t / 2, 0, 0)),
+            ((t / 2, d / 2, h / 2), (w / 2 - t / 2, 0, 0)),
+            ((w / 2 - t, t / 2, h / 2), (0, -d / 2 + t / 2, 0)),
+            ((w / 2 - t, t / 2, h / 2), (0, d / 2 - t / 2, 0)),
+        ]
+        return (*_compound(client, parts, colour), h / 2)
+    if spec.grip == "knob":
+        knob = 0.012
+        parts = [((w / 2, d / 2, h / 2), (0, 0, 0)), ((knob, knob, 0.015), (0, 0, h / 2 + 0.015))]
+        return (*_compound(client, parts, colour), h / 2)
+    half = (w / 2, d / 2, h / 2)
+    return (
+        pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half, physicsClientId=client),
+        pb.createVisualShape(pb.GEOM_BOX, halfExtents=half, rgbaColor=colour, physicsClientId=client),
+        h / 2,
+    )
+
+
+def _compound(client: int, parts: list, colour: list[float]) -> tuple[int, int]:
+    """Collision and visual shapes made of boxes (``parts``: half extents and offsets)."""
+    halves = [list(p[0]) for p in parts]
+    offsets = [list(p[1]) for p in parts]
+    types = [pb.GEOM_BOX] * len(parts)
+    collision = pb.createCollisionShapeArray(
+        types, halfExtents=halves, collisionFramePositions=offsets, physicsClientId=client
+    )
+    visual = pb.createVisualShapeArray(
+        types,
+        halfExtents=halves,
+        visualFramePositions=offsets,
+        rgbaColors=[colour] * len(parts),
+        physicsClientId=client,
+    )
+    return collision, visual
+
+
+def _layout(specs: list[tuple[ObjectSpec, bool]], rng: random.Random) -> dict[str, tuple[float, float]]:
+    """Positions without overlaps: receptacles and zones on the outer ring first, then the rest."""
+    placed: list[tuple[float, float, float]] = []
+    positions: dict[str, tuple[float, float]] = {}
+    order = sorted(specs, key=lambda item: (not item[1], -item[0].footprint_radius))
+    for spec, outer in order:
+        radius = spec.footprint_radius
+        lo = (REACH_MIN_M + REACH_MAX_M) / 2 if outer else REACH_MIN_M
+        hi = REACH_MAX_M if outer else REACH_MAX_M - 0.06
+        if spec.shape == "zone":
+            hi += ZONE_OVERHANG_M  # only the near part of a large pad must be in reach
+        for attempt in range(4000):
+            if attempt == 2000:
+                lo = REACH_MIN_M  # crowded: let it use the whole ring
+            r = rng.uniform(lo + radius * 0.5, hi - radius * 0.5) if hi - lo > radius else (lo + hi) / 2
+            side = SIDE_ANGLE_RAD + (OUTER_EXTRA_ANGLE_RAD if outer else 0.0)
+            a = rng.uniform(-side, side)
+            x, y = r * math.cos(a), r * math.sin(a)
+            if all(math.hypot(x - px, y - py) >= radius + pr + MARGIN_M for px, py, pr in placed):
+                placed.append((x, y, radius))
+                positions[spec.name] = (x, y)
+                break
+        else:
+            raise ConfigError(
+                f"the scene does not fit on the simulated table ({len(specs)} objects); "
+                "remove some objects or use smaller receptacles"
+            )
+    return positions
+
+
+def build_world(scene: Scene, seed: int = 0, catalogue: Catalogue | None = None) -> World:
+    """Create the simulation for ``scene`` (headless, DIRECT mode).
+
+    Args:
+        scene: The scene; names, pickable/destination flags and (for objects the catalogue does not
+            know) sizes are used. A scene entry ``"layout": {"name": [x, y], ...}`` pins positions
+            (metres, robot at the origin) instead of sampling them.
+        seed: Layout seed.
+        catalogue: Object catalogue (default: the shipped one).
+
+    Raises:
+        ConfigError: The objects do not fit on the table, or a pinned position is malformed.
+    """
+    catalogue = catalogue or Catalogue.load()
+    catalogue.warnings.clear()
+    client = pb.connect(pb.DIRECT)
+    try:
+        pb.setGravity(0, 0, -9.81, physicsClientId=client)
+        pb.setTimeStep(1 / 240, physicsClientId=client)
+        table = pb.createMultiBody(
+            0,
+            pb.createCollisionShape(pb.GEOM_BOX, halfExtents=TABLE_HALF, physicsClientId=client),
+            pb.createVisualShape(
+                pb.GEOM_BOX, halfExtents=TABLE_HALF, rgbaColor=[0.62, 0.5, 0.38, 1], physicsClientId=client
+            ),
+            [TABLE_CENTRE[0], TABLE_CENTRE[1], -TABLE_HALF[2]],
+            physicsClientId=client,
+        )
+        pb.changeDynamics(table, -1, lateralFriction=0.8, physicsClientId=client)
+        robot = Panda(client)
+        specs = [(catalogue.spec(o.name, o.size_m), o.destination and not o.pickable) for o in scene.objects]
+        rng = random.Random(seed)
+        positions = _layout(specs, rng)
+        pinned = scene.extra.get("layout", {}) or {}
+        for name, xy in pinned.items():
+            if name not in positions or not (isinstance(xy, list) and len(xy) == 2):
+                raise ConfigError(f"layout: {name!r} must be a scene object with [x, y] in metres")
+            positions[name] = (float(xy[0]), float(xy[1]))
+        bodies: dict[str, Body] = {}
+        for obj, (spec, _) in zip(scene.objects, specs, strict=True):
+            collision, visual, z = _shapes(client, spec)
+            x, y = positions[obj.name]
+            # Face the arm: a long object lies across the reach direction so the gripper closes on its
+            # narrow side without twisting the wrist far.
+            yaw = math.atan2(y, x) if spec.shape not in ("zone",) else 0.0
+            # Receptacles and zones the robot may not pick are fixed in place: a bump does not slide a
+            # bin across the table (real ones are heavy or stand beside it).
+            mass = spec.mass_kg if obj.pickable else 0.0
+            body_id = pb.createMultiBody(
+                mass,
+                collision,
+                visual,
+                [x, y, z + 0.0005],
+                pb.getQuaternionFromEuler((0, 0, yaw)),
+                physicsClientId=client,
+            )
+            pb.changeDynamics(
+                body_id,
+                -1,
+                lateralFriction=1.0,
+                spinningFriction=0.002,
+                rollingFriction=0.01 if spec.shape == "sphere" else 0.0001,  # fruit is not a ball bearing
+                physicsClientId=client,
+            )
+            bodies[obj.name] = Body(obj.name, spec, body_id, obj.pickable, obj.destination)
+        world = World(client, robot, bodies, table, seed, list(catalogue.warnings))
+        world.settle(60)
+        return world
+    except Exception:
+        pb.disconnect(client)
+        raise
