@@ -52,3 +52,20 @@ def test_undetected_objects_get_zero_affordance() -> None:
     llm = FakeLLM(scores=[[0.0, -5.0]])
     plan = SayCan(llm).plan("apple", scene)
     assert plan.actions == ["done()"] and plan.steps[0].candidates[0].action == "done()"
+
+
+def test_feedback_makes_failed_options_infeasible_and_keeps_executed_steps() -> None:
+    from conceptbot.core.plan import Feedback, valid_actions
+
+    scene = spill_scene()
+    order = [str(a) for a in valid_actions(scene)]
+    best = order.index("pick_and_place(chips, user)")
+    second = order.index("pick_and_place(sponge, user)")
+    scores = [[0.0 if i == best else (-0.5 if i == second else -9.0) for i in range(len(order))]]
+    scores.append([0.0 if a == "done()" else -9.0 for a in order])
+    plan = SayCan(FakeLLM(scores=scores)).plan(
+        "r",
+        scene,
+        feedback=Feedback(executed=["pick_and_place(knife, table)"], failed=[(order[best], "slipped")]),
+    )
+    assert plan.actions == ["pick_and_place(knife, table)", "pick_and_place(sponge, user)", "done()"]

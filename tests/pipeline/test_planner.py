@@ -97,3 +97,24 @@ def test_when_nothing_wanted_is_feasible_the_planner_stops() -> None:
     llm = FakeLLM(["pick_and_place(chips, user)"] * 10)
     steps, actions, _ = Planner(llm, method="vote", n=5).plan("q", spill_scene(), {})
     assert actions == ["pick_and_place(chips, user)", "done()"] and steps[1].chosen == "done()"
+
+
+def test_feedback_continues_after_executed_steps_and_rules_out_failed_actions() -> None:
+    from conceptbot.core.plan import Feedback
+
+    feedback = Feedback(
+        executed=["pick_and_place(sponge, user)"],
+        failed=[("pick_and_place(chips, user)", "too_wide: chips is 9 cm across")],
+    )
+    # The LLM still prefers the failed action; its affordance is 0, so the second choice wins.
+    llm = FakeLLM(scores=[_logprobs(ORDER[1], second=ORDER[0]), _logprobs("done()")])
+    steps, actions, _ = Planner(llm, method="logprob").plan("chips", spill_scene(), {}, feedback=feedback)
+    assert actions == ["pick_and_place(sponge, user)", "pick_and_place(chips, table)", "done()"]
+    assert steps[0].index == 2
+    failed = next(c for c in steps[0].candidates if c.action == ORDER[1])
+    assert failed.affordance == 0.0 and failed.factors["failed"] == 0.0
+    prompt = llm.score_requests[0].prompt
+    assert prompt.endswith(
+        "robot.pick_and_place(sponge, user)\n"
+        "# failed: pick_and_place(chips, user) (too_wide: chips is 9 cm across)\n"
+    )

@@ -73,6 +73,7 @@ def _register() -> None:
         models_cmd,
         plan_cmd,
         scenes_cmd,
+        sim_cmd,
     )
 
     cli.add_command(models_cmd.models)
@@ -83,6 +84,7 @@ def _register() -> None:
     cli.add_command(plan_cmd.plan)
     cli.add_command(scenes_cmd.scenes)
     cli.add_command(bench_cmd.bench)
+    cli.add_command(sim_cmd.sim)
 
 
 _register()

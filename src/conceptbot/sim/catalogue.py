@@ -76,6 +76,26 @@ def grip_mode(shape: str, size_m: tuple[float, float, float], override: str | No
     return "body"
 
 
+def _check(key: str, entry: dict[str, Any]) -> None:
+    """Raise ConfigError unless ``entry`` is a complete, valid object description."""
+    try:
+        valid = (
+            entry["shape"] in SHAPES
+            and entry.get("grip", "body") in GRIPS
+            and len(entry["size"]) == 3
+            and min(float(v) for v in entry["size"]) > 0
+            and len(entry["rgba"]) == 4
+            and float(entry["mass"]) >= 0
+        )
+    except (KeyError, TypeError, ValueError):
+        valid = False
+    if not valid:
+        raise ConfigError(
+            f"object catalogue: {key!r} needs a known shape and grip, a positive 3-number size, "
+            "a mass and an rgba"
+        )
+
+
 class Catalogue:
     """Object specs by name; see the module docstring for the look-up order.
 
@@ -90,6 +110,7 @@ class Catalogue:
         self._kinds: dict[str, dict[str, Any]] = kinds
         self._objects: dict[str, dict[str, Any]] = {k.lower(): v for k, v in data.get("objects", {}).items()}
         self.warnings: list[str] = []
+        _check("default", kinds["default"])
         for name in self._objects:
             self._entry(name)  # validate eagerly: a bad data file fails on load, not mid-run
 
@@ -124,10 +145,7 @@ class Catalogue:
                 raise ConfigError(f"object catalogue: {key!r} names unknown kind {kind!r}")
             entry.update(self._kinds[kind])
         entry.update({k: v for k, v in raw.items() if k != "kind"})
-        if entry["shape"] not in SHAPES or entry.get("grip", "body") not in GRIPS:
-            raise ConfigError(f"object catalogue: {key!r} has an unknown shape or grip")
-        if len(entry["size"]) != 3 or min(entry["size"]) <= 0 or len(entry["rgba"]) != 4:
-            raise ConfigError(f"object catalogue: {key!r} needs a positive 3-number size and an rgba")
+        _check(key, entry)
         return entry
 
     def _find(self, name: str) -> str | None:

@@ -1,0 +1,147 @@
+"""``conceptbot sim run``: plan a request, execute it in PyBullet, check the result, save pictures."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+from PIL import Image
+
+from conceptbot.baselines.factory import SYSTEMS, build_system
+from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.core.errors import ConfigError
+from conceptbot.core.plan import InvalidActionError, parse_action
+from conceptbot.scenes import resolve_scene
+from conceptbot.sim.detector import SimDetector, observe
+from conceptbot.sim.execute import execute_plan, run_closed_loop
+from conceptbot.sim.render import VIEW, picture, save_gif
+from conceptbot.sim.skills import GRASP_MODES, PickAndPlace
+from conceptbot.sim.world import build_world
+
+GIF_SIZE = (320, 240)
+
+
+@click.group("sim")
+def sim() -> None:
+    """Execute plans in a PyBullet tabletop (Franka Panda) and check where things end up."""
+
+
+def _plan_file(path: Path) -> list[str]:
+    """The actions of a ``conceptbot plan --json`` output (or a bare JSON list of actions)."""
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ConfigError(f"no plan file {path}") from None
+    except ValueError as exc:
+        raise ConfigError(f"{path} is not valid JSON: {exc}") from None
+    actions = data.get("plan") if isinstance(data, dict) else data
+    if not isinstance(actions, list) or not all(isinstance(a, str) for a in actions):
+        raise ConfigError(
+            f"{path}: expected the output of `conceptbot plan --json` (a 'plan' list of actions)"
+        )
+    return actions
+
+
+@sim.command("run")
+@click.argument("request", required=False, default="")
+@click.option(
+    "--scene", "-s", "scene_ref", default="kitchen", show_default=True, help="Scene file or demo name."
+)
+@click.option(
+    "--config", "-c", type=click.Choice(SYSTEMS), default="conceptbot", show_default=True, help="Planner."
+)
+@click.option(
+    "--plan",
+    "plan_path",
+    type=click.Path(path_type=Path, dir_okay=False),
+    help="Execute this plan (`conceptbot plan --json` output) instead of planning REQUEST.",
+)
+@click.option("--seed", default=0, show_default=True, help="Layout seed (same seed, same world).")
+@click.option("--grasp", type=click.Choice(GRASP_MODES), default="friction", show_default=True)
+@click.option(
+    "--max-replans",
+    default=2,
+    show_default=True,
+    type=click.IntRange(0, 10),
+    help="Replans after failed steps (closed loop).",
+)
+@click.option("--risk", is_flag=True, help="Use the Risk Index in OPE.")
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(path_type=Path, file_okay=False),
+    default=Path("sim-run"),
+    show_default=True,
+    help="Folder for before.png, after.png, execution.gif and result.json.",
+)
+@click.option("--no-gif", is_flag=True, help="Skip the animation (faster).")
+@click.option("--json", "as_json", is_flag=True, help="Print result.json to stdout.")
+@pass_app
+def run(
+    app: AppContext,
+    request: str,
+    scene_ref: str,
+    config: str,
+    plan_path: Path | None,
+    seed: int,
+    grasp: str,
+    max_replans: int,
+    risk: bool,
+    out_dir: Path,
+    no_gif: bool,
+    as_json: bool,
+) -> None:
+    """Plan REQUEST (or load --plan), execute it in simulation, and print a verdict.
+
+    The simulated detector (top camera) sets each object's confidence, box and size before planning,
+    so the affordance sees what the camera sees. When a step fails, the failure goes back to the
+    planner, which plans the rest (at most --max-replans times). Exit status 0 whatever the verdict;
+    the verdict is in the output and in result.json.
+    """
+    if not request.strip() and plan_path is None:
+        raise ConfigError("give a REQUEST to plan, or --plan FILE to execute")
+    scene = resolve_scene(scene_ref)
+    actions = _plan_file(plan_path) if plan_path else None
+    if actions is not None:
+        for text in actions:
+            try:
+                parse_action(text, scene)
+            except InvalidActionError as exc:
+                raise ConfigError(f"{plan_path}: {exc}") from None
+    say = lambda message: click.secho(message, dim=True, err=True)  # noqa: E731
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with build_world(scene, seed=seed) as world:
+        for warning in world.warnings:
+            click.secho(f"warning: {warning}", fg="yellow", err=True)
+        seen = observe(scene, world, SimDetector())
+        picture(world, VIEW, title=f"before: {request or plan_path}").save(out_dir / "before.png")
+        frames: list[Image.Image] = []
+        small = VIEW.scaled(*GIF_SIZE)
+        hook = None if no_gif else (lambda: frames.append(picture(world, small, labels=False)))
+        skill = PickAndPlace(world, grasp, on_frame=hook)
+        if actions is not None:
+            say(f"Executing {len(actions)} actions from {plan_path}")
+            execution = execute_plan(world, seen, actions, skill)
+        else:
+            system = build_system(app.settings, config)
+            execution, _ = run_closed_loop(
+                system, request, seen, world, skill, max_replans=max_replans, risk=risk, progress=say
+            )
+        picture(world, VIEW, title=f"after: {execution.verdict[:70]}").save(out_dir / "after.png")
+        if frames:
+            save_gif(frames, out_dir / "execution.gif")
+    result = {"request": request, "scene": scene.name, "seed": seed, "grasp": grasp, **execution.to_dict()}
+    (out_dir / "result.json").write_text(json.dumps(result, indent=2), encoding="utf-8")
+    if as_json:
+        click.echo(json.dumps(result, indent=2))
+        return
+    for i, plan in enumerate(execution.plans):
+        click.echo(f"{'Plan' if i == 0 else 'Replan ' + str(i)}: {', '.join(plan)}")
+    for step in execution.results:
+        status = "ok" if step.ok else f"FAILED ({step.failure}: {step.message})"
+        click.echo(f"  {step.action}: {status} [{step.seconds:.2f} s]")
+    for obj, where in execution.placements.items():
+        click.echo(f"  {obj} -> {where or 'table'}")
+    click.secho(f"Verdict: {execution.verdict}", fg="green" if execution.ok else "red", bold=True)
+    click.echo(f"Pictures: {out_dir}/before.png, after.png{', execution.gif' if frames else ''}")
