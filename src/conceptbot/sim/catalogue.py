@@ -15,7 +15,7 @@ shape (see :func:`grip_mode`).
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from importlib.resources import files
 from pathlib import Path
 from typing import Any
@@ -188,7 +188,3 @@ class Catalogue:
             grip=grip_mode(shape, size, entry.get("grip")),
             source=source,
         )
-
-    def with_size(self, spec: ObjectSpec, size_m: tuple[float, float, float]) -> ObjectSpec:
-        """``spec`` resized (and its grip re-derived): for scenes that give full geometry."""
-        return replace(spec, size_m=size_m, grip=grip_mode(spec.shape, size_m))

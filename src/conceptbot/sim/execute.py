@@ -128,7 +128,6 @@ def run_closed_loop(
     max_replans: int = 2,
     risk: bool = False,
     progress: Callable[[str], None] | None = None,
-    first_plan: Plan | None = None,
 ) -> tuple[Execution, list[Plan]]:
     """Plan, execute, and replan after failures (see the module docstring).
 
@@ -139,7 +138,7 @@ def run_closed_loop(
     execution = Execution()
     plans: list[Plan] = []
     feedback = Feedback()
-    plan = first_plan or system.plan(request, scene, risk=risk, progress=progress)
+    plan = system.plan(request, scene, risk=risk, progress=progress)
     while True:
         plans.append(plan)
         execution.plans.append(list(plan.actions))

@@ -226,7 +226,7 @@ class PickAndPlace:
         pick = self._pick_poses(grasp, transit)
         if pick is None:
             return SkillResult(action, False, "unreachable", f"the arm cannot reach {obj}", 0.0)
-        yaw, above_obj, _at = pick
+        yaw, above_obj = pick
         offset = (gx - ox, gy - oy)
         object_yaw = world.yaw(obj)
         place = None
@@ -279,16 +279,14 @@ class PickAndPlace:
         """Hand yaws to try: only ``base`` when the grasp fixes it, else eight around it."""
         return [base + k * math.pi / 8 for k in range(8)] if free else [base]
 
-    def _pick_poses(
-        self, grasp: Grasp, transit: float
-    ) -> tuple[float, tuple[float, ...], tuple[float, ...]] | None:
-        """``(yaw, joints above the object, joints at the grasp)``, or None when out of reach."""
+    def _pick_poses(self, grasp: Grasp, transit: float) -> tuple[float, tuple[float, ...]] | None:
+        """``(yaw, joints above the object)`` where the grasp pose is also reachable, or None."""
         gx, gy, _ = grasp.position
         for yaw in self._yaws(grasp.yaw, grasp.free_yaw):
             above = self._reach((gx, gy, transit), yaw)
             at = self._reach(grasp.position, yaw)
             if above is not None and at is not None:
-                return yaw, above, at
+                return yaw, above  # the grasp pose is checked here, reached by a straight descent
         return None
 
     def _place_poses(
