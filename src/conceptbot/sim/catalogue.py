@@ -24,10 +24,10 @@ from conceptbot.core.errors import ConfigError
 
 SHAPES = ("box", "cylinder", "sphere", "container", "flat", "zone")
 GRIPS = ("body", "rim", "knob", "edge")
-MAX_RECEPTACLE_FOOTPRINT_M = 0.25
-MAX_ZONE_FOOTPRINT_M = 0.26
+MAX_RECEPTACLE_FOOTPRINT_M = 0.28
+MAX_ZONE_FOOTPRINT_M = 0.3
 MAX_CONTAINER_HEIGHT_M = 0.12
-THIN_M = 0.012  # objects thinner than this lie flat: picked by the edge (see grip_mode)
+THIN_M = 0.016  # objects thinner than this lie flat: picked by the edge (see grip_mode)
 
 
 @dataclass(frozen=True)

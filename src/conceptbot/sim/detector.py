@@ -6,9 +6,9 @@ the scene's detections (``confidence``, ``bbox_px``, ``size_m``).
 * ``confidence``: the visible fraction -- visible pixels over the pixels its top face would cover
   unoccluded (its footprint projected at its distance from the camera), capped at 1. A thing under
   the arm or inside a deep box scores low; a thing out of view is not detected at all.
-* ``size_m``: the mask's extents along its principal axes in metres at the object's distance (what
-  an RGB-D detector measures), narrow side first, and its height; the affordance compares the
-  narrow side with the gripper opening.
+* ``size_m``: the mask's extents along the sides of its smallest enclosing rectangle, in metres at
+  the object's distance (what an RGB-D detector measures), narrow side first, and its height; the
+  affordance compares the narrow side with the gripper opening.
 
 Any other detector plugs in through :class:`Detector`.
 """
@@ -51,15 +51,20 @@ def _footprint_area(shape: str, width: float, depth: float) -> float:
 
 
 def _extents(rows: np.ndarray, cols: np.ndarray) -> tuple[float, float]:
-    """Long and short extents (pixels) of a pixel set along its principal axes."""
+    """Long and short extents (pixels) of a pixel set along the sides of its smallest-area enclosing
+    rectangle (turns tried every 3 degrees; principal axes alone are arbitrary for a square)."""
     points = np.stack([rows, cols], axis=1).astype(float)
     if len(points) < 3:
         return 1.0, 1.0
     centred = points - points.mean(axis=0)
-    _, vectors = np.linalg.eigh(np.cov(centred.T))
-    projected = centred @ vectors
-    spans = projected.max(axis=0) - projected.min(axis=0) + 1.0
-    return float(spans.max()), float(spans.min())
+    angles = np.radians(np.arange(0.0, 90.0, 3.0))
+    axes = np.stack([np.cos(angles), np.sin(angles)], axis=1)  # (turns, 2)
+    along = centred @ axes.T  # first side of each rectangle
+    across = centred @ np.stack([-axes[:, 1], axes[:, 0]], axis=1).T
+    spans_a = along.max(axis=0) - along.min(axis=0) + 1.0
+    spans_b = across.max(axis=0) - across.min(axis=0) + 1.0
+    best = int(np.argmin(spans_a * spans_b))
+    return float(max(spans_a[best], spans_b[best])), float(min(spans_a[best], spans_b[best]))
 
 
 class SimDetector:
@@ -95,8 +100,8 @@ class SimDetector:
             spec = world.bodies[name].spec
             expected_px = _footprint_area(spec.shape, spec.size_m[0], spec.size_m[1]) / metres_per_px**2
             confidence = min(1.0, count / expected_px) if expected_px > 0 else 1.0
-            # Extents along the mask's principal axes: a turned object is as wide as it is, not as
-            # wide as its axis-aligned box.
+            # Extents along the mask's own smallest rectangle: a turned object is as wide as it is,
+            # not as wide as its axis-aligned box.
             long_px, short_px = _extents(rows, cols)
             size = (
                 round(short_px * metres_per_px, 3),

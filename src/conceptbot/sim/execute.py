@@ -78,7 +78,7 @@ def _check(world: World, execution: Execution) -> None:
     wrong = []
     for obj, target in execution.intended.items():
         where = execution.placements.get(obj)
-        if not same_place(where, target):
+        if not same_place(world.holders(obj), target):
             wrong.append(f"{obj} is {'in/on ' + where if where else 'on the table'} (put in/on {target})")
     execution.ok = not failed and not wrong
     if execution.ok:

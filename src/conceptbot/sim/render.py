@@ -57,8 +57,8 @@ class Camera:
         return self.height / (2 * math.tan(math.radians(self.fov_deg) / 2))
 
 
-TOP = Camera(eye=(0.2, 0.0, 1.75), target=(0.2, 0.0, 0.0), up=(1.0, 0.0, 0.0), fov_deg=48.0)
-VIEW = Camera(eye=(1.45, 0.0, 0.95), target=(0.3, 0.0, 0.0), up=(0.0, 0.0, 1.0), fov_deg=55.0)
+TOP = Camera(eye=(0.03, 0.0, 2.1), target=(0.03, 0.0, 0.0), up=(1.0, 0.0, 0.0), fov_deg=50.0)
+VIEW = Camera(eye=(1.55, 0.0, 1.25), target=(0.1, 0.0, 0.0), up=(0.0, 0.0, 1.0), fov_deg=60.0)
 
 
 def capture(world: World, camera: Camera) -> tuple[np.ndarray, np.ndarray]:

@@ -146,6 +146,13 @@ class Panda:
         """Teleport back after :meth:`out_of_view`."""
         self._teleport(joints)
 
+    def pose_at(self, joints: Sequence[float], opening: float) -> None:
+        """Teleport the arm to ``joints`` and the fingers to ``opening`` (for collision checks; the
+        caller saves and restores the physics state around it)."""
+        self._teleport(joints)
+        for finger in self.FINGERS:
+            pb.resetJointState(self.id, finger, opening / 2, physicsClientId=self.client)
+
     def _teleport(self, joints: Sequence[float]) -> None:
         for joint, q in zip(self.ARM_JOINTS, joints, strict=True):
             pb.resetJointState(self.id, joint, q, physicsClientId=self.client)

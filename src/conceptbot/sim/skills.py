@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import pybullet as pb
@@ -30,22 +31,26 @@ from conceptbot.sim.world import WALL_M, World
 FAILURES = ("unknown", "too_wide", "unreachable", "target_full", "slipped", "missed")
 GRASP_MODES = ("friction", "assisted")
 REACH_TOLERANCE_M = 0.015
-CLEARANCE_M = 0.06
+CLEARANCE_M = 0.04
 CARRY_SPEED = 0.8  # rad/s while holding something: a fast swing shakes it loose
 TRANSIT_Z_M = 0.32
 TALL_M = 0.12
 FINGER_MARGIN_M = 0.004
+MAX_PILE_M = 0.08  # the highest pile on a pad or plate
+HEAP_M = 0.03  # how far a heap may rise over a container's rim
+FINGER_CLEARANCE_M = 0.02  # room kept beside a placed object for the fingers and their opening
 
 
 TABLE = "table"
 
 
-def same_place(located: str | None, target: str) -> bool:
-    """Whether an object found in/on ``located`` (None: the bare table) is where ``target`` says;
-    "table" means anywhere on the table that is not in another destination, or its zone."""
+def same_place(holders: Sequence[str], target: str) -> bool:
+    """Whether an object in/on ``holders`` (from :meth:`World.holders`; empty: the bare table) is
+    where ``target`` says: in/on it directly or on top of something in/on it; "table" means anywhere
+    on the table that is not in another destination, or its zone."""
     if target.lower() == TABLE:
-        return located is None or located.lower() == TABLE
-    return located == target
+        return not holders or TABLE in (h.lower() for h in holders)
+    return target in holders
 
 
 @dataclass
@@ -59,6 +64,16 @@ class SkillResult:
     seconds: float = 0.0
     located: str | None = None
     details: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Spot:
+    """Where to set an object down: centre ``(x, y)``, its yaw, and the height its bottom rests at."""
+
+    x: float
+    y: float
+    yaw: float
+    floor_z: float
 
 
 @dataclass(frozen=True)
@@ -154,24 +169,74 @@ class PickAndPlace:
         )
         return touched and self.world.locate(name) is None
 
-    def free_spots(self, obj: str, target: str) -> list[tuple[float, float, float]]:
-        """Places ``(x, y, yaw)`` in/on ``target`` where ``obj``'s footprint (turned to ``yaw``: along
-        the world axes or across them) overlaps nothing already there; nearest the arm first."""
+    def free_spots(self, obj: str, target: str) -> list[Spot]:
+        """Places in/on ``target`` for ``obj``, best first (see :class:`Spot`).
+
+        Floor spots first: the object's footprint (turned along the world axes or across them) plus
+        :data:`FINGER_CLEARANCE_M` for the open fingers overlaps nothing already there (without the
+        clearance when nothing fits with it). Receptacles whose floor is full (a bin, a dishwasher)
+        take things on top of what is in them, lowest pile first, as a person would drop a brochure
+        onto a journal in the paper bin. A plain object (stacking) takes one thing on its top.
+        """
         x0, y0, x1, y1 = self.world.region(target)
+        floor = self.world.floor_z(target)
         w, d, h = self.world.bodies[obj].spec.size_m
+        inside = [other for other in self.world.occupants(target) if other != obj]
         occupied = []
-        for other in self.world.occupants(target):
-            if other != obj:
-                lo, hi = self.world.aabb(other)
-                occupied.append((lo[0], lo[1], hi[0], hi[1]))
+        for other in inside:
+            lo, hi = self.world.aabb(other)
+            occupied.append((lo[0], lo[1], hi[0], hi[1], hi[2]))
         cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
         if self.world.bodies[target].spec.shape not in ("container", "zone", "flat"):
             # Stacking on an object: its top must be free; the footprint may overhang.
-            return [] if occupied else [(cx, cy, 0.0), (cx, cy, math.pi / 2)]
+            return [] if occupied else [Spot(cx, cy, 0.0, floor), Spot(cx, cy, math.pi / 2, floor)]
+        for pad in (FINGER_CLEARANCE_M, 0.005):
+            spots = self._floor_spots((x0, y0, x1, y1), (w, d), pad, occupied, floor)
+            if spots:
+                break
+        if h > TALL_M and self.world.bodies[target].spec.shape == "container":
+            # Tall things go to a container's centre, where they cannot topple over a wall.
+            spots.sort(key=lambda s: (round(math.hypot(s.x - cx, s.y - cy), 3), s.yaw))
+        elif h > TALL_M:
+            # On a pad or plate, to the far side: the hand then has room in front for the next thing.
+            spots.sort(key=lambda s: (-round(math.hypot(s.x, s.y), 3), s.yaw))
+        else:
+            # Fill from the side nearest the arm: keeps the far side free and packs several things.
+            spots.sort(key=lambda s: (round(math.hypot(s.x, s.y), 3), s.yaw))
+        if spots:
+            return spots
+        piles = []
+        for px, py in [(cx, cy)] + [((o[0] + o[2]) / 2, (o[1] + o[3]) / 2) for o in occupied]:
+            for yaw, (hx, hy) in ((0.0, (w / 2, d / 2)), (math.pi / 2, (d / 2, w / 2))):
+                under = [
+                    o[4]
+                    for o in occupied
+                    if not (px + hx <= o[0] or px - hx >= o[2] or py + hy <= o[1] or py - hy >= o[3])
+                ]
+                piles.append(Spot(px, py, yaw, max(under, default=floor)))
+        # A pile stays in a container (heaped at most a little over its rim) and low on a pad or plate.
+        _, hi = self.world.aabb(target)
+        container = self.world.bodies[target].spec.shape == "container"
+        limit = hi[2] + HEAP_M if container else floor + MAX_PILE_M
+        piles = [s for s in piles if s.floor_z <= limit]
+        piles.sort(key=lambda s: (round(s.floor_z, 3), round(math.hypot(s.x - cx, s.y - cy), 3)))
+        return piles
+
+    @staticmethod
+    def _floor_spots(
+        region: tuple[float, float, float, float],
+        size: tuple[float, float],
+        pad: float,
+        occupied: list[tuple[float, float, float, float, float]],
+        floor: float,
+    ) -> list[Spot]:
+        """Grid positions in ``region`` where the footprint ``size`` plus ``pad`` is clear."""
+        x0, y0, x1, y1 = region
+        cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
         spots = []
-        for yaw, (hx, hy) in ((0.0, (w / 2, d / 2)), (math.pi / 2, (d / 2, w / 2))):
+        for yaw, (hx, hy) in ((0.0, (size[0] / 2, size[1] / 2)), (math.pi / 2, (size[1] / 2, size[0] / 2))):
             # A footprint bigger than the region may still rest on it (a banana across a plate).
-            hx, hy = min(hx, (x1 - x0) / 2), min(hy, (y1 - y0) / 2)
+            hx, hy = min(hx + pad, (x1 - x0) / 2), min(hy + pad, (y1 - y0) / 2)
             grid = 4
             candidates = [(cx, cy)] + [
                 (x0 + hx + (x1 - x0 - 2 * hx) * i / grid, y0 + hy + (y1 - y0 - 2 * hy) * j / grid)
@@ -179,17 +244,11 @@ class PickAndPlace:
                 for j in range(grid + 1)
             ]
             for px, py in candidates:
-                box = (px - hx - 0.005, py - hy - 0.005, px + hx + 0.005, py + hy + 0.005)
+                box = (px - hx, py - hy, px + hx, py + hy)
                 if all(
                     box[2] <= o[0] or box[0] >= o[2] or box[3] <= o[1] or box[1] >= o[3] for o in occupied
                 ):
-                    spots.append((px, py, yaw))
-        if h > TALL_M:
-            # Tall things go to the centre, where they cannot topple over a wall or off a pad.
-            spots.sort(key=lambda s: (round(math.hypot(s[0] - cx, s[1] - cy), 3), s[2]))
-        else:
-            # Fill from the side nearest the arm: keeps the far side free and packs several things.
-            spots.sort(key=lambda s: (round(math.hypot(s[0], s[1]), 3), s[2]))
+                    spots.append(Spot(px, py, yaw, floor))
         return spots
 
     # -- the skill -----------------------------------------------------------------------------------
@@ -219,26 +278,35 @@ class PickAndPlace:
         (ox, oy, _), _ = world.pose(obj)
         obj_lo, obj_hi = world.aabb(obj)
         hand_above_bottom = gz - obj_lo[2]
-        floor = world.floor_z(target)
         _, target_hi = world.aabb(target)
+        top = max([target_hi[2]] + [spot.floor_z for spot in spots[:12]])
         # Travel high enough that the held object clears everything on the way (tallest things 0.25 m).
-        transit = max(TRANSIT_Z_M, target_hi[2] + hand_above_bottom + CLEARANCE_M, obj_hi[2] + CLEARANCE_M)
-        pick = self._pick_poses(grasp, transit)
+        transit = max(TRANSIT_Z_M, top + hand_above_bottom + CLEARANCE_M, obj_hi[2] + CLEARANCE_M)
+        pick = self._pick_poses(grasp, obj, transit)
         if pick is None:
             return SkillResult(action, False, "unreachable", f"the arm cannot reach {obj}", 0.0)
         yaw, above_obj = pick
         offset = (gx - ox, gy - oy)
         object_yaw = world.yaw(obj)
-        place = None
-        for spot in spots[:12]:
-            place = self._place_poses(
-                spot, offset, yaw, object_yaw, transit, floor + hand_above_bottom + 0.004
-            )
+        # The first place where the hand at the release touches nothing (the palm is 21 cm wide: beside
+        # a bin's wall it would land on the wall, beside a bottle it would knock it over).
+        place = first = None
+        for spot in spots:
+            release_z = spot.floor_z + hand_above_bottom + 0.004
+            round_body = world.bodies[obj].spec.shape in ("sphere", "cylinder")
+            for candidate in self._place_poses(spot, offset, yaw, object_yaw, transit, release_z, round_body):
+                first = first or candidate
+                if self._clear(candidate[3], obj, grasp.width):
+                    place = candidate
+                    break
             if place is not None:
                 break
-        if place is None:
+        if first is None:
             return SkillResult(action, False, "unreachable", f"the arm cannot reach {target}", 0.0)
-        above_target, drop, drop_yaw = place
+        if place is None:
+            message = f"no spot in/on {target} leaves room for the hand beside what is there"
+            return SkillResult(action, False, "target_full", message, 0.0)
+        above_target, drop, drop_yaw, _ = place
 
         robot = self.robot
         robot.grip(Panda.OPENING_M, steps=20)
@@ -262,57 +330,95 @@ class PickAndPlace:
             return self._fail(action, "slipped", f"{obj} slipped out on the way", started)
         robot.move_straight(drop, drop_yaw, on_frame=self.on_frame)
         self._detach(constraint)
-        # Open only a little wider than the object: a wide-open hand pushes its neighbours away.
-        robot.grip(min(Panda.OPENING_M, grasp.width + 0.02), steps=50, on_frame=self.on_frame)
+        # Open into the clearance free_spots kept beside it (not wide open: that would push the
+        # neighbours away), and let it stand on its own before the fingers leave.
+        robot.grip(
+            min(Panda.OPENING_M, grasp.width + 2 * FINGER_CLEARANCE_M), steps=50, on_frame=self.on_frame
+        )
+        world.settle(30)
         robot.move_straight((drop[0], drop[1], transit), drop_yaw, waypoints=3)
         self._go_home()
         world.settle(60)
         located = world.locate(obj)
         seconds = time.perf_counter() - started
-        if not same_place(located, target):
+        if not same_place(world.holders(obj), target):
             where = f"in/on {located}" if located else "on the table"
             message = f"{obj} ended up {where}, not in/on {target}"
             return SkillResult(action, False, "missed", message, seconds, located)
         return SkillResult(action, True, None, "ok", seconds, located, {"lifted_m": round(lifted, 3)})
 
-    def _yaws(self, base: float, free: bool) -> list[float]:
-        """Hand yaws to try: only ``base`` when the grasp fixes it, else eight around it."""
-        return [base + k * math.pi / 8 for k in range(8)] if free else [base]
+    def _yaws(self, grasp: Grasp) -> list[float]:
+        """Hand yaws to try: ``grasp.yaw`` and its turn by pi (the same finger line, another arm pose),
+        or eight around it when the grasp may turn (round things, knobs, sheets)."""
+        if grasp.free_yaw:
+            return [grasp.yaw + k * math.pi / 8 for k in range(8)]
+        return [grasp.yaw, grasp.yaw + math.pi]
 
-    def _pick_poses(self, grasp: Grasp, transit: float) -> tuple[float, tuple[float, ...]] | None:
-        """``(yaw, joints above the object)`` where the grasp pose is also reachable, or None."""
+    def _pick_poses(self, grasp: Grasp, obj: str, transit: float) -> tuple[float, tuple[float, ...]] | None:
+        """``(yaw, joints above the object)`` where the grasp pose is also reachable, or None.
+
+        A yaw where the open hand at the grasp pose touches no other body wins (the palm is 21 cm
+        wide along the finger line: beside a bottle it would land on it); else the first reachable.
+        """
         gx, gy, _ = grasp.position
-        for yaw in self._yaws(grasp.yaw, grasp.free_yaw):
+        first = None
+        for yaw in self._yaws(grasp):
             above = self._reach((gx, gy, transit), yaw)
             at = self._reach(grasp.position, yaw)
-            if above is not None and at is not None:
+            if above is None or at is None:
+                continue
+            if self._clear(at, obj):
                 return yaw, above  # the grasp pose is checked here, reached by a straight descent
-        return None
+            first = first or (yaw, above)
+        return first
+
+    def _clear(self, joints: tuple[float, ...], obj: str, opening: float = Panda.OPENING_M) -> bool:
+        """Whether the hand at ``joints``, fingers ``opening`` apart, keeps 3 mm from every body but
+        ``obj`` and the table.
+
+        Checked by putting the arm there without stepping the physics, then restoring the state."""
+        client = self.world.client
+        state = pb.saveState(physicsClientId=client)
+        try:
+            self.robot.pose_at(joints, opening)
+            held = self.world.bodies[obj].id
+            return not any(
+                pb.getClosestPoints(self.robot.id, body.id, 0.003, physicsClientId=client)
+                for body in self.world.bodies.values()
+                if body.id != held
+            )
+        finally:
+            pb.restoreState(state, physicsClientId=client)
+            pb.removeState(state, physicsClientId=client)
 
     def _place_poses(
         self,
-        spot: tuple[float, float, float],
+        spot: Spot,
         offset: tuple[float, float],
         yaw: float,
         object_yaw: float,
         transit: float,
         release_z: float,
-    ) -> tuple[tuple[float, ...], Vec3, float] | None:
-        """``(joints above the spot, hand position at the release, hand yaw)``, or None.
+        round_body: bool = False,
+    ) -> list[tuple[tuple[float, ...], Vec3, float, tuple[float, ...]]]:
+        """Reachable ``(joints above the spot, hand position at the release, hand yaw, joints at the
+        release)`` for one spot.
 
         The hand turns the held object from ``object_yaw`` to the spot's yaw (or that plus pi, the same
-        footprint); the grasp offset turns with it.
+        footprint); a round body may turn any way (eight turns tried), which lets the wide palm
+        avoid a wall or a tall neighbour. The grasp offset turns with it.
         """
-        for extra in (0.0, math.pi):
-            turn = spot[2] - object_yaw + extra
+        found = []
+        for extra in [k * math.pi / 4 for k in range(8)] if round_body else (0.0, math.pi):
+            turn = spot.yaw - object_yaw + extra
             dx = offset[0] * math.cos(turn) - offset[1] * math.sin(turn)
             dy = offset[0] * math.sin(turn) + offset[1] * math.cos(turn)
-            x, y = spot[0] + dx, spot[1] + dy
+            x, y = spot.x + dx, spot.y + dy
             above = self._reach((x, y, transit), yaw + turn)
             drop = self._reach((x, y, release_z), yaw + turn)
             if above is not None and drop is not None:
-                return above, (x, y, release_z), yaw + turn
-        return None
+                found.append((above, (x, y, release_z), yaw + turn, drop))
+        return found
 
     def _near_hand(self, obj: str) -> bool:
         points = pb.getClosestPoints(

@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import random
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import pybullet as pb
 
@@ -24,12 +25,17 @@ from conceptbot.sim.robot import Panda, Vec3
 WALL_M = 0.008
 REACH_MIN_M = 0.32
 REACH_MAX_M = 0.78
-SIDE_ANGLE_RAD = math.radians(115)
-OUTER_EXTRA_ANGLE_RAD = math.radians(15)  # receptacles may stand a little behind the arm's sides
+SIDE_ANGLE_RAD = math.radians(150)
+OUTER_EXTRA_ANGLE_RAD = math.radians(10)  # receptacles may stand a little behind the arm's sides
 MARGIN_M = 0.015
 ZONE_OVERHANG_M = 0.08
-TABLE_HALF = (0.75, 0.95, 0.02)
-TABLE_CENTRE = (0.1, 0.0)
+TABLE_HALF = (0.92, 0.95, 0.02)
+BLOCKING_HEIGHT_M = 0.13  # things taller than this block the forearm's way down to what is behind them
+ARM_CORRIDOR_M = 0.07  # half-width of the forearm's way from the arm to an object
+BLOCKING_RANGE_M = 0.2  # how far before an object the forearm is low
+TALL_M_LAYOUT = 0.2  # pickable things taller than this stand within TALL_REACH_M
+TALL_REACH_M = 0.6
+TABLE_CENTRE = (0.03, 0.0)
 
 
 @dataclass
@@ -109,7 +115,7 @@ class World:
             if other == name:
                 continue
             olo, ohi = self.aabb(other)
-            if not (olo[0] - 0.005 <= x <= ohi[0] + 0.005 and olo[1] - 0.005 <= y <= ohi[1] + 0.005):
+            if not self._over(other, x, y, 0.005):
                 continue
             if body.spec.shape == "container":
                 resting = olo[2] - 0.01 <= lo[2] <= ohi[2] + 0.01
@@ -118,6 +124,27 @@ class World:
             if resting and (best is None or ohi[2] > best[0]):
                 best = (ohi[2], other)
         return best[1] if best else None
+
+    def holders(self, name: str) -> list[str]:
+        """Every destination ``name`` is in or on, innermost first: a fork on a plate in the dishwasher
+        gives ``["plate", "dishwasher"]`` (things piled in a bin are in the bin)."""
+        chain: list[str] = []
+        current = self.locate(name)
+        while current is not None and current not in chain:
+            chain.append(current)
+            current = self.locate(current)
+        return chain
+
+    def _over(self, name: str, x: float, y: float, margin: float) -> bool:
+        """Whether the point ``(x, y)`` lies over ``name``'s footprint (in its own turned frame; an
+        axis-aligned box would take in the corners beside a turned bin)."""
+        (ox, oy, _), _ = self.pose(name)
+        yaw = self.yaw(name)
+        dx, dy = x - ox, y - oy
+        lx = dx * math.cos(yaw) + dy * math.sin(yaw)
+        ly = -dx * math.sin(yaw) + dy * math.cos(yaw)
+        w, d, _ = self.bodies[name].spec.size_m
+        return abs(lx) <= w / 2 + margin and abs(ly) <= d / 2 + margin
 
     def occupants(self, name: str) -> list[str]:
         """Bodies currently in or on ``name``."""
@@ -195,26 +222,60 @@ def _compound(client: int, parts: list, colour: list[float]) -> tuple[int, int]:
     return collision, visual
 
 
+class _Placed(NamedTuple):
+    """An object already laid out: centre, footprint radius, height, and whether the arm picks it."""
+
+    x: float
+    y: float
+    radius: float
+    height: float
+    picked: bool
+
+
+def _blocks(near: _Placed, far: _Placed) -> bool:
+    """Whether ``near`` stands in the arm's way to ``far``: it is tall, nearer the arm, and within the
+    forearm's corridor on the line from the arm to ``far``. Only objects to pick count as ``far``: a
+    receptacle has room beside the blocker, and the skill picks a spot there."""
+    reach = math.hypot(far.x, far.y)
+    if not far.picked or near.height <= BLOCKING_HEIGHT_M or math.hypot(near.x, near.y) >= reach:
+        return False
+    along = (near.x * far.x + near.y * far.y) / reach
+    across = abs(near.x * far.y - near.y * far.x) / reach
+    # Only near the far object does the forearm come down low enough to hit something.
+    return 0.0 < reach - along < BLOCKING_RANGE_M and across < near.radius + ARM_CORRIDOR_M
+
+
 def _layout(specs: list[tuple[ObjectSpec, bool]], rng: random.Random) -> dict[str, tuple[float, float]]:
-    """Positions without overlaps: receptacles and zones on the outer ring first, then the rest."""
-    placed: list[tuple[float, float, float]] = []
+    """Positions without overlaps: receptacles and zones on the outer ring first, then the rest.
+
+    Tall objects stand within :data:`TALL_REACH_M` (the arm lifts them higher than it can reach far
+    out) and never in the forearm's way to another object (a bottle in front of an egg leaves no way
+    down to the egg)."""
+    placed: list[_Placed] = []
     positions: dict[str, tuple[float, float]] = {}
     order = sorted(specs, key=lambda item: (not item[1], -item[0].footprint_radius))
     for spec, outer in order:
         radius = spec.footprint_radius
+        height = spec.size_m[2]
         lo = (REACH_MIN_M + REACH_MAX_M) / 2 if outer else REACH_MIN_M
         hi = REACH_MAX_M if outer else REACH_MAX_M - 0.06
         if spec.shape == "zone":
             hi += ZONE_OVERHANG_M  # only the near part of a large pad must be in reach
-        for attempt in range(4000):
-            if attempt == 2000:
+        elif not outer and height > TALL_M_LAYOUT:
+            hi = min(hi, TALL_REACH_M)
+        for attempt in range(10000):
+            if attempt == 3000:
                 lo = REACH_MIN_M  # crowded: let it use the whole ring
+            corridors = attempt < 8000  # very crowded: give up keeping the forearm's ways free
             r = rng.uniform(lo + radius * 0.5, hi - radius * 0.5) if hi - lo > radius else (lo + hi) / 2
             side = SIDE_ANGLE_RAD + (OUTER_EXTRA_ANGLE_RAD if outer else 0.0)
             a = rng.uniform(-side, side)
             x, y = r * math.cos(a), r * math.sin(a)
-            if all(math.hypot(x - px, y - py) >= radius + pr + MARGIN_M for px, py, pr in placed):
-                placed.append((x, y, radius))
+            here = _Placed(x, y, radius, height, not outer)
+            if all(math.hypot(x - p.x, y - p.y) >= radius + p.radius + MARGIN_M for p in placed) and not (
+                corridors and any(_blocks(here, other) or _blocks(other, here) for other in placed)
+            ):
+                placed.append(here)
                 positions[spec.name] = (x, y)
                 break
         else:
@@ -269,7 +330,8 @@ def build_world(scene: Scene, seed: int = 0, catalogue: Catalogue | None = None)
             x, y = positions[obj.name]
             # Face the arm: a long object lies across the reach direction so the gripper closes on its
             # narrow side without twisting the wrist far.
-            yaw = math.atan2(y, x) if spec.shape not in ("zone",) else 0.0
+            # Receptacles stay square to the table: their regions are then their bounding boxes.
+            yaw = math.atan2(y, x) if spec.shape in ("box", "cylinder", "sphere") else 0.0
             # Receptacles and zones the robot may not pick are fixed in place: a bump does not slide a
             # bin across the table (real ones are heavy or stand beside it).
             mass = spec.mass_kg if obj.pickable else 0.0
