@@ -27,8 +27,9 @@ def sim() -> None:
     """Execute plans in a PyBullet tabletop (Franka Panda) and check where things end up."""
 
 
-def _plan_file(path: Path) -> list[str]:
-    """The actions of a ``conceptbot plan --json`` output (or a bare JSON list of actions)."""
+def _plan_file(path: Path) -> tuple[list[str], str]:
+    """The actions and request of a ``conceptbot plan --json`` output (or a bare JSON list of
+    actions; the request is then empty)."""
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
@@ -40,7 +41,8 @@ def _plan_file(path: Path) -> list[str]:
         raise ConfigError(
             f"{path}: expected the output of `conceptbot plan --json` (a 'plan' list of actions)"
         )
-    return actions
+    request = data.get("request", "") if isinstance(data, dict) else ""
+    return actions, request if isinstance(request, str) else ""
 
 
 @sim.command("run")
@@ -102,7 +104,7 @@ def run(
     if not request.strip() and plan_path is None:
         raise ConfigError("give a REQUEST to plan, or --plan FILE to execute")
     scene = resolve_scene(scene_ref)
-    actions = _plan_file(plan_path) if plan_path else None
+    actions, planned_for = _plan_file(plan_path) if plan_path else (None, "")
     if actions is not None:
         for text in actions:
             try:
@@ -115,7 +117,8 @@ def run(
         for warning in world.warnings:
             click.secho(f"warning: {warning}", fg="yellow", err=True)
         seen = observe(scene, world, SimDetector())
-        picture(world, VIEW, title=f"before: {request or plan_path}").save(out_dir / "before.png")
+        heading = request or planned_for or (plan_path.name if plan_path else "")
+        picture(world, VIEW, title=f"before: {heading}").save(out_dir / "before.png")
         frames: list[Image.Image] = []
         small = VIEW.scaled(*GIF_SIZE)
         hook = None if no_gif else (lambda: frames.append(picture(world, small, labels=False)))
