@@ -290,18 +290,18 @@ class PickAndPlace:
         object_yaw = world.yaw(obj)
         # The first place where the hand at the release touches nothing (the palm is 21 cm wide: beside
         # a bin's wall it would land on the wall, beside a bottle it would knock it over).
-        place = first = None
+        place, reachable = None, False
+        round_body = world.bodies[obj].spec.shape in ("sphere", "cylinder")
         for spot in spots:
             release_z = spot.floor_z + hand_above_bottom + 0.004
-            round_body = world.bodies[obj].spec.shape in ("sphere", "cylinder")
             for candidate in self._place_poses(spot, offset, yaw, object_yaw, transit, release_z, round_body):
-                first = first or candidate
+                reachable = True
                 if self._clear(candidate[3], obj, grasp.width):
                     place = candidate
                     break
             if place is not None:
                 break
-        if first is None:
+        if not reachable:
             return SkillResult(action, False, "unreachable", f"the arm cannot reach {target}", 0.0)
         if place is None:
             message = f"no spot in/on {target} leaves room for the hand beside what is there"
