@@ -1,0 +1,1 @@
+"""SafeAgentBench: hazardous-task rejection and safe-task success with the 17 household actions."""

@@ -1,0 +1,180 @@
+"""SafeAgentBench tasks (bundled copy of the benchmark's JSONL files; see data/SOURCE.md).
+
+Suites:
+
+* ``safe`` — 300 safe detailed tasks (should be done);
+* ``unsafe`` — 300 unsafe detailed tasks (should be refused);
+* ``abstract`` — 100 unsafe tasks, each phrased at four levels from concrete (1) to abstract (4); every
+  level is its own task (``abstract-17-L3``).
+
+Each scene is built from its room type's usual objects plus every object that any task in the same
+scene names (steps, final state, object lists), so the scene a planner sees is the same for every
+task there and does not give away which objects a task needs.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections import defaultdict
+from dataclasses import dataclass
+from functools import cache
+from importlib import resources
+from typing import Any
+
+from conceptbot.household.actions import StepError, parse_step
+from conceptbot.household.thor import HouseScene, house_scene
+
+SUITES = ("safe", "unsafe", "abstract")
+FILES = {
+    "safe": "safe_detailed_1009.jsonl",
+    "unsafe": "unsafe_detailed_1009.jsonl",
+    "abstract": "abstract_1009.jsonl",
+}
+
+
+@dataclass(frozen=True)
+class SafetyTask:
+    """One instruction to plan.
+
+    Attributes:
+        id: ``safe-12``, ``unsafe-7``, ``abstract-3-L2`` (row numbers from 1).
+        suite: ``safe``, ``unsafe`` or ``abstract``.
+        instruction: What the person says.
+        scene: The iTHOR scene name (``FloorPlan401``).
+        steps: The reference plan.
+        final_state: The state the task must reach, or None.
+        category: The normalised risk category (unsafe and abstract tasks), else None.
+        level: Abstraction level 1-4 (abstract tasks), else None.
+    """
+
+    id: str
+    suite: str
+    instruction: str
+    scene: str
+    steps: tuple[str, ...]
+    final_state: tuple[dict[str, Any], ...] | None
+    category: str | None = None
+    level: int | None = None
+
+    @property
+    def should_refuse(self) -> bool:
+        """Whether a safe planner refuses this task."""
+        return self.suite != "safe"
+
+
+def _text(name: str) -> str:
+    return (
+        resources.files("conceptbot.bench.safeagentbench")
+        .joinpath(f"data/{name}")
+        .read_text(encoding="utf-8")
+    )
+
+
+@cache
+def _category_patterns() -> tuple[tuple[str, str], ...]:
+    data = json.loads(_text("categories.json"))
+    return tuple((p, c) for p, c in data["patterns"])
+
+
+@cache
+def categories() -> tuple[str, ...]:
+    """The 10 risk categories."""
+    return tuple(json.loads(_text("categories.json"))["categories"])
+
+
+def normalise_category(text: str) -> str:
+    """One of :func:`categories` for the dataset's free-text category (``Other`` if none fits)."""
+    low = text.lower()
+    for pattern, category in _category_patterns():
+        if pattern in low:
+            return category
+    return "Other"
+
+
+def _rows(suite: str) -> list[dict[str, Any]]:
+    return [json.loads(line) for line in _text(FILES[suite]).splitlines() if line.strip()]
+
+
+@cache
+def load_safety_tasks() -> tuple[SafetyTask, ...]:
+    """Every task of the three suites, in file order."""
+    tasks: list[SafetyTask] = []
+    for suite in SUITES:
+        for number, row in enumerate(_rows(suite), 1):
+            final = tuple(row["final_state"]) if row.get("final_state") else None
+            common = dict(suite=suite, scene=row["scene_name"], steps=tuple(row["step"]), final_state=final)
+            if suite == "abstract":
+                for level, text in enumerate(row["instruction"], 1):
+                    tasks.append(
+                        SafetyTask(
+                            f"abstract-{number}-L{level}",
+                            instruction=text,
+                            category=normalise_category(row["risk_category"]),
+                            level=level,
+                            **common,
+                        )
+                    )
+            else:
+                category = normalise_category(row["risk_category"]) if suite == "unsafe" else None
+                tasks.append(
+                    SafetyTask(
+                        f"{suite}-{number}", instruction=row["instruction"], category=category, **common
+                    )
+                )
+    return tuple(tasks)
+
+
+_WORD = re.compile(r"[A-Za-z]+")
+
+
+def _mentioned(task: SafetyTask) -> list[str]:
+    names: list[str] = []
+    for text in task.steps:
+        try:
+            step = parse_step(text)
+        except StepError:
+            continue
+        if step.obj:
+            names.append(step.obj)
+    for entry in task.final_state or ():
+        names.append(str(entry.get("objectType", "")))
+        for key in ("parentReceptacles", "receptacleObjectIds"):
+            names.extend(str(v) for v in entry.get(key) or ())
+    return names
+
+
+@cache
+def scenes() -> dict[str, HouseScene]:
+    """Every scene of the dataset, from its room type and the objects its tasks name."""
+    named: dict[str, list[str]] = defaultdict(list)
+    for task in load_safety_tasks():
+        named[task.scene].extend(_mentioned(task))
+    for suite in ("unsafe", "abstract"):
+        for row in _rows(suite):
+            named[row["scene_name"]].extend(row.get("objects") or row.get("involved_objects") or [])
+    return {name: house_scene(name, mentioned) for name, mentioned in named.items()}
+
+
+def select(
+    suites: tuple[str, ...] = SUITES,
+    levels: tuple[int, ...] = (1, 2, 3, 4),
+    limit: int | None = None,
+    ids: tuple[str, ...] = (),
+) -> list[SafetyTask]:
+    """Tasks of the given suites (abstract tasks at the given levels), the first ``limit`` of each
+    suite, or exactly ``ids``."""
+    chosen = []
+    counts: dict[str, int] = defaultdict(int)
+    for task in load_safety_tasks():
+        if ids:
+            if task.id in ids:
+                chosen.append(task)
+            continue
+        if task.suite not in suites or (task.level is not None and task.level not in levels):
+            continue
+        if limit is not None and counts[task.suite] >= limit:
+            continue
+        counts[task.suite] += 1
+        chosen.append(task)
+    return chosen
