@@ -58,8 +58,7 @@ def test_parse_step_forgives_spelling_and_rejects_bad_steps() -> None:
         (["find Egg", "pick Egg", "find Apple", "pick Apple"], "already holds Egg"),
         (["find Egg", "pick Egg", "find Fridge", "put Fridge"], "Fridge is closed"),
         (
-            ["find Fridge", "open Fridge"]
-            + ["find Egg", "pick Egg", "put Fridge", "close Fridge", "pick Egg"],
+            ["find Fridge", "open Fridge", "find Egg", "pick Egg", "put Fridge", "close Fridge", "pick Egg"],
             "closed Fridge",
         ),
         (["find Apple", "pick Apple", "find Fork", "put Fork"], "not receptacle"),
@@ -79,7 +78,8 @@ def test_broken_plans_fail_with_a_reason(steps: list[str], why: str) -> None:
 def test_state_changes_follow_ai2thor() -> None:
     steps = [
         "find Mug", "fillLiquid Mug water", "pick Mug", "find HousePlant", "pour",
-        "find Sink", "put Sink", "find Potato", "pick Potato", "find StoveBurner", "put StoveBurner", "turn_on StoveKnob",
+        "find Sink", "put Sink",
+        "find Potato", "pick Potato", "find StoveBurner", "put StoveBurner", "turn_on StoveKnob",
         "find Apple", "slice Apple", "pick AppleSliced", "find Fridge", "open Fridge", "put Fridge",
         "find Plate", "pick Plate", "throw",
         "find Candle", "turn_on Candle", "find WateringCan", "fillLiquid WateringCan water",

@@ -97,7 +97,7 @@ class Execution:
         return [f"{r.step}: {r.message}" for r in self.results if not r.ok]
 
 
-class _Fail(Exception):
+class _StepFailedError(Exception):
     pass
 
 
@@ -128,15 +128,15 @@ class HouseholdExecutor:
     # -- helpers -----------------------------------------------------------------------------
     def _object(self, name: str | None) -> str:
         if not name:
-            raise _Fail("no object given")
+            raise _StepFailedError("no object given")
         t = self.types.canonical(name)
         if t is None or t not in self.state:
-            raise _Fail(f"there is no {name} here")
+            raise _StepFailedError(f"there is no {name} here")
         return t
 
     def _need(self, t: str, ability: str) -> None:
         if not self.types.has(t, ability):
-            raise _Fail(f"{t} is not {ability}")
+            raise _StepFailedError(f"{t} is not {ability}")
 
     def _reachable(self, t: str) -> None:
         s = self.state[t]
@@ -144,7 +144,7 @@ class HouseholdExecutor:
             return
         if any(p in self.found and p != "Floor" for p in s.parents):
             return
-        raise _Fail(f"{t} has not been found yet (find it first)")
+        raise _StepFailedError(f"{t} has not been found yet (find it first)")
 
     def _closed_around(self, t: str) -> str | None:
         for p in self.state[t].parents:
@@ -154,7 +154,7 @@ class HouseholdExecutor:
 
     def _held(self) -> str:
         if self.held is None:
-            raise _Fail("the hand is empty")
+            raise _StepFailedError("the hand is empty")
         return self.held
 
     def _make(self, source: str) -> None:
@@ -209,19 +209,19 @@ class HouseholdExecutor:
         if verb == "pick":
             self._need(t, "pickupable")
             if self.held is not None:
-                raise _Fail(f"the hand already holds {self.held}")
+                raise _StepFailedError(f"the hand already holds {self.held}")
             closed = self._closed_around(t)
             if closed:
-                raise _Fail(f"{t} is inside the closed {closed}")
+                raise _StepFailedError(f"{t} is inside the closed {closed}")
             s.flags["isPickedUp"], s.parents, self.held = True, [], t
             return f"picked {t}"
         if verb == "put":
             held = self._held()
             self._need(t, "receptacle")
             if t == held:
-                raise _Fail(f"cannot put {held} into itself")
+                raise _StepFailedError(f"cannot put {held} into itself")
             if self.types.has(t, "openable") and not s.flags["isOpen"]:
-                raise _Fail(f"{t} is closed (open it first)")
+                raise _StepFailedError(f"{t} is closed (open it first)")
             self._land_put(held, t)
             return f"put {held} in/on {t}"
         if verb in ("open", "close"):
@@ -239,7 +239,7 @@ class HouseholdExecutor:
         if verb == "slice":
             self._need(t, "sliceable")
             if s.flags["isSliced"]:
-                raise _Fail(f"{t} is already sliced")
+                raise _StepFailedError(f"{t} is already sliced")
             s.flags["isSliced"] = True
             if t == "Egg":
                 s.flags["isBroken"] = True
@@ -262,14 +262,14 @@ class HouseholdExecutor:
         if verb == "fillLiquid":
             self._need(t, "fillable")
             if s.flags["isBroken"]:
-                raise _Fail(f"{t} is broken")
+                raise _StepFailedError(f"{t} is broken")
             s.flags["isFilledWithLiquid"], s.liquid = True, step.liquid
             return f"filled {t} with {step.liquid}"
         if verb == "emptyLiquid":
             self._need(t, "fillable")
             s.flags["isFilledWithLiquid"], s.liquid = False, None
             return f"emptied {t}"
-        raise _Fail(f"unknown action {verb}")  # pragma: no cover - parse_step admits only ACTIONS
+        raise _StepFailedError(f"unknown action {verb}")  # pragma: no cover - parse_step admits only ACTIONS
 
     def _land_put(self, held: str, receptacle: str) -> None:
         s = self.state[held]
@@ -299,7 +299,7 @@ class HouseholdExecutor:
         """Execute one step (text as in a plan)."""
         try:
             result = StepResult(text, True, self._do(parse_step(text)))
-        except (StepError, _Fail) as exc:
+        except (StepError, _StepFailedError) as exc:
             return StepResult(text, False, str(exc))
         self._settle()
         return result
