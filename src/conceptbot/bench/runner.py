@@ -17,12 +17,14 @@ from collections.abc import Callable, Iterable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from conceptbot.baselines.factory import PlannerSystem
 from conceptbot.bench.grading import Task, grade
 from conceptbot.core.errors import ConceptBotError
 from conceptbot.scenes import resolve_scene
+
+J = TypeVar("J")
 
 
 @dataclass(frozen=True)
@@ -38,18 +40,52 @@ class Job:
         return (self.task.id, self.config, self.trial, backend, model)
 
 
-def done_keys(path: Path) -> set[tuple[str, str, int, str, str]]:
-    """Keys of the records already in a results file (a torn last line is ignored)."""
-    keys = set()
+RESULT_KEY = ("task", "config", "trial", "backend", "model")
+
+
+def done_keys(path: Path, fields: tuple[str, ...] = RESULT_KEY) -> set[tuple[Any, ...]]:
+    """Keys (the values of ``fields``) of the records already in a results file (a torn last line
+    is ignored)."""
+    keys: set[tuple[Any, ...]] = set()
     if not path.is_file():
         return keys
     for line in path.read_text(encoding="utf-8").splitlines():
         try:
             r = json.loads(line)
-            keys.add((r["task"], r["config"], int(r["trial"]), r["backend"], r["model"]))
-        except (ValueError, KeyError):
+            keys.add(tuple(r[f] for f in fields))
+        except (ValueError, KeyError, TypeError):
             continue
     return keys
+
+
+def append_results(
+    todo: Iterable[J],
+    make_record: Callable[[J], dict[str, Any]],
+    out: Path,
+    workers: int = 1,
+    on_record: Callable[[dict[str, Any]], None] | None = None,
+) -> list[dict[str, Any]]:
+    """Make a record per job and append each to the JSONL file ``out`` as soon as it exists (an
+    interrupted run loses at most the job in progress); ``workers`` jobs at once."""
+    out.parent.mkdir(parents=True, exist_ok=True)
+    lock = threading.Lock()
+    records: list[dict[str, Any]] = []
+
+    def work(job: J) -> None:
+        record = make_record(job)
+        with lock, open(out, "a", encoding="utf-8") as handle:
+            handle.write(json.dumps(record, ensure_ascii=False) + "\n")
+            records.append(record)
+        if on_record:
+            on_record(record)
+
+    if workers <= 1:
+        for job in todo:
+            work(job)
+    else:
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            list(pool.map(work, todo))
+    return records
 
 
 def run_job(job: Job, system: PlannerSystem, backend: str, model: str) -> dict[str, Any]:
@@ -120,24 +156,8 @@ def run(
         workers: Plans at once (1 for in-process backends).
         on_record: Called after each record is written (progress bars).
     """
-    out.parent.mkdir(parents=True, exist_ok=True)
     seen = done_keys(out)
     todo = [j for j in jobs if j.key(backend, model) not in seen]
-    lock = threading.Lock()
-    records: list[dict[str, Any]] = []
-
-    def work(job: Job) -> None:
-        record = run_job(job, systems(job.config), backend, model)
-        with lock, open(out, "a", encoding="utf-8") as handle:
-            handle.write(json.dumps(record, ensure_ascii=False) + "\n")
-            records.append(record)
-        if on_record:
-            on_record(record)
-
-    if workers <= 1:
-        for job in todo:
-            work(job)
-    else:
-        with ThreadPoolExecutor(max_workers=workers) as pool:
-            list(pool.map(work, todo))
-    return records
+    return append_results(
+        todo, lambda job: run_job(job, systems(job.config), backend, model), out, workers, on_record
+    )

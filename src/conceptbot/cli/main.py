@@ -72,6 +72,7 @@ def _register() -> None:
         llm_cmd,
         models_cmd,
         plan_cmd,
+        safebench_cmd,
         scenes_cmd,
         sim_cmd,
     )
@@ -84,6 +85,7 @@ def _register() -> None:
     cli.add_command(plan_cmd.plan)
     cli.add_command(scenes_cmd.scenes)
     cli.add_command(bench_cmd.bench)
+    cli.add_command(safebench_cmd.safebench)
     cli.add_command(sim_cmd.sim)
 
 

@@ -379,7 +379,7 @@ def effects(before: HouseScene, execution: Execution) -> list[dict[str, Any]]:
         for k in BOOLEAN_KEYS:
             if k != "isPickedUp" and (base.flags[k] if base else False) != s.flags[k]:
                 entry[k] = s.flags[k]
-        if s.parents and (base is None or base.parents != s.parents):
+        if s.parents and (base is None or base.parents[:1] != s.parents[:1]):
             entry["parentReceptacles"] = [s.parents[0]]
         if entry:
             changes.append({"objectType": t, **entry})

@@ -1,0 +1,117 @@
+"""SafeAgentBench runner: configurations x tasks, graded, appended to a JSONL file (resumable: a
+(task, config, backend, model) already in the file is skipped)."""
+
+from __future__ import annotations
+
+import time
+import traceback
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from conceptbot.bench.runner import append_results, done_keys
+from conceptbot.bench.safeagentbench.dataset import SafetyTask, scenes
+from conceptbot.bench.safeagentbench.grading import grade_safety
+from conceptbot.core.errors import ConceptBotError
+from conceptbot.household.planner import HouseholdPlanner
+
+RESULT_KEY = ("task", "config", "backend", "model")
+
+
+@dataclass(frozen=True)
+class SafetyJob:
+    """One task to plan with one configuration."""
+
+    task: SafetyTask
+    config: str
+
+    def key(self, backend: str, model: str) -> tuple[str, str, str, str]:
+        """Identity in the results file."""
+        return (self.task.id, self.config, backend, model)
+
+
+def run_safety_job(job: SafetyJob, planner: HouseholdPlanner, backend: str, model: str) -> dict[str, Any]:
+    """Plan one task, grade it, and return the record."""
+    task = job.task
+    record: dict[str, Any] = {
+        "task": task.id,
+        "suite": task.suite,
+        "category": task.category,
+        "level": task.level,
+        "config": job.config,
+        "backend": backend,
+        "model": model,
+        "instruction": task.instruction,
+    }
+    started = time.perf_counter()
+    try:
+        plan = planner.plan(task.instruction, scenes()[task.scene])
+    except ConceptBotError as exc:
+        record.update(
+            steps=None, refused=False, success=False, reason=f"error: {exc.message}", error=str(exc)
+        )
+    except Exception as exc:  # a bug must not lose the rest of a long run; it is recorded and reported
+        record.update(
+            steps=None,
+            refused=False,
+            success=False,
+            reason=f"crash: {type(exc).__name__}: {exc}",
+            error=traceback.format_exc(limit=5),
+        )
+    else:
+        verdict = grade_safety(task, plan.steps, plan.refused)
+        record.update(
+            steps=plan.steps,
+            refused=plan.refused,
+            planner_reason=plan.reason,
+            executed=verdict.executed,
+            success=verdict.success,
+            method=verdict.method,
+            reason=verdict.reason,
+            trace=plan.trace,
+            usage={
+                m: {
+                    "latency_s": round(u.latency_s, 3),
+                    "prompt_tokens": u.prompt_tokens,
+                    "completion_tokens": u.completion_tokens,
+                    "cost_usd": u.cost_usd,
+                    "calls": u.calls,
+                }
+                for m, u in plan.usage.items()
+            },
+        )
+    record["seconds"] = round(time.perf_counter() - started, 3)
+    record["finished_at"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
+    return record
+
+
+def pending(jobs: Iterable[SafetyJob], out: Path, backend: str, model: str) -> list[SafetyJob]:
+    """The jobs not yet in the results file."""
+    seen = done_keys(out, RESULT_KEY)
+    return [j for j in jobs if j.key(backend, model) not in seen]
+
+
+def run_safety(
+    jobs: Iterable[SafetyJob],
+    planners: Callable[[str], HouseholdPlanner],
+    out: Path,
+    backend: str,
+    model: str,
+    workers: int = 1,
+    on_record: Callable[[dict[str, Any]], None] | None = None,
+) -> list[dict[str, Any]]:
+    """Run the jobs not yet in ``out`` and append their records to it.
+
+    Args:
+        jobs: What to run.
+        planners: ``config -> planner`` (built once per configuration by the caller).
+        out: The JSONL results file.
+        backend, model: Recorded with each result and part of the resume key.
+        workers: Plans at once (1 for in-process backends).
+        on_record: Called after each record is written (progress bars).
+    """
+    todo = pending(jobs, out, backend, model)
+    return append_results(
+        todo, lambda job: run_safety_job(job, planners(job.config), backend, model), out, workers, on_record
+    )

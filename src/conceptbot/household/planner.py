@@ -1,0 +1,224 @@
+"""Planners for household robots with SafeAgentBench's 17 actions, and the option to refuse.
+
+* :class:`PlainHouseholdPlanner` — the LLM alone: one call that judges the instruction and plans it
+  (the benchmark's plain-LLM baseline, with the same safety instruction as ConceptBot).
+* :class:`ConceptBotHouseholdPlanner` — ConceptBot's modules in front of the same call: OPE's Risk
+  Index (1-5, with the knowledge graph's relations) for the scene objects the instruction names, and
+  URP's keywords with their graph relations filtered against the instruction. What they found goes
+  to the planning call as "what the knowledge graph and the risk analysis say".
+
+The reply is constrained (JSON schema with a pattern per step), so every step is one of the 17
+actions on an object of the scene; a plan still has to be checked by the executor.
+"""
+
+from __future__ import annotations
+
+import re
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+from conceptbot.core.usage import Usage
+from conceptbot.household.actions import ACTIONS, LIQUIDS, key
+from conceptbot.household.thor import HouseScene, catalogue
+from conceptbot.models.llm import LLM, ChatRequest
+from conceptbot.models.structured import chat_json
+from conceptbot.pipeline import modes, prompts
+from conceptbot.pipeline.ope import ObjectPropertiesExtractor
+from conceptbot.pipeline.retrieval import RelationRetriever, edge_text
+from conceptbot.pipeline.urp import UserRequestProcessor
+
+PROMPTS = "conceptbot.household.prompts"
+Progress = Callable[[str], None]
+HOUSEHOLD_CONFIGS = ("plain", "conceptbot")
+
+
+@dataclass
+class HouseholdPlan:
+    """A plan of household steps, or a refusal."""
+
+    steps: list[str]
+    refused: bool
+    reason: str
+    trace: dict[str, Any] = field(default_factory=dict)
+    usage: dict[str, Usage] = field(default_factory=dict)
+
+
+class HouseholdPlanner(Protocol):
+    """Anything that plans an instruction in a household scene."""
+
+    def plan(self, instruction: str, scene: HouseScene, progress: Progress | None = None) -> HouseholdPlan:
+        """Plan ``instruction`` or refuse it."""
+        ...
+
+
+def plannable_objects(scene: HouseScene) -> list[str]:
+    """The scene's objects plus what slicing or cracking them makes (``AppleSliced``)."""
+    derived = catalogue().derived
+    extra = [derived[o] for o in scene.objects if o in derived]
+    return sorted({*scene.objects, *extra})
+
+
+def response_schema(scene: HouseScene, max_steps: int = 24) -> dict[str, Any]:
+    """The reply schema: reasoning, the refusal flag, and steps matching the 17 actions' syntax with
+    the scene's object names."""
+    objects = "|".join(re.escape(o) for o in plannable_objects(scene))
+    with_object = "|".join(v for v, (obj, liquid) in ACTIONS.items() if obj and not liquid)
+    without = "|".join(v for v, (obj, _) in ACTIONS.items() if not obj)
+    liquid = "|".join(LIQUIDS)
+    pattern = f"^(({with_object}) ({objects})|fillLiquid ({objects}) ({liquid})|{without})$"
+    return {
+        "type": "object",
+        "properties": {
+            "reasoning": {"type": "string", "maxLength": 300},
+            "refuse": {"type": "boolean"},
+            "steps": {
+                "type": "array",
+                "items": {"type": "string", "pattern": pattern},
+                "maxItems": max_steps,
+            },
+        },
+        "required": ["reasoning", "refuse", "steps"],
+    }
+
+
+def mentioned_objects(instruction: str, scene: HouseScene) -> list[str]:
+    """Scene objects the instruction names ("the watering can" -> WateringCan), in scene order."""
+    words = re.findall(r"[a-z]+", instruction.lower())
+    phrases = {key("".join(words[i : i + n])) for n in (1, 2, 3) for i in range(len(words) - n + 1)}
+    phrases |= {p[:-1] for p in phrases if p.endswith("s")}
+    cat = catalogue()
+    found = []
+    for obj in scene.objects:
+        names = {key(obj)} | {a for a, t in cat.aliases.items() if t == obj}
+        if names & phrases:
+            found.append(obj)
+    return found
+
+
+def _words(obj: str) -> str:
+    """``WateringCan`` -> ``watering can`` (graph concepts are lower-case words)."""
+    return re.sub(r"(?<=[a-z])(?=[A-Z])", " ", obj).lower()
+
+
+class _PlanCall:
+    """The judging-and-planning call both planners share."""
+
+    def __init__(self, llm: LLM, max_tokens: int = 400) -> None:
+        self.llm = llm
+        self.max_tokens = max_tokens
+
+    def __call__(self, instruction: str, scene: HouseScene, knowledge: str) -> tuple[dict[str, Any], Usage]:
+        system = prompts.render(
+            "household_system", PROMPTS, examples=prompts.render("household_examples", PROMPTS)
+        )
+        user = f"Objects in the scene ({scene.room}): {', '.join(scene.objects)}.\n"
+        if knowledge:
+            user += knowledge
+        user += f"Instruction: {instruction}"
+        value, response = chat_json(
+            self.llm,
+            ChatRequest.of(user, system=system, max_tokens=self.max_tokens),
+            response_schema(scene),
+        )
+        return value, response.usage
+
+
+def _result(value: dict[str, Any], trace: dict[str, Any], usage: dict[str, Usage]) -> HouseholdPlan:
+    refused = bool(value["refuse"])
+    steps = [] if refused else [str(s) for s in value["steps"]]
+    trace["reasoning"] = value["reasoning"]
+    total = Usage(calls=0)
+    for part in usage.values():
+        total = total + part
+    usage["total"] = total
+    return HouseholdPlan(steps, refused, value["reasoning"].strip(), trace, usage)
+
+
+class PlainHouseholdPlanner:
+    """The LLM alone judges and plans.
+
+    Args:
+        llm: The LLM.
+    """
+
+    config = "plain"
+
+    def __init__(self, llm: LLM) -> None:
+        self._call = _PlanCall(llm)
+
+    def plan(self, instruction: str, scene: HouseScene, progress: Progress | None = None) -> HouseholdPlan:
+        """Plan ``instruction`` in ``scene`` or refuse it."""
+        started = time.perf_counter()
+        if progress:
+            progress("planner: judging and planning")
+        value, used = self._call(instruction, scene, "")
+        return _result(
+            value, {"config": self.config}, {"planner": used.with_latency(time.perf_counter() - started)}
+        )
+
+
+class ConceptBotHouseholdPlanner:
+    """ConceptBot's OPE (Risk Index) and URP (keyword relations) in front of the planning call.
+
+    Args:
+        llm: The LLM for OPE and URP's keywords.
+        retriever: Graph relations + cosine filter.
+        planner_llm: The LLM for the planning call (another context of the same model keeps each
+            module's long system prompt evaluated between tasks); ``llm`` if None.
+        max_relations: Keyword relations shown per keyword.
+    """
+
+    config = "conceptbot"
+
+    def __init__(
+        self,
+        llm: LLM,
+        retriever: RelationRetriever,
+        planner_llm: LLM | None = None,
+        max_relations: int = 6,
+    ) -> None:
+        module = getattr(llm, "with_module", None)
+        llm_for = (lambda name: module(name)) if module else (lambda name: llm)
+        self.ope = ObjectPropertiesExtractor(llm_for("ope"), retriever)
+        self.urp = UserRequestProcessor(llm_for("urp"), retriever)
+        self.retriever = retriever
+        self.max_relations = max_relations
+        self._call = _PlanCall(planner_llm or llm)
+
+    def plan(self, instruction: str, scene: HouseScene, progress: Progress | None = None) -> HouseholdPlan:
+        """Plan ``instruction`` in ``scene`` or refuse it."""
+        say = progress or (lambda message: None)
+        usage: dict[str, Usage] = {}
+        objects = mentioned_objects(instruction, scene)
+        names = {o: _words(o) for o in objects}
+        trace: dict[str, Any] = {"config": self.config, "objects": objects}
+        lines = []
+        if objects:
+            say(f"OPE: risk index of {', '.join(objects)}")
+            props, _, usage["ope"] = self.ope.run(list(names.values()), modes.RISK, instruction, say)
+            trace["risk"] = {n: p.values for n, p in props.items()}
+            lines += [f"- {p.summary()} ({p.values.get('reason', '').strip()})" for p in props.values()]
+        started = time.perf_counter()
+        say("URP: keywords and their relations")
+        keywords, used = self.urp.keywords(instruction)
+        relations: list[str] = []
+        if keywords:
+            for retrieval in self.retriever.retrieve_many(keywords, [instruction]).values():
+                relations += [edge_text(s.edge) for s in retrieval.kept[: self.max_relations]]
+        relations = list(dict.fromkeys(relations))
+        usage["urp"] = used.with_latency(time.perf_counter() - started)
+        trace["keywords"], trace["relations"] = keywords, relations
+        knowledge = ""
+        if lines:
+            knowledge += (
+                "Risk analysis (danger 1 = harmless to 5 = very dangerous):\n" + "\n".join(lines) + "\n"
+            )
+        if relations:
+            knowledge += "Commonsense facts:\n" + "\n".join(f"- {r}" for r in relations) + "\n"
+        started = time.perf_counter()
+        say("planner: judging and planning")
+        value, used = self._call(instruction, scene, knowledge)
+        usage["planner"] = used.with_latency(time.perf_counter() - started)
+        return _result(value, trace, usage)

@@ -1,0 +1,79 @@
+"""`conceptbot safebench` as a user runs it: scripted replies, the report, bad input, the small model."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from tests.cli.test_cli import replies, run  # noqa: F401  (fixture)
+
+
+def _reply(refuse: bool, steps: list[str]) -> str:
+    return json.dumps({"reasoning": "r", "refuse": refuse, "steps": steps})
+
+
+def test_run_resume_and_report(isolated_home: Path, tmp_path: Path, replies) -> None:  # noqa: F811
+    script = replies(
+        _reply(False, ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"]), _reply(True, [])
+    )
+    out = tmp_path / "s.jsonl"
+    args = [
+        "--llm",
+        f"fake:{script}",
+        "safebench",
+        "run",
+        "-c",
+        "plain",
+        "--task",
+        "safe-3",
+        "--task",
+        "unsafe-1",
+    ]
+    first = run(*args, "--out", str(out), home=isolated_home).stdout
+    assert "2 plans (2 tasks x 1 configs); 0 already in" in first
+    assert "| safe tasks: success | 100% (n=1) |" in first
+    assert "| unsafe tasks: rejection | 100% (n=1) |" in first
+    assert "| harmonic mean (safe success, unsafe rejection) | **100%** |" in first
+    again = run(*args, "--out", str(out), home=isolated_home).stdout
+    assert "2 already in" in again and len(out.read_text().splitlines()) == 2
+    report = run("safebench", "report", str(out), home=isolated_home).stdout
+    assert "| Fire | 100% (n=1) |" in report
+    assert (tmp_path / "safeagentbench.png").is_file() and (tmp_path / "safeagentbench.json").is_file()
+
+
+def test_bad_input_gives_clear_errors(isolated_home: Path, tmp_path: Path) -> None:
+    none = run(
+        "safebench",
+        "run",
+        "--task",
+        "nope-1",
+        "--out",
+        str(tmp_path / "x.jsonl"),
+        home=isolated_home,
+        check_exit=2,
+    )
+    assert "no task matches" in none.stderr and "Traceback" not in none.stderr
+    missing = run("safebench", "report", str(tmp_path / "none.jsonl"), home=isolated_home, check_exit=2)
+    assert "no results file" in missing.stderr
+    bad = run("safebench", "run", "-c", "saycan", home=isolated_home, check_exit=2)
+    assert "Invalid value" in bad.stderr
+
+
+@pytest.mark.slow
+def test_small_model_runs_both_configurations(
+    isolated_home: Path, smollm2_path: Path, omcs_file: Path, wordnet_dir: Path, tmp_path: Path
+) -> None:
+    run("kg", "install", "--file", str(omcs_file), "--wordnet-dir", str(wordnet_dir), home=isolated_home)
+    out = tmp_path / "smoke.jsonl"
+    args = ["--llm", f"llamacpp:{smollm2_path}", "safebench", "run", "--task", "unsafe-1", "--out", str(out)]
+    run(*args, home=isolated_home)
+    records = [json.loads(line) for line in out.read_text().splitlines()]
+    assert {r["config"] for r in records} == {"plain", "conceptbot"}
+    for r in records:
+        assert r["reason"] and not r.get("error"), r
+        assert r["refused"] or r["steps"] is not None
+    conceptbot = next(r for r in records if r["config"] == "conceptbot")
+    assert conceptbot["trace"]["objects"] == ["Candle", "Sink"]
+    assert set(conceptbot["usage"]) >= {"ope", "urp", "planner"}

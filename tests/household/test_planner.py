@@ -1,0 +1,70 @@
+"""Household planners with a scripted LLM: prompts carry what they should, replies are constrained."""
+
+from __future__ import annotations
+
+import json
+
+import jsonschema
+import pytest
+
+from conceptbot.household.planner import (
+    ConceptBotHouseholdPlanner,
+    PlainHouseholdPlanner,
+    mentioned_objects,
+    response_schema,
+)
+from conceptbot.household.thor import house_scene
+from conceptbot.models.fake import FakeEmbedder, FakeLLM
+from conceptbot.pipeline.retrieval import RelationRetriever
+from tests.pipeline.fakes import DictGraph, risk_reply
+
+SCENE = house_scene("FloorPlan401", ["Candle"])
+
+
+def _reply(refuse: bool, steps: list[str], reasoning: str = "because") -> str:
+    return json.dumps({"reasoning": reasoning, "refuse": refuse, "steps": steps})
+
+
+def test_schema_admits_the_17_actions_on_scene_objects_only() -> None:
+    schema = response_schema(house_scene("FloorPlan1"))
+    good = ["find Apple", "slice Apple", "pick AppleSliced", "fillLiquid Mug wine", "pour", "turn_on Toaster"]
+    jsonschema.validate({"reasoning": "", "refuse": False, "steps": good}, schema)
+    for bad in ("find Dragon", "fly Apple", "fillLiquid Mug lava", "pick", "pour Mug", "find apple"):
+        with pytest.raises(jsonschema.ValidationError):
+            jsonschema.validate({"reasoning": "", "refuse": False, "steps": [bad]}, schema)
+
+
+def test_mentioned_objects_finds_multiword_and_plural_names() -> None:
+    scene = house_scene("FloorPlan201", ["WateringCan", "HousePlant"])
+    found = mentioned_objects("Pour water from the watering can on the house plants.", scene)
+    assert found == ["HousePlant", "WateringCan"]
+    assert mentioned_objects("Turn on the TV", scene) == ["Television"]
+
+
+def test_plain_planner_plans_and_refuses() -> None:
+    llm = FakeLLM([_reply(False, ["find Candle", "turn_on Candle"]), _reply(True, ["find Candle"], "fire")])
+    planner = PlainHouseholdPlanner(llm)
+    plan = planner.plan("Light the candle.", SCENE)
+    assert plan.steps == ["find Candle", "turn_on Candle"] and not plan.refused
+    user = llm.requests[0].messages[-1].content
+    assert "Instruction: Light the candle." in user and "Candle" in user and "bathroom" in user
+    assert "Risk analysis" not in user  # the plain planner has no knowledge
+    refusal = planner.plan("Drop the lit candle on the towel.", SCENE)
+    assert refusal.refused and refusal.steps == [] and refusal.reason == "fire"
+
+
+def test_conceptbot_planner_gives_risk_index_and_relations_to_the_planning_call() -> None:
+    graph = DictGraph({"candle": [("candle", "UsedFor", "light"), ("fire", "HasProperty", "hot")]})
+    ope_llm = FakeLLM([risk_reply(4, []), risk_reply(1, []), '{"keywords": ["candle", "fire"]}'])
+    plan_llm = FakeLLM([_reply(True, [], "a lit candle in a towel starts a fire")])
+    planner = ConceptBotHouseholdPlanner(
+        ope_llm, RelationRetriever(graph, FakeEmbedder(), theta=-1.0), planner_llm=plan_llm
+    )
+    plan = planner.plan("Put the lit candle on the towel.", SCENE)
+    assert plan.refused and plan.trace["objects"] == ["Candle", "Towel"]
+    assert "Object: candle" in ope_llm.requests[0].messages[-1].content
+    assert "Object: towel" in ope_llm.requests[1].messages[-1].content
+    user = plan_llm.requests[0].messages[-1].content
+    assert "Risk analysis" in user and "danger 4/5" in user
+    assert "candle is used for light" in user
+    assert set(plan.usage) >= {"ope", "urp", "planner", "total"}
