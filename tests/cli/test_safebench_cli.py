@@ -15,8 +15,9 @@ def _reply(refuse: bool, steps: list[str]) -> str:
 
 
 def test_run_resume_and_report(isolated_home: Path, tmp_path: Path, replies) -> None:  # noqa: F811
+    # safe and unsafe tasks alternate by number: unsafe-1 comes before safe-3
     script = replies(
-        _reply(False, ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"]), _reply(True, [])
+        _reply(True, []), _reply(False, ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"])
     )
     out = tmp_path / "s.jsonl"
     args = [
