@@ -7,7 +7,7 @@ from typing import Protocol
 from conceptbot.baselines.saycan import SayCan
 from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConfigError, NotSupportedError
-from conceptbot.core.plan import Feedback, Plan
+from conceptbot.core.plan import EventSink, Feedback, Plan
 from conceptbot.core.scene import Scene
 from conceptbot.models.registry import open_llm, open_store
 from conceptbot.pipeline.conceptbot import CONFIGS as CONCEPTBOT_CONFIGS
@@ -20,9 +20,16 @@ class PlannerSystem(Protocol):
     """Anything that plans a request in a scene."""
 
     def plan(
-        self, request: str, scene: Scene, risk: bool = False, progress=None, feedback: Feedback | None = None
+        self,
+        request: str,
+        scene: Scene,
+        risk: bool = False,
+        progress=None,
+        feedback: Feedback | None = None,
+        events: EventSink | None = None,
     ) -> Plan:
-        """Plan ``request`` in ``scene`` (continuing after ``feedback`` from an execution, if given)."""
+        """Plan ``request`` in ``scene`` (continuing after ``feedback`` from an execution, if given;
+        ``events`` gets each module's results as they finish)."""
         ...
 
 

@@ -18,7 +18,7 @@ import math
 import time
 from importlib import resources
 
-from conceptbot.core.plan import Action, CandidateScore, Feedback, Plan, Step, valid_actions
+from conceptbot.core.plan import Action, CandidateScore, EventSink, Feedback, Plan, Step, valid_actions
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, ScoreRequest
@@ -61,12 +61,19 @@ class SayCan:
         return "\n".join(lines) + "\n"
 
     def plan(
-        self, request: str, scene: Scene, risk: bool = False, progress=None, feedback: Feedback | None = None
+        self,
+        request: str,
+        scene: Scene,
+        risk: bool = False,
+        progress=None,
+        feedback: Feedback | None = None,
+        events: EventSink | None = None,
     ) -> Plan:
         """Plan greedily (``risk`` is ignored: SayCan has no risk assessment).
 
         With ``feedback`` the plan continues from the executed steps and failed actions are
         infeasible (affordance 0), as SayCan's affordance would report after a failed attempt.
+        ``events`` gets a ``step`` event as each step is chosen.
         """
         started = time.perf_counter()
         candidates = valid_actions(scene)
@@ -102,6 +109,8 @@ class SayCan:
             ranked = sorted(cands, key=lambda c: -c.combined)
             shown = ranked[:TOP_K] + [c for c in ranked[TOP_K:] if c.action == "done()"]
             steps.append(Step(index + 1, best.action, tuple(shown), (), "saycan"))
+            if events:
+                events("step", steps[-1].to_dict())
             if best.action == "done()":
                 break
             history.append(best.action)

@@ -74,6 +74,7 @@ def _register() -> None:
         plan_cmd,
         safebench_cmd,
         scenes_cmd,
+        serve_cmd,
         sim_cmd,
     )
 
@@ -87,6 +88,7 @@ def _register() -> None:
     cli.add_command(bench_cmd.bench)
     cli.add_command(safebench_cmd.safebench)
     cli.add_command(sim_cmd.sim)
+    cli.add_command(serve_cmd.serve)
 
 
 _register()

@@ -8,6 +8,7 @@ that is not in the scene, a self-placement or a malformed command never reaches 
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -106,6 +107,30 @@ class Step:
     rejected: tuple[str, ...] = ()
     method: str = "logprob"
 
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (as in ``conceptbot plan --json``)."""
+        return {
+            "index": self.index,
+            "chosen": self.chosen,
+            "method": self.method,
+            "rejected": list(self.rejected),
+            "candidates": [
+                {
+                    "action": c.action,
+                    "llm": round(c.llm, 4),
+                    "affordance": round(c.affordance, 4),
+                    "combined": round(c.combined, 4),
+                    "factors": {k: round(v, 4) for k, v in c.factors.items()},
+                }
+                for c in self.candidates
+            ],
+        }
+
+
+# Called with an event name and its JSON-able data as a planner's modules finish (``ope``, ``urp``,
+# ``step``): lets a user interface show each part while the rest is still being computed.
+EventSink = Callable[[str, dict[str, Any]], None]
+
 
 @dataclass(frozen=True)
 class Feedback:
@@ -153,25 +178,7 @@ class Plan:
         """The JSON contract of ``conceptbot plan --json``."""
         return {
             "plan": list(self.actions),
-            "steps": [
-                {
-                    "index": s.index,
-                    "chosen": s.chosen,
-                    "method": s.method,
-                    "rejected": list(s.rejected),
-                    "candidates": [
-                        {
-                            "action": c.action,
-                            "llm": round(c.llm, 4),
-                            "affordance": round(c.affordance, 4),
-                            "combined": round(c.combined, 4),
-                            "factors": {k: round(v, 4) for k, v in c.factors.items()},
-                        }
-                        for c in s.candidates
-                    ],
-                }
-                for s in self.steps
-            ],
+            "steps": [s.to_dict() for s in self.steps],
             "refused": self.refused,
             "reason": self.reason,
             "trace": self.trace,

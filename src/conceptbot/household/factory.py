@@ -18,9 +18,9 @@ from conceptbot.pipeline.retrieval import RelationRetriever, default_theta
 def build_household_planner(settings: Settings, config: str) -> HouseholdPlanner:
     """``plain`` (the LLM alone) or ``conceptbot`` (OPE Risk Index + URP relations + the LLM).
 
-    For ConceptBot the planning call gets its own backend instance (for llama.cpp: a second context
-    over the same memory-mapped weights), so its long system prompt stays evaluated while OPE and
-    URP use the other one.
+    For ConceptBot, OPE, URP's keywords and the planning call each get their own backend instance
+    (for llama.cpp: a context each over the same memory-mapped weights), so each module's system
+    prompt stays evaluated from one task to the next.
 
     Raises:
         ConfigError: Unknown configuration.
@@ -33,8 +33,9 @@ def build_household_planner(settings: Settings, config: str) -> HouseholdPlanner
         embedder = open_embedder(settings, store)
         retriever = RelationRetriever(graph, embedder, default_theta(embedder.model))
         return ConceptBotHouseholdPlanner(
-            open_llm(settings, store, module="pipeline"),
+            open_llm(settings, store, module="ope"),
             retriever,
             planner_llm=open_llm(settings, store, module="planner"),
+            keyword_llm=open_llm(settings, store, module="urp"),
         )
     raise ConfigError(f"unknown configuration {config!r}", hint=f"use one of {', '.join(HOUSEHOLD_CONFIGS)}")

@@ -102,6 +102,12 @@ def _words(obj: str) -> str:
     return re.sub(r"(?<=[a-z])(?=[A-Z])", " ", obj).lower()
 
 
+def _labelled(llm: LLM, module: str) -> LLM:
+    """The LLM logging its calls under ``module`` where it keeps a call log."""
+    relabel = getattr(llm, "with_module", None)
+    return relabel(module) if relabel else llm
+
+
 class _PlanCall:
     """The judging-and-planning call both planners share."""
 
@@ -165,8 +171,10 @@ class ConceptBotHouseholdPlanner:
     Args:
         llm: The LLM for OPE and URP's keywords.
         retriever: Graph relations + cosine filter.
-        planner_llm: The LLM for the planning call (another context of the same model keeps each
-            module's long system prompt evaluated between tasks); ``llm`` if None.
+        planner_llm: The LLM for the planning call; ``llm`` if None.
+        keyword_llm: The LLM for URP's keywords; ``llm`` if None. (Separate contexts of the same
+            model keep each module's system prompt evaluated from one task to the next: with one
+            context, every task re-evaluates all three prompts.)
         max_relations: Keyword relations shown per keyword.
     """
 
@@ -177,12 +185,11 @@ class ConceptBotHouseholdPlanner:
         llm: LLM,
         retriever: RelationRetriever,
         planner_llm: LLM | None = None,
+        keyword_llm: LLM | None = None,
         max_relations: int = 6,
     ) -> None:
-        module = getattr(llm, "with_module", None)
-        llm_for = (lambda name: module(name)) if module else (lambda name: llm)
-        self.ope = ObjectPropertiesExtractor(llm_for("ope"), retriever)
-        self.urp = UserRequestProcessor(llm_for("urp"), retriever)
+        self.ope = ObjectPropertiesExtractor(_labelled(llm, "ope"), retriever)
+        self.urp = UserRequestProcessor(_labelled(keyword_llm or llm, "urp"), retriever)
         self.retriever = retriever
         self.max_relations = max_relations
         self._call = _PlanCall(planner_llm or llm)

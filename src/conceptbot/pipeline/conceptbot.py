@@ -16,7 +16,7 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
-from conceptbot.core.plan import Feedback, Plan
+from conceptbot.core.plan import EventSink, Feedback, Plan
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.models.cache import CacheStore
@@ -117,6 +117,7 @@ class ConceptBot:
         risk: bool = False,
         progress: Progress | None = None,
         feedback: Feedback | None = None,
+        events: EventSink | None = None,
     ) -> Plan:
         """Plan ``request`` in ``scene``.
 
@@ -127,7 +128,10 @@ class ConceptBot:
             progress: Called with a short message as each piece of work starts (LLM calls take seconds).
             feedback: What happened when an earlier plan was executed (closed loop): the Planner
                 continues from the executed steps and avoids failed actions; OPE and URP are as before.
+            events: Gets ``ope`` and ``urp`` (their trace parts) as those modules finish, and ``step``
+                for each planner step.
         """
+        emit = events or (lambda name, data: None)
         started = time.perf_counter()
         if not request.strip():
             raise ValueError("the request is empty")
@@ -146,6 +150,7 @@ class ConceptBot:
                 },
                 "retrieval": _retrieval_trace(retrievals),
             }
+            emit("ope", trace["ope"])
         guidance = ""
         commands: list[str] = []
         if self.switches.urp:
@@ -160,13 +165,14 @@ class ConceptBot:
                 "refused": urp.refused,
                 "refusal_reason": urp.refusal_reason,
             }
+            emit("urp", trace["urp"])
             if urp.refused:
                 usage["total"] = _total(usage, started)
                 return Plan(["done()"], [], True, urp.refusal_reason or "judged unsafe", trace, usage)
             guidance = guidance_from(urp)
             commands = urp.commands
         steps, actions, usage["planner"] = self.planner.plan(
-            request, scene, properties, guidance, progress, commands, feedback
+            request, scene, properties, guidance, progress, commands, feedback, events
         )
         trace["planner"] = {"method": self.planner.method, "steps": len(steps)}
         usage["total"] = _total(usage, started)

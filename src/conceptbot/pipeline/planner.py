@@ -23,6 +23,7 @@ from collections import Counter
 from conceptbot.core.plan import (
     Action,
     CandidateScore,
+    EventSink,
     Feedback,
     InvalidActionError,
     Step,
@@ -187,11 +188,13 @@ class Planner:
         progress: Progress | None = None,
         commands: list[str] | None = None,
         feedback: Feedback | None = None,
+        events: EventSink | None = None,
     ) -> tuple[list[Step], list[str], Usage]:
         """Plan greedily; returns the steps, the action texts (ending with ``done()``) and usage.
 
         With ``feedback`` (from executing an earlier plan) the plan starts with the executed steps, the
-        failures are shown to the LLM and failed actions get affordance 0.
+        failures are shown to the LLM and failed actions get affordance 0. ``events`` gets a
+        ``step`` event as each step is chosen.
         """
         started = time.perf_counter()
         usage = Usage(calls=0)
@@ -222,6 +225,8 @@ class Planner:
             ranked = sorted(scored, key=lambda c: -c.combined)
             shown = ranked[:TOP_K] + [c for c in ranked[TOP_K:] if c.action == "done()"]
             steps.append(Step(index + 1, best.action, tuple(shown), tuple(rejected), self.method))
+            if events:
+                events("step", steps[-1].to_dict())
             if best.action == "done()":
                 break
             history.append(best.action)

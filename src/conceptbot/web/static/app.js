@@ -1,0 +1,190 @@
+// ConceptBot page: start a run, then show each module's results as the server streams them.
+"use strict";
+
+const $ = (id) => document.getElementById(id);
+const el = (tag, attrs = {}, ...children) => {
+  const node = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) node.setAttribute(k, v);
+  for (const c of children) node.append(c instanceof Node ? c : document.createTextNode(String(c)));
+  return node;
+};
+const list = (text) => text.split(",").map((s) => s.trim()).filter(Boolean);
+let options = null;
+let source = null;
+
+function setStatus(text, kind = "") {
+  const s = $("status");
+  s.textContent = text;
+  s.className = kind;
+}
+
+function busy(on) {
+  $("run").disabled = on;
+  $("run").textContent = on ? "Planning…" : "Plan";
+}
+
+async function loadScene(name) {
+  const r = await fetch(`/api/scenes/${encodeURIComponent(name)}`);
+  const scene = await r.json();
+  $("pickable").value = scene.pickable_objects.join(", ");
+  $("destinations").value = scene.destinations.join(", ");
+  const both = new Set([...scene.pickable_objects, ...scene.destinations]);
+  $("others").value = scene.objects.filter((o) => !both.has(o)).join(", ");
+  $("objects-box").dataset.edited = "";
+}
+
+function fill(select, values, chosen) {
+  select.replaceChildren(...values.map((v) => el("option", v === chosen ? { value: v, selected: "" } : { value: v }, v)));
+}
+
+async function init() {
+  options = await (await fetch("/api/options")).json();
+  fill($("scene"), options.scenes, options.default_scene);
+  fill($("config"), options.configs, options.default_config);
+  fill($("backend"), options.backends, options.backends[0]);
+  $("simulate").checked = options.simulator;
+  $("simulate-label").hidden = !options.simulator;
+  $("scene").addEventListener("change", () => loadScene($("scene").value));
+  for (const id of ["pickable", "destinations", "others"]) {
+    $(id).addEventListener("input", () => { $("objects-box").dataset.edited = "yes"; });
+  }
+  await loadScene(options.default_scene);
+  $("ask").addEventListener("submit", start);
+}
+
+function clear() {
+  for (const id of ["refusal", "plan-box", "sim-box", "ope-box", "urp-box", "steps-box"]) $(id).hidden = true;
+  for (const id of ["plan", "properties", "relations", "keyword-relations", "steps", "sim-pictures"]) $(id).replaceChildren();
+}
+
+async function start(event) {
+  event.preventDefault();
+  const body = {
+    request: $("request").value,
+    config: $("config").value,
+    backend: $("backend").value,
+    risk: $("risk").checked,
+    simulate: $("simulate").checked,
+  };
+  if ($("objects-box").dataset.edited === "yes") {
+    const pickable = list($("pickable").value);
+    const destinations = list($("destinations").value);
+    body.objects = { objects: [...pickable, ...destinations, ...list($("others").value)], pickable_objects: pickable, destinations };
+  } else {
+    body.scene = $("scene").value;
+  }
+  clear();
+  busy(true);
+  setStatus("starting…", "busy");
+  const r = await fetch("/api/runs", { method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body) });
+  const reply = await r.json();
+  if (!r.ok) {
+    busy(false);
+    const detail = typeof reply.detail === "string" ? reply.detail : JSON.stringify(reply.detail);
+    setStatus(`Not started: ${detail}`, "error");
+    return;
+  }
+  listen(reply.id);
+}
+
+function listen(id) {
+  if (source) source.close();
+  source = new EventSource(`/api/runs/${id}/events`);
+  source.onmessage = (message) => handle(id, JSON.parse(message.data));
+  source.onerror = () => { if (source.readyState === EventSource.CLOSED) busy(false); };
+}
+
+function handle(id, e) {
+  switch (e.type) {
+    case "status": setStatus(e.message, "busy"); break;
+    case "ope": showOpe(e.data); break;
+    case "urp": showUrp(e.data); break;
+    case "step": showStep(e.data); break;
+    case "plan": showPlan(e); break;
+    case "sim": showSim(id, e); break;
+    case "error":
+      setStatus(`Error: ${e.message}${e.hint ? " — " + e.hint : ""}`, "error");
+      source.close(); busy(false); break;
+    case "done":
+      setStatus("Done.");
+      source.close(); busy(false); break;
+  }
+}
+
+function relationsTable(retrievals, perConcept = 8) {
+  const box = el("div");
+  for (const [concept, r] of Object.entries(retrievals)) {
+    const table = el("table", {}, el("tr", {}, el("th", {}, `${concept}${r.match && r.match !== "exact" ? " (" + r.match + " match)" : ""}`), el("th", {}, "similarity"), el("th", {}, "source")));
+    const edges = r.edges.slice().sort((a, b) => b.similarity - a.similarity).slice(0, perConcept);
+    if (!edges.length) table.append(el("tr", {}, el("td", { class: "dim" }, "no relations in the graph")));
+    for (const edge of edges) {
+      table.append(el("tr", { class: edge.kept ? "kept" : "dropped" }, el("td", {}, edge.relation), el("td", {}, edge.similarity.toFixed(3)), el("td", {}, edge.source)));
+    }
+    box.append(table);
+  }
+  return box;
+}
+
+function showOpe(ope) {
+  $("ope-box").hidden = false;
+  $("ope-mode").textContent = `mode: ${ope.mode} (${ope.why})`;
+  const names = Object.keys(ope.objects);
+  const keys = names.length ? Object.keys(ope.objects[names[0]].values).filter((k) => k !== "object") : [];
+  const table = $("properties");
+  table.append(el("tr", {}, el("th", {}, "object"), ...keys.map((k) => el("th", {}, k))));
+  for (const name of names) {
+    const values = ope.objects[name].values;
+    const cells = keys.map((k) => {
+      let v = values[k];
+      if (Array.isArray(v)) v = v.map((x) => (typeof x === "object" ? `${x.object} (${x.score})` : x)).join(", ");
+      return el("td", k === "dangerous" ? { class: `risk-${v}` } : {}, v ?? "");
+    });
+    table.append(el("tr", {}, el("td", {}, name), ...cells));
+  }
+  $("relations").append(relationsTable(ope.retrieval));
+}
+
+function showUrp(urp) {
+  $("urp-box").hidden = false;
+  $("keywords").textContent = urp.keywords.join(", ") || "(none)";
+  $("reasoning").textContent = urp.reasoning;
+  $("commands").textContent = urp.commands.join("; ") || "(none)";
+  $("keyword-relations").append(relationsTable(urp.keyword_relations, 6));
+  if (urp.refused) showRefusal(urp.refusal_reason || "judged unsafe");
+}
+
+function showStep(step) {
+  $("steps-box").hidden = false;
+  const box = el("div", { class: "step" }, el("h3", {}, `Step ${step.index}: ${step.chosen}`));
+  const top = Math.max(...step.candidates.map((c) => c.combined), 1e-9);
+  for (const c of step.candidates) {
+    const row = el("div", { class: c.action === step.chosen ? "bar chosen" : "bar" },
+      el("span", {}, c.action), el("div", { class: "fill", style: `width:${(100 * c.combined) / top}%` }),
+      el("span", {}, c.combined.toFixed(3)));
+    row.title = `LLM ${c.llm.toFixed(3)} × affordance ${c.affordance.toFixed(2)}`;
+    box.append(row);
+  }
+  $("steps").append(box);
+}
+
+function showRefusal(reason) {
+  $("refusal").hidden = false;
+  $("refusal-reason").textContent = reason;
+}
+
+function showPlan(e) {
+  $("plan-box").hidden = false;
+  $("plan").replaceChildren(...e.plan.map((a) => el("li", {}, a)));
+  const total = e.usage.total;
+  if (total) $("usage").textContent = `${total.latency_s.toFixed(1)} s, ${total.prompt_tokens + total.completion_tokens} tokens, ${total.calls} LLM calls`;
+  if (e.refused) showRefusal(e.reason || "judged unsafe");
+}
+
+function showSim(id, e) {
+  $("sim-box").hidden = false;
+  $("sim-verdict").textContent = e.verdict;
+  $("sim-verdict").className = e.ok ? "kept" : "error";
+  $("sim-pictures").replaceChildren(...e.files.map((f) => el("img", { src: `/api/runs/${id}/files/${f}`, alt: f })));
+}
+
+init().catch((err) => setStatus(`Could not load the page: ${err}`, "error"));

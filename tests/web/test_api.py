@@ -1,0 +1,171 @@
+"""Every endpoint of the web app, with good and bad input."""
+
+from __future__ import annotations
+
+import threading
+from pathlib import Path
+
+from fastapi.testclient import TestClient
+
+from conceptbot.core.config import load_settings
+from conceptbot.core.errors import BackendUnavailableError
+from conceptbot.web.worker import available_backends
+from tests.web.conftest import REQUEST, events_of
+
+RUN = {"request": REQUEST, "scene": "example-scissors", "config": "conceptbot"}
+
+
+def test_pages_and_static_files(make_client) -> None:
+    client: TestClient = make_client()
+    page = client.get("/")
+    assert page.status_code == 200 and "<title>ConceptBot</title>" in page.text
+    fresh = TestClient(client.app)
+    assert "conceptbot_session" in fresh.get("/").cookies
+    assert "Benchmark results" in client.get("/results").text
+    assert client.get("/static/app.js").headers["content-type"].startswith("text/javascript")
+    assert client.get("/static/style.css").status_code == 200
+    for bad in ("/static/../app.py", "/static/secret.txt", "/nope"):
+        assert client.get(bad).status_code == 404
+
+
+def test_options_and_scenes(make_client) -> None:
+    client = make_client()
+    options = client.get("/api/options").json()
+    assert options["backends"] == ["llamacpp:qwen2.5-coder-1.5b", "llamacpp:smollm2-135m"]
+    assert {"conceptbot", "saycan", "nokg"} <= set(options["configs"]) and "kitchen" in options["scenes"]
+    assert options["simulator"] is False
+    scene = client.get("/api/scenes/example-scissors").json()
+    assert scene["pickable_objects"] == ["scissors", "knife", "safety scissors"]
+    assert client.get("/api/scenes/nope").status_code == 404
+
+
+def test_api_keys_never_reach_the_page(make_client, isolated_home: Path) -> None:
+    settings = load_settings(env={"OPENAI_API_KEY": "sk-secret-123", "CONCEPTBOT_LLM": "openai:gpt-4o-mini"})
+    client = make_client(backends=available_backends(settings))
+    text = client.get("/api/options").text + client.get("/").text
+    assert "openai:gpt-4o-mini" in text and "sk-secret" not in text
+
+
+def test_a_run_streams_each_module_then_the_plan(make_client) -> None:
+    client = make_client()
+    started = client.post("/api/runs", json=RUN)
+    assert started.status_code == 201
+    events = events_of(client, started.json()["id"])
+    kinds = [e["type"] for e in events]
+    assert kinds[0] == "status" and kinds[-1] == "done"
+    assert kinds.index("ope") < kinds.index("urp") < kinds.index("step") < kinds.index("plan")
+    ope = next(e for e in events if e["type"] == "ope")["data"]
+    assert ope["mode"] == "risk" and ope["objects"]["scissors"]["values"]["dangerous"] == 4
+    steps = [e["data"] for e in events if e["type"] == "step"]
+    assert steps[0]["chosen"] == "pick_and_place(safety scissors, child)" and steps[0]["candidates"]
+    plan = next(e for e in events if e["type"] == "plan")
+    assert plan["plan"] == ["pick_and_place(safety scissors, child)", "done()"] and not plan["refused"]
+    # A page that connects again replays the run from the start.
+    assert [e["type"] for e in events_of(client, started.json()["id"])] == kinds
+
+
+def test_edited_objects_make_the_scene(make_client) -> None:
+    seen = {}
+
+    def worker(spec, emit, out_dir):
+        seen["scene"] = spec.scene
+
+    client = make_client(worker=worker)
+    objects = {"objects": ["cup", "sink"], "pickable_objects": ["cup"], "destinations": ["sink"]}
+    run = client.post("/api/runs", json={"request": "wash up", "objects": objects})
+    assert run.status_code == 201
+    events_of(client, run.json()["id"])
+    assert seen["scene"].pickable == ["cup"] and seen["scene"].destinations == ["sink"]
+
+
+def test_bad_run_requests_are_refused_with_a_reason(make_client) -> None:
+    client = make_client()
+    cases = [
+        ({**RUN, "request": "  "}, 400, "empty"),
+        ({**RUN, "config": "gpt"}, 400, "unknown configuration"),
+        ({**RUN, "backend": "openai-compatible:http://evil.example/v1"}, 400, "unknown backend"),
+        ({**RUN, "scene": "../../etc/passwd"}, 400, "unknown demo scene"),
+        (
+            {"request": "x", "objects": {"objects": [""], "pickable_objects": [], "destinations": []}},
+            400,
+            "names",
+        ),
+        (
+            {"request": "x", "objects": {"objects": [], "pickable_objects": [], "destinations": []}},
+            400,
+            "no objects",
+        ),
+        ({**RUN, "request": "x" * 501}, 422, "request"),
+        ({"scene": "kitchen"}, 422, "request"),
+    ]
+    for body, status, words in cases:
+        reply = client.post("/api/runs", json=body)
+        assert reply.status_code == status, (body, reply.text)
+        assert words in reply.text
+    assert (
+        client.post(
+            "/api/runs", content=b"{not json", headers={"content-type": "application/json"}
+        ).status_code
+        == 422
+    )
+    big = client.post("/api/runs", content=b"x" * 40_000, headers={"content-type": "application/json"})
+    assert big.status_code == 413 and "over" in big.json()["detail"]
+    stranger = TestClient(client.app)  # never loaded the page: no session
+    assert stranger.post("/api/runs", json=RUN).status_code == 403
+
+
+def test_one_run_at_a_time_per_page_and_runs_are_private(make_client) -> None:
+    release = threading.Event()
+
+    def worker(spec, emit, out_dir):
+        emit("status", {"message": "thinking"})
+        release.wait(10)
+
+    client = make_client(worker=worker)
+    first = client.post("/api/runs", json=RUN)
+    assert first.status_code == 201
+    busy = client.post("/api/runs", json=RUN)
+    assert busy.status_code == 409 and "already in progress" in busy.json()["detail"]
+    other = TestClient(client.app)
+    other.get("/")
+    assert other.get(f"/api/runs/{first.json()['id']}/events").status_code == 404
+    release.set()
+    assert events_of(client, first.json()["id"])[-1]["type"] == "done"
+    assert client.post("/api/runs", json=RUN).status_code == 201  # free again
+
+
+def test_errors_reach_the_page_with_their_hint(make_client) -> None:
+    def worker(spec, emit, out_dir):
+        raise BackendUnavailableError("the model server is down", hint="start it")
+
+    client = make_client(worker=worker)
+    events = events_of(client, client.post("/api/runs", json=RUN).json()["id"])
+    assert events[-1] == {"type": "error", "message": "the model server is down", "hint": "start it"}
+
+
+def test_run_pictures_by_fixed_names_only(make_client) -> None:
+    def worker(spec, emit, out_dir):
+        (out_dir / "before.png").write_bytes(b"\x89PNG fake")
+        (out_dir / "notes.txt").write_text("private")
+
+    client = make_client(worker=worker)
+    run_id = client.post("/api/runs", json=RUN).json()["id"]
+    events_of(client, run_id)
+    picture = client.get(f"/api/runs/{run_id}/files/before.png")
+    assert picture.status_code == 200 and picture.headers["content-type"] == "image/png"
+    for name in ("after.png", "notes.txt", "..%2Fnotes.txt"):
+        assert client.get(f"/api/runs/{run_id}/files/{name}").status_code == 404
+    assert client.get("/api/runs/nope/files/before.png").status_code == 404
+
+
+def test_results_page_data(make_client, tmp_path: Path) -> None:
+    client = make_client()
+    assert client.get("/api/results").json() == {"reports": []}
+    results = tmp_path / "results"
+    results.mkdir()
+    (results / "report.md").write_text("| category | saycan |\n|---|---|\n| all | 86% (n=14) |\n")
+    (results / "success.png").write_bytes(b"\x89PNG fake")
+    reports = client.get("/api/results").json()["reports"]
+    assert reports[0]["title"] == "paper benchmark" and "86%" in reports[0]["markdown"]
+    assert client.get(reports[0]["chart"]).status_code == 200
+    assert client.get("/api/results/files/report.md").status_code == 404

@@ -1,0 +1,107 @@
+"""End to end in headless Chromium (Debian ``chromium`` + ``chromium-driver``): load the page, ask,
+wait for the plan, check what is shown. Screenshots go to build/screenshots/ (or
+$CONCEPTBOT_SCREENSHOTS)."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import socket
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+import uvicorn
+
+from conceptbot.web.app import create_app
+from conceptbot.web.runs import RunManager
+from conceptbot.web.worker import make_worker
+from tests.web.conftest import REQUEST, scripted_bot
+
+SHOTS = Path(os.environ.get("CONCEPTBOT_SCREENSHOTS", Path(__file__).parents[2] / "build" / "screenshots"))
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture
+def server(tmp_path: Path) -> Iterator[str]:
+    manager = RunManager(make_worker(lambda config, backend: scripted_bot(), can_simulate=False))
+    app = create_app(
+        manager, backends=["llamacpp:qwen2.5-coder-1.5b"], results_dir=tmp_path, can_simulate=False
+    )
+    port = _free_port()
+    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning"))
+    thread = threading.Thread(target=server.run, daemon=True)
+    thread.start()
+    deadline = time.time() + 20
+    while not server.started and time.time() < deadline:
+        time.sleep(0.05)
+    assert server.started, "the web server did not start"
+    yield f"http://127.0.0.1:{port}"
+    server.should_exit = True
+    thread.join(10)
+    manager.close()
+
+
+@pytest.fixture
+def browser():
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    binary, driver = shutil.which("chromium"), shutil.which("chromedriver")
+    assert binary and driver, "headless Chromium is missing: run bash scripts/install-browser.sh"
+    options = webdriver.ChromeOptions()
+    options.binary_location = binary
+    for flag in (
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--window-size=1280,1600",
+    ):
+        options.add_argument(flag)
+    os.environ.setdefault("SE_OFFLINE", "true")  # never let Selenium Manager look for downloads
+    chrome = webdriver.Chrome(service=Service(executable_path=driver), options=options)
+    yield chrome
+    chrome.quit()
+
+
+@pytest.mark.slow
+def test_ask_and_watch_the_plan_in_chromium(server: str, browser) -> None:
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support import expected_conditions as when
+    from selenium.webdriver.support.ui import Select, WebDriverWait
+
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    wait = WebDriverWait(browser, 30)
+    browser.get(server + "/")
+    wait.until(lambda b: len(Select(b.find_element(By.ID, "scene")).options) > 5)
+    Select(browser.find_element(By.ID, "scene")).select_by_visible_text("example-scissors")
+    wait.until(lambda b: "safety scissors" in b.find_element(By.ID, "pickable").get_attribute("value"))
+    browser.save_screenshot(str(SHOTS / "web-1-loaded.png"))
+    browser.find_element(By.ID, "request").send_keys(REQUEST)
+    browser.find_element(By.ID, "run").click()
+    wait.until(when.text_to_be_present_in_element((By.ID, "status"), "Done."))
+    plan = [li.text for li in browser.find_elements(By.CSS_SELECTOR, "#plan li")]
+    assert plan == ["pick_and_place(safety scissors, child)", "done()"]
+    properties = browser.find_element(By.ID, "properties").text
+    assert "scissors" in properties and "4" in properties
+    assert browser.find_element(By.ID, "reasoning").text == "because"
+    chosen = browser.find_elements(By.CSS_SELECTOR, "#steps .bar.chosen")
+    assert [c.text.split("\n")[0] for c in chosen] == ["pick_and_place(safety scissors, child)", "done()"]
+    assert browser.find_element(By.ID, "run").is_enabled()
+    assert not browser.find_element(By.ID, "refusal").is_displayed()
+    browser.save_screenshot(str(SHOTS / "web-2-plan.png"))
+    # The results page says there are no reports yet (the results folder is empty).
+    browser.get(server + "/results")
+    wait.until(when.text_to_be_present_in_element((By.ID, "reports"), "No reports yet"))
+    assert (SHOTS / "web-2-plan.png").stat().st_size > 10_000
