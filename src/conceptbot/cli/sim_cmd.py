@@ -6,18 +6,13 @@ import json
 from pathlib import Path
 
 import click
-from PIL import Image
 
 from conceptbot.baselines.factory import SYSTEMS, build_system
 from conceptbot.cli.main import AppContext, pass_app
 from conceptbot.core.errors import ConfigError
 from conceptbot.core.plan import InvalidActionError, parse_action
 from conceptbot.scenes import resolve_scene
-from conceptbot.sim.detector import SimDetector, observe
-from conceptbot.sim.execute import execute_plan, run_closed_loop
-from conceptbot.sim.render import VIEW, picture, save_gif
-from conceptbot.sim.skills import GRASP_MODES, PickAndPlace
-from conceptbot.sim.world import build_world
+from conceptbot.sim import GRASP_MODES
 
 GIF_SIZE = (320, 240)
 
@@ -101,6 +96,15 @@ def run(
     planner, which plans the rest (at most --max-replans times). Exit status 0 whatever the verdict;
     the verdict is in the output and in result.json.
     """
+    # Imported here: PyBullet is heavy and prints a banner, and other commands do not need it.
+    from PIL import Image
+
+    from conceptbot.sim.detector import SimDetector, observe
+    from conceptbot.sim.execute import execute_plan, run_closed_loop
+    from conceptbot.sim.render import VIEW, picture, save_gif
+    from conceptbot.sim.skills import PickAndPlace
+    from conceptbot.sim.world import build_world
+
     if not request.strip() and plan_path is None:
         raise ConfigError("give a REQUEST to plan, or --plan FILE to execute")
     scene = resolve_scene(scene_ref)

@@ -25,11 +25,11 @@ from dataclasses import dataclass, field
 
 import pybullet as pb
 
+from conceptbot.sim import GRASP_MODES
 from conceptbot.sim.robot import FrameHook, Panda, Vec3
 from conceptbot.sim.world import WALL_M, World
 
 FAILURES = ("unknown", "too_wide", "unreachable", "target_full", "slipped", "missed")
-GRASP_MODES = ("friction", "assisted")
 REACH_TOLERANCE_M = 0.015
 CLEARANCE_M = 0.04
 CARRY_SPEED = 0.8  # rad/s while holding something: a fast swing shakes it loose
@@ -38,6 +38,7 @@ TALL_M = 0.12
 FINGER_MARGIN_M = 0.004
 MAX_PILE_M = 0.08  # the highest pile on a pad or plate
 HEAP_M = 0.03  # how far a heap may rise over a container's rim
+DROP_M = 0.04  # the highest a thing is let go above where it comes to rest
 FINGER_CLEARANCE_M = 0.02  # room kept beside a placed object for the fingers and their opening
 
 
@@ -292,14 +293,20 @@ class PickAndPlace:
         # a bin's wall it would land on the wall, beside a bottle it would knock it over).
         place, reachable = None, False
         round_body = world.bodies[obj].spec.shape in ("sphere", "cylinder")
-        for spot in spots:
-            release_z = spot.floor_z + hand_above_bottom + 0.004
-            for candidate in self._place_poses(spot, offset, yaw, object_yaw, transit, release_z, round_body):
-                reachable = True
-                if self._clear(candidate[3], obj, grasp.width):
-                    place = candidate
+        # Where the hand cannot go all the way down (fingers on a bowl's rim), it lets go a little
+        # higher, as people do: the thing drops at most DROP_M.
+        for lift in (0.0, DROP_M / 2, DROP_M):
+            for spot in spots:
+                release_z = spot.floor_z + hand_above_bottom + 0.004 + lift
+                poses = self._place_poses(spot, offset, yaw, object_yaw, transit, release_z, round_body)
+                for candidate in poses:
+                    reachable = True
+                    if self._clear(candidate[3], obj, grasp.width):
+                        place = candidate
+                        break
+                if place is not None:
                     break
-            if place is not None:
+            if place is not None or not reachable:
                 break
         if not reachable:
             return SkillResult(action, False, "unreachable", f"the arm cannot reach {target}", 0.0)
