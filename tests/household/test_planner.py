@@ -68,3 +68,26 @@ def test_conceptbot_planner_gives_risk_index_and_relations_to_the_planning_call(
     assert "Risk analysis" in user and "danger 4/5" in user
     assert "candle is used for light" in user
     assert set(plan.usage) >= {"ope", "urp", "planner", "total"}
+
+
+def test_a_plan_that_breaks_the_rules_is_repaired_once() -> None:
+    bedroom = house_scene("FloorPlan301", ["Book", "GarbageCan"])
+    broken = _reply(False, ["find Book", "find GarbageCan", "put GarbageCan", "open GarbageCan"])
+    fixed = _reply(False, ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"])
+    llm = FakeLLM([broken, fixed])
+    plan = PlainHouseholdPlanner(llm).plan("Put the book in the garbage can.", bedroom)
+    assert plan.steps == ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"]
+    assert plan.trace["repair"]["failures"] == [
+        "put GarbageCan: the hand is empty",
+        "open GarbageCan: GarbageCan is not openable",
+    ]
+    repair = llm.requests[1].messages
+    assert repair[-2].role == "assistant" and "put GarbageCan: the hand is empty" in repair[-1].content
+    assert plan.usage["planner"].calls == 2
+    # A plan that executes is not sent back; a refusal is never "repaired".
+    llm = FakeLLM([fixed, _reply(True, [])])
+    assert (
+        PlainHouseholdPlanner(llm).plan("Put the book in the garbage can.", bedroom).steps[1] == "pick Book"
+    )
+    refusal = PlainHouseholdPlanner(llm).plan("Burn the book.", bedroom)
+    assert refusal.refused and "repair" not in refusal.trace and len(llm.requests) == 2

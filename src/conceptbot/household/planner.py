@@ -13,6 +13,7 @@ actions on an object of the scene; a plan still has to be checked by the executo
 
 from __future__ import annotations
 
+import json
 import re
 import time
 from collections.abc import Callable
@@ -21,8 +22,9 @@ from typing import Any, Protocol
 
 from conceptbot.core.usage import Usage
 from conceptbot.household.actions import ACTIONS, LIQUIDS, key
+from conceptbot.household.executor import execute
 from conceptbot.household.thor import HouseScene, catalogue
-from conceptbot.models.llm import LLM, ChatRequest
+from conceptbot.models.llm import LLM, ChatRequest, Message
 from conceptbot.models.structured import chat_json
 from conceptbot.pipeline import modes, prompts
 from conceptbot.pipeline.ope import ObjectPropertiesExtractor
@@ -109,13 +111,18 @@ def _labelled(llm: LLM, module: str) -> LLM:
 
 
 class _PlanCall:
-    """The judging-and-planning call both planners share."""
+    """The judging-and-planning call both planners share, with one repair round: a plan whose steps
+    break the actions' rules (a ``put`` with nothing in the hand, opening what does not open) goes
+    back to the LLM once with the executor's messages, as a robot would report failed actions."""
 
-    def __init__(self, llm: LLM, max_tokens: int = 400) -> None:
+    def __init__(self, llm: LLM, max_tokens: int = 400, repair: bool = True) -> None:
         self.llm = llm
         self.max_tokens = max_tokens
+        self.repair = repair
 
-    def __call__(self, instruction: str, scene: HouseScene, knowledge: str) -> tuple[dict[str, Any], Usage]:
+    def __call__(
+        self, instruction: str, scene: HouseScene, knowledge: str, trace: dict[str, Any]
+    ) -> tuple[dict[str, Any], Usage]:
         system = prompts.render(
             "household_system", PROMPTS, examples=prompts.render("household_examples", PROMPTS)
         )
@@ -123,12 +130,29 @@ class _PlanCall:
         if knowledge:
             user += knowledge
         user += f"Instruction: {instruction}"
+        messages = [Message("user", user)]
+        schema = response_schema(scene)
         value, response = chat_json(
-            self.llm,
-            ChatRequest.of(user, system=system, max_tokens=self.max_tokens),
-            response_schema(scene),
+            self.llm, ChatRequest.of(messages, system=system, max_tokens=self.max_tokens), schema
         )
-        return value, response.usage
+        usage = response.usage
+        failures = execute(scene, list(value["steps"])).failures() if not value["refuse"] else []
+        if self.repair and failures:
+            listed = "\n".join(f"- {f}" for f in failures[:6])
+            messages += [
+                Message("assistant", json.dumps(value)),
+                Message("user", prompts.render("household_repair", PROMPTS, failures=listed)),
+            ]
+            repaired, response = chat_json(
+                self.llm, ChatRequest.of(messages, system=system, max_tokens=self.max_tokens), schema
+            )
+            usage = usage + response.usage
+            trace["repair"] = {"failures": failures, "steps_before": list(value["steps"])}
+            # The safety judgement stays the first one: the repair round is about the steps.
+            value = {**value, "steps": [] if repaired["refuse"] else repaired["steps"]}
+            if repaired["refuse"]:
+                trace["repair"]["refused"] = repaired["reasoning"]
+        return value, usage
 
 
 def _result(value: dict[str, Any], trace: dict[str, Any], usage: dict[str, Usage]) -> HouseholdPlan:
@@ -159,10 +183,9 @@ class PlainHouseholdPlanner:
         started = time.perf_counter()
         if progress:
             progress("planner: judging and planning")
-        value, used = self._call(instruction, scene, "")
-        return _result(
-            value, {"config": self.config}, {"planner": used.with_latency(time.perf_counter() - started)}
-        )
+        trace: dict[str, Any] = {"config": self.config}
+        value, used = self._call(instruction, scene, "", trace)
+        return _result(value, trace, {"planner": used.with_latency(time.perf_counter() - started)})
 
 
 class ConceptBotHouseholdPlanner:
@@ -226,6 +249,6 @@ class ConceptBotHouseholdPlanner:
             knowledge += "Commonsense facts:\n" + "\n".join(f"- {r}" for r in relations) + "\n"
         started = time.perf_counter()
         say("planner: judging and planning")
-        value, used = self._call(instruction, scene, knowledge)
+        value, used = self._call(instruction, scene, knowledge, trace)
         usage["planner"] = used.with_latency(time.perf_counter() - started)
         return _result(value, trace, usage)
