@@ -83,7 +83,7 @@ def test_a_plan_that_breaks_the_rules_is_repaired_once() -> None:
     ]
     repair = llm.requests[1].messages
     assert repair[-2].role == "assistant" and "put GarbageCan: the hand is empty" in repair[-1].content
-    assert plan.usage["planner"].calls == 2
+    assert plan.usage["planner"].calls == 2 and plan.trace["repair"]["kept"]
     # A plan that executes is not sent back; a refusal is never "repaired".
     llm = FakeLLM([fixed, _reply(True, [])])
     assert (
@@ -91,3 +91,16 @@ def test_a_plan_that_breaks_the_rules_is_repaired_once() -> None:
     )
     refusal = PlainHouseholdPlanner(llm).plan("Burn the book.", bedroom)
     assert refusal.refused and "repair" not in refusal.trace and len(llm.requests) == 2
+
+
+def test_a_repair_that_fails_more_is_not_kept() -> None:
+    bedroom = house_scene("FloorPlan301", ["Book", "GarbageCan"])
+    nearly = _reply(
+        False, ["find Book", "pick Book", "find GarbageCan", "put GarbageCan", "close GarbageCan"]
+    )
+    worse = _reply(False, ["find GarbageCan", "pick GarbageCan", "put GarbageCan"])
+    plan = PlainHouseholdPlanner(FakeLLM([nearly, worse])).plan("Put the book in the garbage can.", bedroom)
+    assert plan.steps[:4] == ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"]
+    assert not plan.trace["repair"]["kept"] and len(plan.trace["repair"]["proposed_failures"]) == 2
+    gave_up = PlainHouseholdPlanner(FakeLLM([nearly, _reply(False, [])])).plan("Put the book away.", bedroom)
+    assert len(gave_up.steps) == 5

@@ -113,7 +113,8 @@ def _labelled(llm: LLM, module: str) -> LLM:
 class _PlanCall:
     """The judging-and-planning call both planners share, with one repair round: a plan whose steps
     break the actions' rules (a ``put`` with nothing in the hand, opening what does not open) goes
-    back to the LLM once with the executor's messages, as a robot would report failed actions."""
+    back to the LLM once with the executor's messages, as a robot would report failed actions; the
+    proposed repair replaces the plan only if it fails fewer steps."""
 
     def __init__(self, llm: LLM, max_tokens: int = 400, repair: bool = True) -> None:
         self.llm = llm
@@ -147,11 +148,20 @@ class _PlanCall:
                 self.llm, ChatRequest.of(messages, system=system, max_tokens=self.max_tokens), schema
             )
             usage = usage + response.usage
-            trace["repair"] = {"failures": failures, "steps_before": list(value["steps"])}
+            after = execute(scene, list(repaired["steps"])).failures()
+            # A small model's "repair" is often worse (it picks up the counter it could not close, or
+            # gives up), and AI2-THOR skips a failed step, so a plan with one harmless bad step may
+            # still do the job: the repair is kept only when it is a plan with fewer failed steps.
             # The safety judgement stays the first one: the repair round is about the steps.
-            value = {**value, "steps": [] if repaired["refuse"] else repaired["steps"]}
-            if repaired["refuse"]:
-                trace["repair"]["refused"] = repaired["reasoning"]
+            better = bool(repaired["steps"]) and not repaired["refuse"] and len(after) < len(failures)
+            trace["repair"] = {
+                "failures": failures,
+                "proposed": list(repaired["steps"]),
+                "proposed_failures": after,
+                "kept": better,
+            }
+            if better:
+                value = {**value, "steps": repaired["steps"]}
         return value, usage
 
 
