@@ -22,6 +22,7 @@ from typing import Any, TypeVar
 from conceptbot.baselines.factory import PlannerSystem
 from conceptbot.bench.grading import Task, grade
 from conceptbot.core.errors import ConceptBotError
+from conceptbot.core.usage import Usage
 from conceptbot.scenes import resolve_scene
 
 J = TypeVar("J")
@@ -88,6 +89,28 @@ def append_results(
     return records
 
 
+def usage_fields(usage: dict[str, Usage]) -> dict[str, dict[str, Any]]:
+    """Per-module usage as stored in a results record."""
+    return {
+        m: {
+            "latency_s": round(u.latency_s, 3),
+            "prompt_tokens": u.prompt_tokens,
+            "completion_tokens": u.completion_tokens,
+            "cost_usd": u.cost_usd,
+            "calls": u.calls,
+        }
+        for m, u in usage.items()
+    }
+
+
+def failure_fields(exc: Exception) -> dict[str, str]:
+    """``reason`` and ``error`` of a record whose planning raised: a user-facing error by its
+    message, anything else (a bug) with its traceback."""
+    if isinstance(exc, ConceptBotError):
+        return {"reason": f"error: {exc.message}", "error": str(exc)}
+    return {"reason": f"crash: {type(exc).__name__}: {exc}", "error": traceback.format_exc(limit=5)}
+
+
 def run_job(job: Job, system: PlannerSystem, backend: str, model: str) -> dict[str, Any]:
     """Plan one task with one system, grade it, and return the record."""
     scene = resolve_scene(job.task.scene)
@@ -103,16 +126,8 @@ def run_job(job: Job, system: PlannerSystem, backend: str, model: str) -> dict[s
     }
     try:
         plan = system.plan(job.task.request, scene)
-    except ConceptBotError as exc:
-        record.update(plan=None, refused=False, ok=False, reason=f"error: {exc.message}", error=str(exc))
     except Exception as exc:  # a bug must not lose the rest of a long run; it is recorded and reported
-        record.update(
-            plan=None,
-            refused=False,
-            ok=False,
-            reason=f"crash: {type(exc).__name__}: {exc}",
-            error=traceback.format_exc(limit=5),
-        )
+        record.update(plan=None, refused=False, ok=False, **failure_fields(exc))
     else:
         verdict = grade(job.task, plan.actions, plan.refused)
         record.update(
@@ -121,16 +136,7 @@ def run_job(job: Job, system: PlannerSystem, backend: str, model: str) -> dict[s
             refusal_reason=plan.reason,
             ok=verdict.ok,
             reason=verdict.reason,
-            usage={
-                m: {
-                    "latency_s": round(u.latency_s, 3),
-                    "prompt_tokens": u.prompt_tokens,
-                    "completion_tokens": u.completion_tokens,
-                    "cost_usd": u.cost_usd,
-                    "calls": u.calls,
-                }
-                for m, u in plan.usage.items()
-            },
+            usage=usage_fields(plan.usage),
         )
     record["seconds"] = round(time.perf_counter() - started, 3)
     record["finished_at"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())

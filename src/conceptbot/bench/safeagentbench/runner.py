@@ -4,16 +4,14 @@
 from __future__ import annotations
 
 import time
-import traceback
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from conceptbot.bench.runner import append_results, done_keys
+from conceptbot.bench.runner import append_results, done_keys, failure_fields, usage_fields
 from conceptbot.bench.safeagentbench.dataset import SafetyTask, scenes
 from conceptbot.bench.safeagentbench.grading import grade_safety
-from conceptbot.core.errors import ConceptBotError
 from conceptbot.household.planner import HouseholdPlanner
 
 RESULT_KEY = ("task", "config", "backend", "model")
@@ -47,18 +45,8 @@ def run_safety_job(job: SafetyJob, planner: HouseholdPlanner, backend: str, mode
     started = time.perf_counter()
     try:
         plan = planner.plan(task.instruction, scenes()[task.scene])
-    except ConceptBotError as exc:
-        record.update(
-            steps=None, refused=False, success=False, reason=f"error: {exc.message}", error=str(exc)
-        )
     except Exception as exc:  # a bug must not lose the rest of a long run; it is recorded and reported
-        record.update(
-            steps=None,
-            refused=False,
-            success=False,
-            reason=f"crash: {type(exc).__name__}: {exc}",
-            error=traceback.format_exc(limit=5),
-        )
+        record.update(steps=None, refused=False, success=False, **failure_fields(exc))
     else:
         verdict = grade_safety(task, plan.steps, plan.refused)
         record.update(
@@ -70,16 +58,7 @@ def run_safety_job(job: SafetyJob, planner: HouseholdPlanner, backend: str, mode
             method=verdict.method,
             reason=verdict.reason,
             trace=plan.trace,
-            usage={
-                m: {
-                    "latency_s": round(u.latency_s, 3),
-                    "prompt_tokens": u.prompt_tokens,
-                    "completion_tokens": u.completion_tokens,
-                    "cost_usd": u.cost_usd,
-                    "calls": u.calls,
-                }
-                for m, u in plan.usage.items()
-            },
+            usage=usage_fields(plan.usage),
         )
     record["seconds"] = round(time.perf_counter() - started, 3)
     record["finished_at"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
