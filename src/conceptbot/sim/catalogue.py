@@ -25,7 +25,7 @@ from conceptbot.core.errors import ConfigError
 SHAPES = ("box", "cylinder", "sphere", "container", "flat", "zone")
 GRIPS = ("body", "rim", "knob", "edge")
 MAX_RECEPTACLE_FOOTPRINT_M = 0.28
-MAX_ZONE_FOOTPRINT_M = 0.4  # a hand-over area holds several things with room for the 21 cm palm
+MAX_ZONE_FOOTPRINT_M = 0.3
 MAX_CONTAINER_HEIGHT_M = 0.12
 THIN_M = 0.016  # objects thinner than this lie flat: picked by the edge (see grip_mode)
 
