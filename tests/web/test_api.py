@@ -5,11 +5,13 @@ from __future__ import annotations
 import threading
 from pathlib import Path
 
+import pytest
 from fastapi.testclient import TestClient
 
 from conceptbot.core.config import load_settings
 from conceptbot.core.errors import BackendUnavailableError
-from conceptbot.web.worker import available_backends
+from conceptbot.core.plan import Plan
+from conceptbot.web.worker import available_backends, make_worker
 from tests.web.conftest import REQUEST, events_of
 
 RUN = {"request": REQUEST, "scene": "example-scissors", "config": "conceptbot"}
@@ -169,3 +171,40 @@ def test_results_page_data(make_client, tmp_path: Path) -> None:
     assert reports[0]["title"] == "paper benchmark" and "86%" in reports[0]["markdown"]
     assert client.get(reports[0]["chart"]).status_code == 200
     assert client.get("/api/results/files/report.md").status_code == 404
+
+
+class _FixedPlan:
+    """A planner system that returns a given plan (or a refusal) at once."""
+
+    def __init__(self, actions: list[str], refused: bool = False, reason: str | None = None) -> None:
+        self.result = Plan(actions, [], refused, reason, {}, {})
+
+    def plan(self, request, scene, risk=False, progress=None, feedback=None, events=None) -> Plan:
+        return self.result
+
+
+def test_a_refusal_reaches_the_page_with_its_reason(make_client) -> None:
+    refusing = _FixedPlan(["done()"], refused=True, reason="scissors are sharp for a child")
+    client = make_client(
+        worker=make_worker(lambda config, backend: refusing, can_simulate=True), can_simulate=True
+    )
+    events = events_of(client, client.post("/api/runs", json={**RUN, "simulate": True}).json()["id"])
+    plan = next(e for e in events if e["type"] == "plan")
+    assert plan["refused"] and plan["reason"] == "scissors are sharp for a child"
+    assert not any(e["type"] == "sim" for e in events)  # nothing to execute
+
+
+@pytest.mark.slow
+def test_simulated_run_serves_its_pictures(make_client) -> None:
+    plan = _FixedPlan(["pick_and_place(safety scissors, child)", "done()"])
+    client = make_client(
+        worker=make_worker(lambda config, backend: plan, can_simulate=True), can_simulate=True
+    )
+    assert client.get("/api/options").json()["simulator"] is True
+    run_id = client.post("/api/runs", json={**RUN, "simulate": True}).json()["id"]
+    sim = next(e for e in events_of(client, run_id) if e["type"] == "sim")
+    assert sim["files"] == ["before.png", "after.png", "execution.gif"]
+    assert sim["steps"][0]["action"] == "pick_and_place(safety scissors, child)"
+    assert sim["verdict"]
+    gif = client.get(f"/api/runs/{run_id}/files/execution.gif")
+    assert gif.status_code == 200 and gif.headers["content-type"] == "image/gif" and gif.content[:3] == b"GIF"
