@@ -11,13 +11,12 @@ Scripted :class:`Reply` objects (errors, garbage, slow answers) are served first
 
 from __future__ import annotations
 
-import json
-import threading
 import time
 import urllib.parse
 from dataclasses import dataclass
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import Any
+
+from tests.loopback import LoopbackServer, Request
 
 CONTEXT = ["http://api.conceptnet.io/ld/conceptnet5.7/context.ld.json"]
 
@@ -99,7 +98,7 @@ def _touches(e: dict[str, Any], uri: str) -> bool:
     return False
 
 
-class ConceptNetStub:
+class ConceptNetStub(LoopbackServer):
     """Serves ``GET /query`` on 127.0.0.1; ``url`` is the base URL to hand to the client.
 
     Args:
@@ -114,40 +113,27 @@ class ConceptNetStub:
         script: list[Reply] | None = None,
         always: Reply | None = None,
     ) -> None:
+        super().__init__()
         self.edges = list(edges or [])
         self.script = list(script or [])
         self.always = always
-        self.requests: list[str] = []
-        self._lock = threading.Lock()
-        stub = self
 
-        class _Handler(BaseHTTPRequestHandler):
-            def do_GET(self) -> None:
-                with stub._lock:
-                    stub.requests.append(self.path)
-                    reply = stub.script.pop(0) if stub.script else stub.always
-                if reply is not None and reply.delay_s:
-                    time.sleep(reply.delay_s)
-                status = reply.status if reply is not None else 200
-                body = reply.body if reply is not None else None
-                if body is None:
-                    status, body = stub.answer(self.path) if status == 200 else (status, {"error": "stub"})
-                data = body if isinstance(body, bytes) else json.dumps(body).encode()
-                try:
-                    self.send_response(status)
-                    self.send_header("Content-Type", "application/json")
-                    self.send_header("Content-Length", str(len(data)))
-                    self.end_headers()
-                    self.wfile.write(data)
-                except (BrokenPipeError, ConnectionResetError):
-                    pass  # the client gave up (time-out test)
+    @property
+    def requests(self) -> list[str]:
+        """Every request's path, in order."""
+        return [r.path for r in self.received]
 
-            def log_message(self, *args: Any) -> None:
-                pass
-
-        self.server = ThreadingHTTPServer(("127.0.0.1", 0), _Handler)
-        # A short poll interval makes shutdown() (and so every test) fast.
-        self.thread = threading.Thread(target=self.server.serve_forever, args=(0.05,), daemon=True)
+    def respond(self, request: Request) -> tuple[int, bytes | dict[str, Any]]:
+        """The next scripted reply (after its delay), else the API's answer."""
+        with self.lock:
+            reply = self.script.pop(0) if self.script else self.always
+        if reply is not None and reply.delay_s:
+            time.sleep(reply.delay_s)
+        status = reply.status if reply is not None else 200
+        body = reply.body if reply is not None else None
+        if body is None:
+            status, body = self.answer(request.path) if status == 200 else (status, {"error": "stub"})
+        return status, body
 
     def answer(self, path: str) -> tuple[int, dict[str, Any]]:
         """The normal ``(status, body)`` for a request path, as the real API answers it."""
@@ -181,12 +167,4 @@ class ConceptNetStub:
     @property
     def url(self) -> str:
         """Base URL of the stub API."""
-        return f"http://127.0.0.1:{self.server.server_address[1]}"
-
-    def __enter__(self) -> ConceptNetStub:
-        self.thread.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.server.shutdown()
-        self.server.server_close()
+        return self.base_url

@@ -7,12 +7,11 @@ two queries the client makes: ``list=search`` and ``prop=extracts|pageprops``. S
 
 from __future__ import annotations
 
-import json
-import threading
 from dataclasses import dataclass
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import Any
 from urllib.parse import parse_qsl, urlsplit
+
+from tests.loopback import LoopbackServer, Request
 
 API_PATH = "/w/api.php"
 
@@ -25,7 +24,7 @@ class StubPage:
     disambiguation: bool = False
 
 
-class WikipediaStub:
+class WikipediaStub(LoopbackServer):
     """Serves a scripted wiki; records every request's query parameters and headers.
 
     Args:
@@ -36,6 +35,8 @@ class WikipediaStub:
         responses: Raw ``(status, body)`` replies served, in order, before the wiki answers.
     """
 
+    content_type = "application/json; charset=utf-8"
+
     def __init__(
         self,
         pages: dict[str, str | StubPage] | None = None,
@@ -43,44 +44,36 @@ class WikipediaStub:
         redirects: dict[str, str] | None = None,
         responses: list[tuple[int, bytes | dict[str, Any]]] | None = None,
     ) -> None:
+        super().__init__()
         self.pages = {t: p if isinstance(p, StubPage) else StubPage(p) for t, p in (pages or {}).items()}
         self.search = search or {}
         self.redirects = redirects or {}
         self.responses = list(responses or [])
-        self.requests: list[dict[str, str]] = []
-        self.headers: list[dict[str, str]] = []
         self._ids = {title: 1000 + i for i, title in enumerate(self.pages)}
-        stub = self
 
-        class _Handler(BaseHTTPRequestHandler):
-            def do_GET(self) -> None:
-                parts = urlsplit(self.path)
-                params = dict(parse_qsl(parts.query))
-                stub.requests.append(params)
-                stub.headers.append({k.lower(): v for k, v in self.headers.items()})
-                if stub.responses:
-                    status, body = stub.responses.pop(0)
-                elif parts.path != API_PATH:
-                    status, body = 404, b"not found"
-                else:
-                    status, body = 200, stub.answer(params)
-                data = body if isinstance(body, bytes) else json.dumps(body).encode()
-                self.send_response(status)
-                self.send_header("Content-Type", "application/json; charset=utf-8")
-                self.send_header("Content-Length", str(len(data)))
-                self.end_headers()
-                self.wfile.write(data)
+    @property
+    def requests(self) -> list[dict[str, str]]:
+        """Every request's query parameters, in order."""
+        return [dict(parse_qsl(urlsplit(r.path).query)) for r in self.received]
 
-            def log_message(self, *args: Any) -> None:
-                pass
+    @property
+    def headers(self) -> list[dict[str, str]]:
+        """Every request's headers (lower-case names), in order."""
+        return [r.headers for r in self.received]
 
-        self.server = ThreadingHTTPServer(("127.0.0.1", 0), _Handler)
-        self.thread = threading.Thread(target=self.server.serve_forever, daemon=True)
+    def respond(self, request: Request) -> tuple[int, bytes | dict[str, Any]]:
+        """A scripted raw reply first, else the wiki's answer (404 off the API path)."""
+        parts = urlsplit(request.path)
+        if self.responses:
+            return self.responses.pop(0)
+        if parts.path != API_PATH:
+            return 404, b"not found"
+        return 200, self.answer(dict(parse_qsl(parts.query)))
 
     @property
     def url(self) -> str:
         """The stub's ``api.php`` URL."""
-        return f"http://127.0.0.1:{self.server.server_address[1]}{API_PATH}"
+        return f"{self.base_url}{API_PATH}"
 
     @property
     def fetched_titles(self) -> list[str]:
@@ -136,11 +129,3 @@ class WikipediaStub:
                 entry["pageprops"] = {"disambiguation": ""}
             query["pages"] = {str(pageid): entry}
         return {"batchcomplete": "", "query": query}
-
-    def __enter__(self) -> WikipediaStub:
-        self.thread.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.server.shutdown()
-        self.server.server_close()

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import json
-import threading
 from collections.abc import Callable
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import Any
+
+from tests.loopback import LoopbackServer, Request
 
 Handler = Callable[[dict[str, Any]], tuple[int, dict[str, Any]]]
 
@@ -30,45 +30,23 @@ def completion(texts: list[str], prompt_tokens: int = 7, completion_tokens: int 
     }
 
 
-class StubServer:
+class StubServer(LoopbackServer):
     """Serves POST /v1/chat/completions from a queue of handlers; records request bodies and headers."""
 
     def __init__(self, handlers: list[Handler]) -> None:
+        super().__init__()
         self.handlers = list(handlers)
         self.bodies: list[dict[str, Any]] = []
         self.headers: list[dict[str, str]] = []
-        stub = self
 
-        class _Handler(BaseHTTPRequestHandler):
-            def do_POST(self) -> None:
-                length = int(self.headers.get("Content-Length", 0))
-                body = json.loads(self.rfile.read(length) or b"{}")
-                stub.bodies.append(body)
-                stub.headers.append({k.lower(): v for k, v in self.headers.items()})
-                status, payload = (
-                    stub.handlers.pop(0)(body) if stub.handlers else (500, {"error": {"message": "no more"}})
-                )
-                data = json.dumps(payload).encode()
-                self.send_response(status)
-                self.send_header("Content-Type", "application/json")
-                self.send_header("Content-Length", str(len(data)))
-                self.end_headers()
-                self.wfile.write(data)
-
-            def log_message(self, *args: Any) -> None:
-                pass
-
-        self.server = ThreadingHTTPServer(("127.0.0.1", 0), _Handler)
-        self.thread = threading.Thread(target=self.server.serve_forever, daemon=True)
+    def respond(self, request: Request) -> tuple[int, bytes | dict[str, Any]]:
+        """The next scripted handler's answer to the JSON body (500 when none is left)."""
+        body = json.loads(request.body or b"{}")
+        self.bodies.append(body)
+        self.headers.append(request.headers)
+        return self.handlers.pop(0)(body) if self.handlers else (500, {"error": {"message": "no more"}})
 
     @property
     def url(self) -> str:
-        return f"http://127.0.0.1:{self.server.server_address[1]}/v1"
-
-    def __enter__(self) -> StubServer:
-        self.thread.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.server.shutdown()
-        self.server.server_close()
+        """The stub's OpenAI-style base URL."""
+        return f"{self.base_url}/v1"
