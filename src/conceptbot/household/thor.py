@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cache
 from importlib import resources
@@ -88,7 +89,7 @@ class HouseScene:
         return type_name in self.objects
 
 
-def house_scene(name: str, mentioned: list[str] = ()) -> HouseScene:  # type: ignore[assignment]
+def house_scene(name: str, mentioned: Sequence[str] = ()) -> HouseScene:
     """The scene ``name``: its room type's usual objects plus every type in ``mentioned`` (the
     objects its tasks name). Unknown names in ``mentioned`` are skipped."""
     cat = catalogue()
