@@ -34,14 +34,14 @@ class Catalogue:
     aliases: dict[str, str]
     liquids: tuple[str, ...]
     default_parent: dict[str, str]
+    by_key: dict[str, str]  # comparison key (see actions.key) -> type
 
     def canonical(self, name: str) -> str | None:
         """The object type a name means (case, spaces and a plural 's' forgiven), or None."""
-        by_key = {key(t): t for t in self.types}
         k = key(name)
         for candidate in (k, k[:-1] if k.endswith("s") else k):
-            if candidate in by_key:
-                return by_key[candidate]
+            if candidate in self.by_key:
+                return self.by_key[candidate]
             if candidate in self.aliases:
                 return self.aliases[candidate]
         return None
@@ -64,6 +64,7 @@ def catalogue() -> Catalogue:
         aliases={key(a): t for a, t in raw["aliases"].items()},
         liquids=tuple(raw["liquids"]),
         default_parent=dict(raw["default_parent"]),
+        by_key={key(t): t for t in raw["types"]},
     )
 
 
