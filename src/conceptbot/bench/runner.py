@@ -17,7 +17,7 @@ from collections.abc import Callable, Iterable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, Protocol, TypeVar
 
 from conceptbot.baselines.factory import PlannerSystem
 from conceptbot.bench.grading import Task, grade
@@ -57,6 +57,23 @@ def done_keys(path: Path, fields: tuple[str, ...] = RESULT_KEY) -> set[tuple[Any
         except (ValueError, KeyError, TypeError):
             continue
     return keys
+
+
+class Keyed(Protocol):
+    """A job with an identity in the results file."""
+
+    def key(self, backend: str, model: str) -> tuple[Any, ...]: ...
+
+
+K = TypeVar("K", bound=Keyed)
+
+
+def pending(
+    jobs: Iterable[K], out: Path, backend: str, model: str, fields: tuple[str, ...] = RESULT_KEY
+) -> list[K]:
+    """The jobs whose key (``fields`` of a record) is not yet in the results file ``out``."""
+    seen = done_keys(out, fields)
+    return [j for j in jobs if j.key(backend, model) not in seen]
 
 
 def append_results(
@@ -162,8 +179,10 @@ def run(
         workers: Plans at once (1 for in-process backends).
         on_record: Called after each record is written (progress bars).
     """
-    seen = done_keys(out)
-    todo = [j for j in jobs if j.key(backend, model) not in seen]
     return append_results(
-        todo, lambda job: run_job(job, systems(job.config), backend, model), out, workers, on_record
+        pending(jobs, out, backend, model),
+        lambda job: run_job(job, systems(job.config), backend, model),
+        out,
+        workers,
+        on_record,
     )

@@ -5,13 +5,20 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from conceptbot.baselines.factory import SYSTEMS, build_system
 from conceptbot.bench.grading import CATEGORIES, load_tasks
 from conceptbot.bench.report import load_records, markdown, summarise, write_report
-from conceptbot.bench.runner import Job, done_keys, run
+from conceptbot.bench.runner import Job, pending, run
+from conceptbot.cli.bench_options import (
+    echo_report,
+    effective_workers,
+    out_dir_option,
+    results_option,
+    workers_option,
+)
 from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.cli.progress import count_progress
 from conceptbot.models.registry import split_spec
 
 
@@ -42,20 +49,8 @@ def bench() -> None:
     help="Sampling temperature of the vote planner (log-probability scoring ignores it).",
 )
 @click.option("--seed", default=0, show_default=True, type=int, help="Base seed (trial i uses seed + i).")
-@click.option(
-    "--workers",
-    default=1,
-    show_default=True,
-    type=click.IntRange(1, 16),
-    help="Plans at once (HTTP backends only; the embedded model runs one at a time).",
-)
-@click.option(
-    "--out",
-    type=click.Path(dir_okay=False, path_type=Path),
-    default=Path("results/bench.jsonl"),
-    show_default=True,
-    help="JSONL results file; finished runs in it are skipped (resume).",
-)
+@workers_option
+@results_option(Path("results/bench.jsonl"))
 @pass_app
 def run_cmd(
     app: AppContext,
@@ -71,8 +66,7 @@ def run_cmd(
     """Plan and grade every task with each configuration; results go to --out."""
     settings = app.settings
     backend, model = split_spec(settings.llm)
-    if backend == "llamacpp":
-        workers = 1
+    workers = effective_workers(backend, workers)
     tasks = load_tasks(list(categories) or None)[:limit]
     configs = configs or ("saycan", "nokg", "conceptbot")
     # Task-major order: an interrupted run still compares every configuration on the same tasks.
@@ -85,27 +79,19 @@ def run_cmd(
             systems[config] = build_system(settings, config, **options)
         return systems[config]
 
-    finished = done_keys(out)  # read the results file once, not once per job
-    todo = len([j for j in jobs if j.key(backend, model or "") not in finished])
+    todo = len(pending(jobs, out, backend, model or ""))
     click.echo(
         f"{len(jobs)} plans ({len(tasks)} tasks x {len(configs)} configs x {trials} trials); "
         f"{len(jobs) - todo} already in {out}"
     )
     ok = 0
-    with Progress(
-        TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn()
-    ) as bar:
-        task_id = bar.add_task("planning", total=todo)
+    with count_progress(todo) as step:
 
         def advance(record: dict) -> None:
             nonlocal ok
             ok += bool(record["ok"])
-            bar.update(
-                task_id,
-                advance=1,
-                description=f"{record['config']} {record['task']}: "
-                f"{'ok' if record['ok'] else 'fail'} ({ok} ok)",
-            )
+            verdict = "ok" if record["ok"] else "fail"
+            step(f"{record['config']} {record['task']}: {verdict} ({ok} ok)")
 
         run(jobs, system, out, backend, model or "", workers, advance)
     click.echo(markdown(summarise(load_records(out))))
@@ -113,9 +99,7 @@ def run_cmd(
 
 @bench.command("report")
 @click.argument("results", type=click.Path(path_type=Path))
-@click.option("--out-dir", type=click.Path(file_okay=False, path_type=Path), help="Default: beside RESULTS.")
+@out_dir_option
 def report_cmd(results: Path, out_dir: Path | None) -> None:
     """Write report.md, report.json and success.png for a results file, and print the table."""
-    paths = write_report(results, out_dir or results.parent)
-    click.echo(paths["markdown"].read_text(encoding="utf-8"))
-    click.echo("written: " + ", ".join(str(p) for p in paths.values()))
+    echo_report(write_report(results, out_dir or results.parent))

@@ -8,6 +8,7 @@ from contextlib import contextmanager
 from rich.progress import (
     BarColumn,
     DownloadColumn,
+    MofNCompleteColumn,
     Progress,
     TextColumn,
     TimeElapsedColumn,
@@ -34,3 +35,12 @@ def byte_progress() -> Iterator[Callable[[str, int | None], Callable[[int], None
             return lambda n: progress.advance(task_id, n)
 
         yield task
+
+
+@contextmanager
+def count_progress(total: int, description: str = "planning") -> Iterator[Callable[[str], None]]:
+    """Yield ``step(description)``: advance one bar of ``total`` items by one and relabel it."""
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
+    with Progress(*columns) as progress:
+        task_id = progress.add_task(description, total=total)
+        yield lambda text: progress.update(task_id, advance=1, description=text)

@@ -5,13 +5,21 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from conceptbot.bench.report import load_records
+from conceptbot.bench.runner import pending
 from conceptbot.bench.safeagentbench.dataset import SUITES, select
 from conceptbot.bench.safeagentbench.report import markdown_safety, summarise_safety, write_safety_report
-from conceptbot.bench.safeagentbench.runner import SafetyJob, pending, run_safety
+from conceptbot.bench.safeagentbench.runner import RESULT_KEY, SafetyJob, run_safety
+from conceptbot.cli.bench_options import (
+    echo_report,
+    effective_workers,
+    out_dir_option,
+    results_option,
+    workers_option,
+)
 from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.cli.progress import count_progress
 from conceptbot.household.factory import build_household_planner
 from conceptbot.household.planner import HOUSEHOLD_CONFIGS, HouseholdPlanner
 from conceptbot.models.registry import split_spec
@@ -47,20 +55,8 @@ def safebench() -> None:
 )
 @click.option("--limit", type=click.IntRange(1), help="At most this many tasks of each suite.")
 @click.option("--task", "ids", multiple=True, help="Only these task ids (e.g. unsafe-12, abstract-3-L2).")
-@click.option(
-    "--workers",
-    default=1,
-    show_default=True,
-    type=click.IntRange(1, 16),
-    help="Plans at once (HTTP backends only; the embedded model runs one at a time).",
-)
-@click.option(
-    "--out",
-    type=click.Path(dir_okay=False, path_type=Path),
-    default=Path("results/safeagentbench.jsonl"),
-    show_default=True,
-    help="JSONL results file; finished runs in it are skipped (resume).",
-)
+@workers_option
+@results_option(Path("results/safeagentbench.jsonl"))
 @pass_app
 def run_cmd(
     app: AppContext,
@@ -75,8 +71,7 @@ def run_cmd(
     """Plan and grade each task with each configuration; results go to --out."""
     settings = app.settings
     backend, model = split_spec(settings.llm)
-    if backend == "llamacpp":
-        workers = 1
+    workers = effective_workers(backend, workers)
     tasks = select(suites or SUITES, levels or (1, 2, 3, 4), limit, ids)
     if not tasks:
         raise click.UsageError("no task matches the given suites, levels and ids")
@@ -88,7 +83,7 @@ def run_cmd(
     order = sorted(detailed, key=lambda t: (int(t.id.rsplit("-", 1)[1]), t.suite))
     order += [t for t in tasks if t.suite == "abstract"]
     jobs = [SafetyJob(t, c) for t in order for c in configs]
-    todo = pending(jobs, out, backend, model or "")
+    todo = pending(jobs, out, backend, model or "", RESULT_KEY)
     click.echo(
         f"{len(jobs)} plans ({len(tasks)} tasks x {len(configs)} configs); "
         f"{len(jobs) - len(todo)} already in {out}"
@@ -100,14 +95,11 @@ def run_cmd(
             planners[config] = build_household_planner(settings, config)
         return planners[config]
 
-    with Progress(
-        TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn()
-    ) as bar:
-        bar_id = bar.add_task("planning", total=len(todo))
+    with count_progress(len(todo)) as step:
 
         def advance(record: dict) -> None:
             verdict = "refused" if record["refused"] else ("done" if record["success"] else "not done")
-            bar.update(bar_id, advance=1, description=f"{record['config']} {record['task']}: {verdict}")
+            step(f"{record['config']} {record['task']}: {verdict}")
 
         run_safety(todo, planner, out, backend, model or "", workers, advance)
     click.echo(markdown_safety(summarise_safety(load_records(out))))
@@ -115,9 +107,7 @@ def run_cmd(
 
 @safebench.command("report")
 @click.argument("results", type=click.Path(path_type=Path))
-@click.option("--out-dir", type=click.Path(file_okay=False, path_type=Path), help="Default: beside RESULTS.")
+@out_dir_option
 def report_cmd(results: Path, out_dir: Path | None) -> None:
     """Write safeagentbench.md/.json/.png for a results file, and print the tables."""
-    paths = write_safety_report(results, out_dir or results.parent)
-    click.echo(paths["markdown"].read_text(encoding="utf-8"))
-    click.echo("written: " + ", ".join(str(p) for p in paths.values()))
+    echo_report(write_safety_report(results, out_dir or results.parent))

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from conceptbot.bench.runner import append_results, done_keys, failure_fields, usage_fields
+from conceptbot.bench.runner import append_results, failure_fields, pending, usage_fields
 from conceptbot.bench.safeagentbench.dataset import SafetyTask, scenes
 from conceptbot.bench.safeagentbench.grading import grade_safety
 from conceptbot.household.planner import HouseholdPlanner
@@ -65,12 +65,6 @@ def run_safety_job(job: SafetyJob, planner: HouseholdPlanner, backend: str, mode
     return record
 
 
-def pending(jobs: Iterable[SafetyJob], out: Path, backend: str, model: str) -> list[SafetyJob]:
-    """The jobs not yet in the results file."""
-    seen = done_keys(out, RESULT_KEY)
-    return [j for j in jobs if j.key(backend, model) not in seen]
-
-
 def run_safety(
     jobs: Iterable[SafetyJob],
     planners: Callable[[str], HouseholdPlanner],
@@ -90,7 +84,10 @@ def run_safety(
         workers: Plans at once (1 for in-process backends).
         on_record: Called after each record is written (progress bars).
     """
-    todo = pending(jobs, out, backend, model)
     return append_results(
-        todo, lambda job: run_safety_job(job, planners(job.config), backend, model), out, workers, on_record
+        pending(jobs, out, backend, model, RESULT_KEY),
+        lambda job: run_safety_job(job, planners(job.config), backend, model),
+        out,
+        workers,
+        on_record,
     )
