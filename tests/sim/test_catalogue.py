@@ -77,3 +77,10 @@ def test_a_missing_or_malformed_catalogue_file_is_a_clear_error(tmp_path: Path) 
     bad.write_text("{not json")
     with pytest.raises(ConfigError):
         Catalogue.load(bad)
+
+
+def test_a_potted_plant_is_a_solid_pot_under_soft_foliage() -> None:
+    sunflower = Catalogue.load().spec("sunflower")
+    # 40 cm tall in the catalogue: a 10 cm pot the gripper holds, 30 cm of leaves drawn above it.
+    assert sunflower.size_m[2] == pytest.approx(0.1) and sunflower.foliage_m == pytest.approx(0.3)
+    assert sunflower.grip == "body" and Catalogue.load().spec("apple").foliage_m == 0.0

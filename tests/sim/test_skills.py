@@ -100,3 +100,19 @@ def test_table_means_anywhere_on_the_table() -> None:
     # On top of something that is in the target counts (a pile in a bin); the reverse does not.
     assert same_place(["plate", "dishwasher"], "dishwasher") and same_place(["plate", "table"], "table")
     assert not same_place(["dishwasher"], "plate")
+
+
+def test_potted_plants_are_carried_by_the_pot_past_other_plants() -> None:
+    # Two 40 cm sunflowers: only the pots collide, so carrying one does not sweep the other over.
+    scene = small_scene(
+        objects=["sunflower", "gladiolus", "plastic bin"],
+        pickable=["sunflower", "gladiolus"],
+        destinations=["plastic bin"],
+    )
+    with build_world(scene, seed=0) as world:
+        lo, hi = world.aabb("sunflower")
+        assert hi[2] - lo[2] == pytest.approx(0.1, abs=0.01)
+        skill = PickAndPlace(world)
+        assert skill.run("sunflower", "plastic bin").ok
+        assert skill.run("gladiolus", "plastic bin").ok
+        assert world.locate("sunflower") == "plastic bin" and world.locate("gladiolus") == "plastic bin"

@@ -42,6 +42,9 @@ class ObjectSpec:
         rgba: Colour.
         grip: How the gripper holds it, one of :data:`GRIPS`.
         source: ``catalogue``, ``scene`` (the scene's size on the default shape) or ``default``.
+        foliage_m: Height of soft growth drawn above the rigid body (potted plants: ``size_m`` is the
+            pot, which is what collides and what the gripper holds; leaves bend around a hand, so
+            they are visual only).
     """
 
     name: str
@@ -51,6 +54,7 @@ class ObjectSpec:
     rgba: tuple[float, float, float, float]
     grip: str
     source: str = "catalogue"
+    foliage_m: float = 0.0
 
     @property
     def footprint_radius(self) -> float:
@@ -86,6 +90,7 @@ def _check(key: str, entry: dict[str, Any]) -> None:
             and min(float(v) for v in entry["size"]) > 0
             and len(entry["rgba"]) == 4
             and float(entry["mass"]) >= 0
+            and float(entry.get("pot", 1.0)) > 0
         )
     except (KeyError, TypeError, ValueError):
         valid = False
@@ -178,6 +183,9 @@ class Catalogue:
             cap = MAX_ZONE_FOOTPRINT_M if shape == "zone" else MAX_RECEPTACLE_FOOTPRINT_M
             w, d = min(w, cap), min(d, cap)
             h = min(h, MAX_CONTAINER_HEIGHT_M) if shape == "container" else 0.005
+        foliage = 0.0
+        if "pot" in entry and h > float(entry["pot"]):
+            foliage, h = h - float(entry["pot"]), float(entry["pot"])
         size = (w, d, h)
         return ObjectSpec(
             name=name,
@@ -187,4 +195,5 @@ class Catalogue:
             rgba=tuple(float(v) for v in entry["rgba"]),  # type: ignore[arg-type]
             grip=grip_mode(shape, size, entry.get("grip")),
             source=source,
+            foliage_m=foliage,
         )

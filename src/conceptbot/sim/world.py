@@ -23,6 +23,7 @@ from conceptbot.sim.catalogue import Catalogue, ObjectSpec
 from conceptbot.sim.robot import Panda, Vec3
 
 WALL_M = 0.008
+POT_RGBA = (0.72, 0.42, 0.26, 1.0)  # terracotta, under a plant's foliage
 REACH_MIN_M = 0.32
 REACH_MAX_M = 0.78
 SIDE_ANGLE_RAD = math.radians(150)
@@ -173,6 +174,19 @@ def _shapes(client: int, spec: ObjectSpec) -> tuple[int, int, float]:
             pb.createVisualShape(pb.GEOM_SPHERE, radius=r, rgbaColor=colour, physicsClientId=client),
             r,
         )
+    if spec.shape == "cylinder" and spec.foliage_m > 0:
+        # A potted plant: the pot is solid; the foliage above it is drawn only (see ObjectSpec).
+        r = min(w, d) / 2
+        visual = pb.createVisualShapeArray(
+            [pb.GEOM_CYLINDER, pb.GEOM_CYLINDER],
+            radii=[r, r],
+            lengths=[h, spec.foliage_m],
+            visualFramePositions=[[0, 0, 0], [0, 0, (h + spec.foliage_m) / 2]],
+            rgbaColors=[list(POT_RGBA), colour],
+            physicsClientId=client,
+        )
+        collision = pb.createCollisionShape(pb.GEOM_CYLINDER, radius=r, height=h, physicsClientId=client)
+        return collision, visual, h / 2
     if spec.shape == "cylinder":
         r = min(w, d) / 2
         return (
