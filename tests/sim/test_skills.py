@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import pytest
 
+from conceptbot.bench.grading import load_tasks, task_scene
 from conceptbot.sim.catalogue import Catalogue
 from conceptbot.sim.skills import PickAndPlace, same_place
 from conceptbot.sim.world import build_world
@@ -116,3 +118,17 @@ def test_potted_plants_are_carried_by_the_pot_past_other_plants() -> None:
         assert skill.run("sunflower", "plastic bin").ok
         assert skill.run("gladiolus", "plastic bin").ok
         assert world.locate("sunflower") == "plastic bin" and world.locate("gladiolus") == "plastic bin"
+
+
+def test_the_release_is_aimed_from_where_the_hand_holds_the_object() -> None:
+    # Regression (benchmark task unambiguous-4, layout 2): the squeeze left the cup held by its far
+    # wall, and a release aimed from the planned grasp put it 7 cm off the user pad.
+    task = next(t for t in load_tasks() if t.id == "unambiguous-4")
+    with build_world(task_scene(task), seed=2) as world:
+        skill = PickAndPlace(world)
+        assert skill.run("7up", "user").ok
+        spots = skill.free_spots("cup", "user")
+        result = skill.run("cup", "user")
+        assert result.ok, result.message
+        (x, y, _), _ = world.pose("cup")
+        assert min(math.hypot(x - s.x, y - s.y) for s in spots) < 0.015

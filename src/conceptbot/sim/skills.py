@@ -27,7 +27,7 @@ import pybullet as pb
 
 from conceptbot.sim import GRASP_MODES
 from conceptbot.sim.robot import FrameHook, Panda, Vec3
-from conceptbot.sim.world import WALL_M, World
+from conceptbot.sim.world import REACH_MAX_M, WALL_M, World
 
 FAILURES = ("unknown", "too_wide", "unreachable", "target_full", "slipped", "missed")
 REACH_TOLERANCE_M = 0.015
@@ -39,6 +39,7 @@ FINGER_MARGIN_M = 0.004
 MAX_PILE_M = 0.08  # the highest pile on a pad or plate
 HEAP_M = 0.03  # how far a heap may rise over a container's rim
 DROP_M = 0.04  # the highest a thing is let go above where it comes to rest
+AIM_TOLERANCE_M = 0.01  # a held object this close to the planned grasp is released as planned
 FINGER_CLEARANCE_M = 0.02  # room kept beside a placed object for the fingers and their opening
 
 
@@ -204,6 +205,9 @@ class PickAndPlace:
         else:
             # Fill from the side nearest the arm: keeps the far side free and packs several things.
             spots.sort(key=lambda s: (round(math.hypot(s.x, s.y), 3), s.yaw))
+        # Zone pads may stick out past the arm's sure reach (they are laid out at the ring's edge);
+        # a release out there lands short, so those spots come last (the sort is stable).
+        spots.sort(key=lambda s: math.hypot(s.x, s.y) > REACH_MAX_M)
         if spots:
             return spots
         piles = []
@@ -280,8 +284,10 @@ class PickAndPlace:
         obj_lo, obj_hi = world.aabb(obj)
         hand_above_bottom = gz - obj_lo[2]
         _, target_hi = world.aabb(target)
-        top = max([target_hi[2]] + [spot.floor_z for spot in spots[:12]])
-        # Travel high enough that the held object clears everything on the way (tallest things 0.25 m).
+        # Travel high enough that the held object clears everything on the way (tallest things 0.25 m)
+        # and what already stands in/on the target, which it passes above on the way in.
+        standing = [world.aabb(o)[1][2] for o in world.occupants(target) if o != obj]
+        top = max([target_hi[2]] + [spot.floor_z for spot in spots[:12]] + standing)
         transit = max(TRANSIT_Z_M, top + hand_above_bottom + CLEARANCE_M, obj_hi[2] + CLEARANCE_M)
         pick = self._pick_poses(grasp, obj, transit)
         if pick is None:
@@ -314,6 +320,7 @@ class PickAndPlace:
             message = f"no spot in/on {target} leaves room for the hand beside what is there"
             return SkillResult(action, False, "target_full", message, 0.0)
         above_target, drop, drop_yaw, _ = place
+        planned_offset, planned_height = offset, hand_above_bottom
 
         robot = self.robot
         robot.grip(Panda.OPENING_M, steps=20)
@@ -331,6 +338,9 @@ class PickAndPlace:
         if lifted < 0.03 or not self._held(obj, constraint):
             self._detach(constraint)
             return self._fail(action, "slipped", f"{obj} was not lifted ({lifted * 100:.1f} cm)", started)
+        # The squeeze moves the object in the hand (a cup held by its wall slides along the fingers),
+        # so the release is aimed from where the hand holds it now, as a robot would after looking.
+        above_target, drop = self._aim(obj, place, yaw, planned_offset, planned_height, transit)
         robot.move(above_target, on_frame=self.on_frame, speed=CARRY_SPEED)
         if not self._held(obj, constraint):
             self._detach(constraint)
@@ -426,6 +436,40 @@ class PickAndPlace:
             if above is not None and drop is not None:
                 found.append((above, (x, y, release_z), yaw + turn, drop))
         return found
+
+    def _aim(
+        self,
+        obj: str,
+        place: tuple[tuple[float, ...], Vec3, float, tuple[float, ...]],
+        pick_yaw: float,
+        planned_offset: tuple[float, float],
+        planned_height: float,
+        transit: float,
+    ) -> tuple[tuple[float, ...], Vec3]:
+        """``(joints above the release, release position)`` for the held ``obj``, corrected by how far
+        it sits from where the grasp was planned (offset from the hand, height under it); the
+        planned ones when the corrected release is out of reach."""
+        above, drop, drop_yaw, _ = place
+        hand = self.robot.hand_position()
+        (ox, oy, _), _ = self.world.pose(obj)
+        lo, _ = self.world.aabb(obj)
+        ex, ey = (hand[0] - ox) - planned_offset[0], (hand[1] - oy) - planned_offset[1]
+        turn = drop_yaw - pick_yaw  # the hand turns the offset with it
+        dx = ex * math.cos(turn) - ey * math.sin(turn)
+        dy = ex * math.sin(turn) + ey * math.cos(turn)
+        dz = (hand[2] - lo[2]) - planned_height
+        if max(math.hypot(dx, dy), abs(dz)) < AIM_TOLERANCE_M:
+            return above, drop  # held as planned: keep the checked poses
+        aimed = (drop[0] + dx, drop[1] + dy, drop[2] + dz)
+        aimed_above = self._reach((aimed[0], aimed[1], transit), drop_yaw)
+        # Another arm configuration (elbow flipped) would swing the held thing through the scene.
+        if (
+            aimed_above is None
+            or max(abs(a - b) for a, b in zip(aimed_above, above, strict=True)) > 0.3
+            or self._reach(aimed, drop_yaw) is None
+        ):
+            return above, drop
+        return aimed_above, aimed
 
     def _near_hand(self, obj: str) -> bool:
         points = pb.getClosestPoints(
