@@ -320,7 +320,6 @@ class PickAndPlace:
             message = f"no spot in/on {target} leaves room for the hand beside what is there"
             return SkillResult(action, False, "target_full", message, 0.0)
         above_target, drop, drop_yaw, _ = place
-        planned_offset, planned_height = offset, hand_above_bottom
 
         robot = self.robot
         robot.grip(Panda.OPENING_M, steps=20)
@@ -340,7 +339,7 @@ class PickAndPlace:
             return self._fail(action, "slipped", f"{obj} was not lifted ({lifted * 100:.1f} cm)", started)
         # The squeeze moves the object in the hand (a cup held by its wall slides along the fingers),
         # so the release is aimed from where the hand holds it now, as a robot would after looking.
-        above_target, drop = self._aim(obj, place, yaw, planned_offset, planned_height, transit)
+        above_target, drop = self._aim(obj, place, yaw, offset, hand_above_bottom, transit)
         robot.move(above_target, on_frame=self.on_frame, speed=CARRY_SPEED)
         if not self._held(obj, constraint):
             self._detach(constraint)
@@ -447,8 +446,11 @@ class PickAndPlace:
         transit: float,
     ) -> tuple[tuple[float, ...], Vec3]:
         """``(joints above the release, release position)`` for the held ``obj``, corrected by how far
-        it sits from where the grasp was planned (offset from the hand, height under it); the
-        planned ones when the corrected release is out of reach."""
+        it sits from where the grasp was planned (offset from the hand, height under it).
+
+        The planned poses stay when the object is held within :data:`AIM_TOLERANCE_M` of the plan
+        (they were checked for collisions), and when the corrected release is out of reach or needs
+        another arm configuration."""
         above, drop, drop_yaw, _ = place
         hand = self.robot.hand_position()
         (ox, oy, _), _ = self.world.pose(obj)
