@@ -37,6 +37,17 @@ def median(values: list[float]) -> float:
     return statistics.median(values)
 
 
+def resident_anonymous_mb() -> float:
+    """This process's resident anonymous memory (heap, llama.cpp buffers), 0 where /proc is missing."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("RssAnon:"):
+                return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return 0.0
+
+
 def bench_llm(llm: LlamaCppLLM, runs: int) -> dict[str, float]:
     prompt_rates, gen_rates = [], []
     for run in range(runs):
@@ -140,9 +151,14 @@ def main() -> int:
         "model": args.model,
         "load_and_first_token_s": time.perf_counter() - t0,
     }
+    resident = resident_anonymous_mb()
     results.update(bench_llm(llm, args.runs))
+    # Chat keeps logits for the last token only; scoring keeps one row per evaluated token.
+    results["chat_resident_growth_mb"] = resident_anonymous_mb() - resident
     results.update(bench_cache(llm, args.runs))
+    resident = resident_anonymous_mb()
     results.update(bench_scoring(llm, args.runs))
+    results["scoring_resident_growth_mb"] = resident_anonymous_mb() - resident
     results.update(bench_embedder(args.runs))
     width = max(len(k) for k in results)
     print(f"model-layer benchmark, median of {args.runs} runs")

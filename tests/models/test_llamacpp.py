@@ -88,6 +88,38 @@ def test_chat_scoring_prefers_the_greedy_reply(llm: LlamaCppLLM) -> None:
     assert int(np.argmax(scored.logprobs)) == 0
 
 
+def test_scoring_after_a_chat_on_the_same_messages_matches_a_fresh_context(llm: LlamaCppLLM) -> None:
+    # Chat evaluates the shared prefix without keeping its logits; scoring must not read them.
+    messages = (
+        Message("system", "You sort things into bins."),
+        Message("user", "Where does a banana peel go?"),
+    )
+    options = (" compost", " glass bin", " paper bin")
+    llm._load().reset()
+    fresh = llm.score(ScoreRequest(options=options, messages=messages))
+    llm.chat(ChatRequest(messages=messages, max_tokens=6))
+    after_chat = llm.score(ScoreRequest(options=options, messages=messages))
+    assert after_chat.logprobs == pytest.approx(fresh.logprobs, abs=2e-3)
+
+
+def _resident_anonymous_mb() -> float:
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("RssAnon:"):
+            return int(line.split()[1]) / 1024
+    pytest.skip("no /proc/self/status")
+
+
+def test_chat_keeps_logits_for_the_last_token_only(smollm2_path: Path) -> None:
+    # Keeping a logits row per prompt token costs 2 x 4 bytes x 49,152 (SmolLM2's vocabulary) =
+    # 0.4 MB per token: over 120 MB for this prompt. Nothing reads them after a chat.
+    fresh = LlamaCppLLM(smollm2_path, model="smollm2-135m", n_ctx=1024)
+    fresh.chat(ChatRequest.of("Hi.", max_tokens=2))  # load and allocate the compute buffers
+    before = _resident_anonymous_mb()
+    response = fresh.chat(ChatRequest.of("Describe a kitchen. " * 70, max_tokens=2))
+    assert response.usage.prompt_tokens > 300
+    assert _resident_anonymous_mb() - before < 30
+
+
 def test_over_long_prompt_is_a_clear_error(llm: LlamaCppLLM) -> None:
     with pytest.raises(BackendRequestError, match="context window"):
         llm.score(ScoreRequest(options=("x",), prompt="word " * 2000))
