@@ -5,7 +5,11 @@ This measures the simulator itself (layout, grasping, placing, the final-state c
 a gold plan that fails here is a simulator failure, unless the failure is a real physical limit
 (``too_wide``: an object wider than the gripper), which is reported separately.
 
-Run: .venv/bin/python benchmarks/bench_sim.py [--seeds 0 1 2] [--grasp friction|assisted] [--json OUT]
+A slipped or missed step is tried again once (``--retries``, as ``conceptbot sim run`` does); the
+figures say how many steps needed it. ``--retries 0`` measures single attempts.
+
+Run: .venv/bin/python benchmarks/bench_sim.py [--seeds 0 1 2] [--grasp friction|assisted] [--retries N]
+     [--json OUT]
 """
 
 from __future__ import annotations
@@ -27,6 +31,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, nargs="+", default=[0])
     parser.add_argument("--grasp", choices=("friction", "assisted"), default="friction")
+    parser.add_argument("--retries", type=int, default=1, help="more tries of a slipped or missed step")
     parser.add_argument("--category", default=None)
     parser.add_argument("--json", default=None, help="write per-run records here")
     args = parser.parse_args(argv)
@@ -41,7 +46,9 @@ def main(argv: list[str] | None = None) -> int:
         scene = task_scene(task)
         for seed in args.seeds:
             with build_world(scene, seed=seed) as world:
-                execution = execute_plan(world, scene, plan, PickAndPlace(world, args.grasp))
+                execution = execute_plan(
+                    world, scene, plan, PickAndPlace(world, args.grasp, retries=args.retries)
+                )
             records.append(
                 {
                     "task": task.id,
@@ -50,6 +57,7 @@ def main(argv: list[str] | None = None) -> int:
                     "verdict": execution.verdict,
                     "failures": [r.failure for r in execution.results if not r.ok],
                     "seconds": execution.seconds_per_action,
+                    "retried": [r.ok for r in execution.results if r.details.get("attempts", 1) > 1],
                     "warnings": world.warnings,
                 }
             )
@@ -63,9 +71,14 @@ def main(argv: list[str] | None = None) -> int:
     kinds = Counter(k for r in records for k in r["failures"])
     wrong_place = sum(1 for r in records if not r["ok"] and not r["failures"])
     print()
-    print(f"gold plans executed: {len(records)} (tasks x seeds), grasp mode {args.grasp}")
+    print(
+        f"gold plans executed: {len(records)} (tasks x seeds), grasp mode {args.grasp}, "
+        f"retries {args.retries}"
+    )
     print(f"execution success: {ok}/{len(records)} = {100 * ok / len(records):.1f}%")
     print(f"failures by kind: {dict(kinds)}; disturbed after placing: {wrong_place}")
+    retried = [ok for r in records for ok in r["retried"]]
+    print(f"steps tried again: {len(retried)} of {len(seconds)}, of which {sum(retried)} then succeeded")
     print(
         f"seconds per pick_and_place: median {statistics.median(seconds):.2f}, "
         f"p90 {sorted(seconds)[int(0.9 * (len(seconds) - 1))]:.2f} over {len(seconds)} actions"

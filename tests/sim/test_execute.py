@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import pybullet as pb
+
 from conceptbot.core.plan import Feedback, Plan
 from conceptbot.core.scene import Scene
-from conceptbot.sim.execute import execute_plan, run_closed_loop
+from conceptbot.sim.execute import _check, execute_plan, run_closed_loop
 from conceptbot.sim.world import build_world
 from tests.sim.conftest import small_scene
 
@@ -73,3 +75,20 @@ def test_replanning_is_bounded() -> None:
     with build_world(scene) as world:
         _, plans = run_closed_loop(Stubborn(), "r", scene, world, max_replans=1)
     assert len(plans) == 2 and Stubborn.calls == 2
+
+
+def test_an_object_knocked_off_the_table_is_not_on_the_table() -> None:
+    # "table" means anywhere on the table; a thing that fell off it is nowhere the plan put it.
+    scene = small_scene(
+        objects=["apple", "user", "table"], pickable=["apple"], destinations=["user", "table"]
+    )
+    with build_world(scene) as world:
+        execution = execute_plan(world, scene, ["pick_and_place(apple, table)", "done()"])
+        assert execution.ok and not world.off_table("apple")
+        pb.resetBasePositionAndOrientation(
+            world.bodies["apple"].id, (1.5, 1.5, 0.3), (0, 0, 0, 1), physicsClientId=world.client
+        )
+        world.settle(240)
+        assert world.off_table("apple")
+        _check(world, execution)
+        assert not execution.ok and "apple fell off the table" in execution.verdict

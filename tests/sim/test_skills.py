@@ -79,11 +79,17 @@ def test_a_too_heavy_object_slips_out_of_a_friction_grasp(tmp_path: Path) -> Non
 
 
 def test_missed_when_the_object_does_not_stay_on_the_target() -> None:
-    # A can cannot stand on an egg: released there, it falls off.
+    # A can cannot stand on an egg: released there, it falls off, once and again.
     scene = small_scene(objects=["coke", "egg"], pickable=["coke", "egg"], destinations=["egg"])
     with build_world(scene) as world:
         result = PickAndPlace(world).run("coke", "egg")
         assert not result.ok and result.failure == "missed" and "not in/on egg" in result.message
+        assert result.details["attempts"] == 2 and "(tried again: " in result.message
+    with build_world(scene) as world:
+        single = PickAndPlace(world, retries=0).run("coke", "egg")
+        assert single.failure == "missed" and "attempts" not in single.details
+    with pytest.raises(ValueError):
+        PickAndPlace(world, retries=-1)
 
 
 def test_unknown_names_and_non_pickable_objects_are_refused_without_moving() -> None:

@@ -57,6 +57,13 @@ def _plan_file(path: Path) -> tuple[list[str], str]:
 @click.option("--seed", default=0, show_default=True, help="Layout seed (same seed, same world).")
 @click.option("--grasp", type=click.Choice(GRASP_MODES), default="friction", show_default=True)
 @click.option(
+    "--retries",
+    default=1,
+    show_default=True,
+    type=click.IntRange(0, 5),
+    help="How many more times to try a step whose grasp slipped or whose placement missed.",
+)
+@click.option(
     "--max-replans",
     default=2,
     show_default=True,
@@ -83,6 +90,7 @@ def run(
     plan_path: Path | None,
     seed: int,
     grasp: str,
+    retries: int,
     max_replans: int,
     risk: bool,
     out_dir: Path,
@@ -126,7 +134,7 @@ def run(
         frames: list[Image.Image] = []
         small = VIEW.scaled(*GIF_SIZE)
         hook = None if no_gif else (lambda: frames.append(picture(world, small, labels=False)))
-        skill = PickAndPlace(world, grasp, on_frame=hook)
+        skill = PickAndPlace(world, grasp, on_frame=hook, retries=retries)
         if actions is not None:
             say(f"Executing {len(actions)} actions from {plan_path}")
             execution = execute_plan(world, seen, actions, skill)

@@ -62,6 +62,7 @@ class Execution:
                     "failure": r.failure,
                     "message": r.message,
                     "seconds": round(r.seconds, 3),
+                    "attempts": int(r.details.get("attempts", 1)),
                 }
                 for r in self.results
             ],
@@ -78,7 +79,9 @@ def _check(world: World, execution: Execution) -> None:
     wrong = []
     for obj, target in execution.intended.items():
         where = execution.placements.get(obj)
-        if not same_place(world.holders(obj), target):
+        if world.off_table(obj):
+            wrong.append(f"{obj} fell off the table (put in/on {target})")
+        elif not same_place(world.holders(obj), target):
             wrong.append(f"{obj} is {'in/on ' + where if where else 'on the table'} (put in/on {target})")
     execution.ok = not failed and not wrong
     if execution.ok:

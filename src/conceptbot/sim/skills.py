@@ -10,6 +10,11 @@ Failure kinds (:data:`FAILURES`):
 * ``slipped`` -- the object was not held after lifting, or was lost on the way;
 * ``missed`` -- released, but it did not end up in/on the target (bounced off, toppled out).
 
+A grasp that slips or a placement that misses is tried again from where the object now lies, as a
+robot that checks its work would (``retries``, default 1); the result then says how many attempts
+it took (``details["attempts"]``); when every attempt failed, the failure is the first one (what went
+wrong with the step) and the message tells what the others ran into.
+
 Grasp modes: ``friction`` (default) holds the object by finger contact and friction only; ``assisted``
 adds a fixed constraint once both fingers touch it (deterministic carrying, for demos). Objects whose
 grip is ``edge`` (sheets, a paper clip) are always held by a constraint once the closed fingers touch
@@ -21,7 +26,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import pybullet as pb
 
@@ -30,6 +35,7 @@ from conceptbot.sim.robot import FrameHook, Panda, Vec3
 from conceptbot.sim.world import REACH_MAX_M, WALL_M, World
 
 FAILURES = ("unknown", "too_wide", "unreachable", "target_full", "slipped", "missed")
+RETRYABLE = ("slipped", "missed")  # the physics went wrong, not the plan: the same step may work again
 REACH_TOLERANCE_M = 0.015
 CLEARANCE_M = 0.04
 CARRY_SPEED = 0.8  # rad/s while holding something: a fast swing shakes it loose
@@ -130,20 +136,32 @@ class PickAndPlace:
         world: The simulation.
         grasp_mode: ``friction`` (default) or ``assisted`` (see the module docstring).
         on_frame: Called after each motion segment (for animations).
+        retries: How many more times a slipped or missed step is tried (0: never).
     """
 
-    def __init__(self, world: World, grasp_mode: str = "friction", on_frame: FrameHook | None = None) -> None:
+    def __init__(
+        self,
+        world: World,
+        grasp_mode: str = "friction",
+        on_frame: FrameHook | None = None,
+        retries: int = 1,
+    ) -> None:
         if grasp_mode not in GRASP_MODES:
             raise ValueError(f"grasp_mode must be one of {GRASP_MODES}")
+        if retries < 0:
+            raise ValueError("retries must be 0 or more")
+        self.retries = retries
         self.world = world
         self.robot: Panda = world.robot
         self.grasp_mode = grasp_mode
         self.on_frame = on_frame
 
     # -- helpers -------------------------------------------------------------------------------------
-    def _fail(self, action: str, kind: str, message: str, started: float) -> SkillResult:
+    def _fail(self, action: str, obj: str, kind: str, message: str, started: float) -> SkillResult:
         self.robot.grip(Panda.OPENING_M, steps=40)
         self._go_home()
+        if self.world.off_table(obj):
+            message += "; it fell off the table"
         return SkillResult(action, False, kind, message, time.perf_counter() - started)
 
     def _go_home(self) -> None:
@@ -258,7 +276,32 @@ class PickAndPlace:
 
     # -- the skill -----------------------------------------------------------------------------------
     def run(self, obj: str, target: str) -> SkillResult:
-        """Pick ``obj`` and place it in/on ``target``; never raises for a failed manipulation."""
+        """Pick ``obj`` and place it in/on ``target``; never raises for a failed manipulation.
+
+        A slipped or missed attempt is repeated from the object's new pose, up to ``retries`` times;
+        ``seconds`` covers every attempt."""
+        started = time.perf_counter()
+        result = self._attempt(obj, target)
+        attempts = 1
+        first, retried = result, list[SkillResult]()
+        while not result.ok and result.failure in RETRYABLE and attempts <= self.retries:
+            self.world.settle(120)  # a dropped thing comes to rest (or falls off the table) first
+            if self.world.off_table(obj):
+                break
+            attempts += 1
+            result = self._attempt(obj, target)
+            retried.append(result)
+        if attempts > 1 and not result.ok:
+            # The first failure says what went wrong with the step; the retries start from the mess.
+            tried = "; ".join(f"{r.failure}: {r.message}" for r in retried)
+            result = replace(first, message=f"{first.message} (tried again: {tried})", located=result.located)
+        result.seconds = time.perf_counter() - started
+        if attempts > 1:
+            result.details["attempts"] = attempts
+        return result
+
+    def _attempt(self, obj: str, target: str) -> SkillResult:
+        """One try at :meth:`run`, from the world as it is now."""
         action = f"pick_and_place({obj}, {target})"
         started = time.perf_counter()
         world = self.world
@@ -329,21 +372,22 @@ class PickAndPlace:
         constraint = None
         if grasp.width == 0.0 or self.grasp_mode == "assisted":
             if not (self._touching(obj) or self._near_hand(obj)):
-                return self._fail(action, "slipped", f"the fingers did not touch {obj}", started)
+                return self._fail(action, obj, "slipped", f"the fingers did not touch {obj}", started)
             constraint = self._attach(obj)
         start_z = world.pose(obj)[0][2]
         robot.move_straight((gx, gy, transit), yaw, on_frame=self.on_frame)
         lifted = world.pose(obj)[0][2] - start_z
         if lifted < 0.03 or not self._held(obj, constraint):
             self._detach(constraint)
-            return self._fail(action, "slipped", f"{obj} was not lifted ({lifted * 100:.1f} cm)", started)
+            message = f"{obj} was not lifted ({lifted * 100:.1f} cm)"
+            return self._fail(action, obj, "slipped", message, started)
         # The squeeze moves the object in the hand (a cup held by its wall slides along the fingers),
         # so the release is aimed from where the hand holds it now, as a robot would after looking.
         above_target, drop = self._aim(obj, place, yaw, offset, hand_above_bottom, transit)
         robot.move(above_target, on_frame=self.on_frame, speed=CARRY_SPEED)
         if not self._held(obj, constraint):
             self._detach(constraint)
-            return self._fail(action, "slipped", f"{obj} slipped out on the way", started)
+            return self._fail(action, obj, "slipped", f"{obj} slipped out on the way", started)
         robot.move_straight(drop, drop_yaw, on_frame=self.on_frame)
         self._detach(constraint)
         # Open into the clearance free_spots kept beside it (not wide open: that would push the
@@ -357,6 +401,8 @@ class PickAndPlace:
         world.settle(60)
         located = world.locate(obj)
         seconds = time.perf_counter() - started
+        if world.off_table(obj):
+            return SkillResult(action, False, "missed", f"{obj} fell off the table", seconds, located)
         if not same_place(world.holders(obj), target):
             where = f"in/on {located}" if located else "on the table"
             message = f"{obj} ended up {where}, not in/on {target}"

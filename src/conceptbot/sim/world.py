@@ -126,6 +126,10 @@ class World:
                 best = (ohi[2], other)
         return best[1] if best else None
 
+    def off_table(self, name: str) -> bool:
+        """Whether ``name`` fell off the table (all of it below the table top, which is at z = 0)."""
+        return self.aabb(name)[1][2] < -0.005
+
     def holders(self, name: str) -> list[str]:
         """Every destination ``name`` is in or on, innermost first: a fork on a plate in the dishwasher
         gives ``["plate", "dishwasher"]`` (things piled in a bin are in the bin)."""
