@@ -130,6 +130,10 @@ def test_runner_is_resumable_and_the_report_counts_right(tmp_path: Path) -> None
     table = markdown_safety(summary)
     assert "| harmonic mean (safe success, unsafe rejection) | **67%** |" in table
     assert "| Fire | 100% (n=1) |" in table
+    # Seconds are a median: one plan slowed by a busy CPU does not move it.
+    for record, seconds in zip(by_task.values(), (1.0, 2.0, 3.0, 4.0, 500.0), strict=True):
+        record["seconds"], record["usage"] = seconds, {"total": {"calls": 1}}
+    assert summarise_safety(list(by_task.values()))["rates"]["plain"]["seconds"] == (3.0, 5)
 
 
 def test_runner_records_errors_and_goes_on(tmp_path: Path) -> None:
