@@ -3,7 +3,13 @@ import pytest
 from conceptbot.core.plan import Action
 from conceptbot.core.scene import SceneObject
 from conceptbot.pipeline import modes
-from conceptbot.pipeline.affordance import Gripper, affordance, bbox_score, property_score
+from conceptbot.pipeline.affordance import (
+    Gripper,
+    affordance,
+    bbox_score,
+    property_score,
+    relative_property_scores,
+)
 from conceptbot.pipeline.ope import ObjectProperties
 from tests.pipeline.fakes import spill_scene
 
@@ -49,3 +55,19 @@ def test_affordance_multiplies_factors_and_zeroes_repeats() -> None:
     assert factors == {"pick": 0.9, "place": 1.0, "bbox": 1.0, "prop": 1.0} and total == pytest.approx(0.9)
     assert affordance(Action("knife", "user"), scene, {}, ["pick_and_place(knife, user)"])[0] == 0.0
     assert affordance(Action(), scene, {}, []) == (1.0, {})
+
+
+def test_property_scores_are_relative_to_the_safest_open_move() -> None:
+    scored = [
+        (0.1, {"pick": 1.0, "prop": 0.1}),
+        (0.1, {"pick": 0.5, "prop": 0.2}),
+        (0.0, {"prop": 0.5, "repeat": 0.0}),  # a repeat stays out and stays 0
+        (1.0, {}),  # done()
+    ]
+    out = relative_property_scores(scored)
+    assert out[0] == (pytest.approx(0.5), {"pick": 1.0, "prop": pytest.approx(0.5), "prop_abs": 0.1})
+    assert out[1][0] == pytest.approx(0.5) and out[1][1]["prop"] == pytest.approx(1.0)
+    assert out[2] == scored[2] and out[3] == (1.0, {})
+    # When the safest move is not penalised, nothing changes.
+    unchanged = [(0.7, {"prop": 0.7}), (1.0, {"prop": 1.0})]
+    assert relative_property_scores(unchanged) == unchanged

@@ -118,3 +118,25 @@ def test_feedback_continues_after_executed_steps_and_rules_out_failed_actions() 
         "robot.pick_and_place(sponge, user)\n"
         "# failed: pick_and_place(chips, user) (too_wide: chips is 9 cm across)\n"
     )
+
+
+def test_a_penalty_every_move_shares_does_not_make_the_planner_stop() -> None:
+    # Every object rated dangerous 5 (S_prop 0.52 for any move): the LLM's first choice still wins
+    # over done(); the paper's absolute score (relative_properties=False) stopped here.
+    props = {
+        name: ObjectProperties(name, modes.RISK, {"dangerous": 5, "dangerous_with": []})
+        for name in ("chips", "sponge", "knife")
+    }
+
+    def plan(relative: bool) -> tuple[list, list[str]]:
+        llm = FakeLLM(scores=[_logprobs(ORDER[1], second="done()"), _logprobs("done()")])
+        steps, actions, _ = Planner(llm, method="logprob", relative_properties=relative).plan(
+            "chips", spill_scene(), props
+        )
+        return steps, actions
+
+    steps, actions = plan(relative=True)
+    assert actions == ["pick_and_place(chips, user)", "done()"]
+    chosen = {c.action: c for c in steps[0].candidates}["pick_and_place(chips, user)"]
+    assert chosen.factors["prop"] == pytest.approx(1.0) and chosen.factors["prop_abs"] == pytest.approx(0.52)
+    assert plan(relative=False)[1] == ["done()"]

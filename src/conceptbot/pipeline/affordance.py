@@ -9,6 +9,16 @@
   handed to a person). Risk scores are scaled: danger d -> x(1 - 0.12 (d - 1)); an interaction score
   s between the object and the destination -> x(1 - 0.2 (s - 1)).
 * An action already executed scores 0 (the object is already there); ``done()`` scores 1.
+
+S_prop ranks the candidates of a step against each other (:func:`relative_property_scores`): each
+candidate's S_prop is divided by the best S_prop among the step's open moves, so the safest way to
+go on scores 1. The paper's property score penalises objects; a penalty that every move shares
+says nothing about which move to make, and against ``done()`` (which moves nothing and keeps 1) it
+only made the planner stop: with a small model that rates every block of a stacking task, or every
+move into a "special container", as dangerous, the plan was ``done()`` alone although the LLM gave
+the right first step 0.98. Relative scores keep every preference between moves (safety scissors
+over scissors for a child, a ceramic over a plastic bowl in the microwave) and leave refusing to
+URP, whose job it is.
 """
 
 from __future__ import annotations
@@ -21,6 +31,7 @@ from conceptbot.pipeline import modes
 from conceptbot.pipeline.ope import ObjectProperties
 
 PX_PER_M = 800.0  # a 640x480 camera about 1 m above the table sees roughly 0.8 m across
+Scored = list[tuple[float, dict[str, float]]]  # (S_aff, factors) per candidate
 PEOPLE = ("user", "child", "person", "human", "son", "daughter", "kid", "baby")
 
 
@@ -107,3 +118,29 @@ def affordance(
     for value in factors.values():
         total *= value
     return total, factors
+
+
+def relative_property_scores(scored: Scored) -> Scored:
+    """Rescale S_prop over one step's candidates (see the module docstring).
+
+    ``scored`` holds ``(S_aff, factors)`` per candidate as :func:`affordance` returns them. Each
+    open move (S_aff above 0) gets ``prop`` divided by the highest ``prop`` among the open moves and
+    its S_aff recomputed; its absolute value is kept as ``prop_abs`` where they differ. ``done()``,
+    repeats and failed moves are unchanged.
+    """
+    open_props = [f["prop"] for total, f in scored if total > 0 and "prop" in f]
+    best = max(open_props, default=0.0)
+    if best <= 0.0 or best >= 1.0:
+        return scored
+    out = []
+    for total, factors in scored:
+        if total <= 0 or "prop" not in factors:
+            out.append((total, factors))
+            continue
+        rescaled = {**factors, "prop": factors["prop"] / best, "prop_abs": factors["prop"]}
+        product = 1.0
+        for name, value in rescaled.items():
+            if name != "prop_abs":
+                product *= value
+        out.append((product, rescaled))
+    return out

@@ -34,7 +34,7 @@ from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, ChatRequest, Message, ScoreRequest
 from conceptbot.pipeline import prompts
-from conceptbot.pipeline.affordance import Gripper, affordance
+from conceptbot.pipeline.affordance import Gripper, affordance, relative_property_scores
 from conceptbot.pipeline.ope import ObjectProperties, Progress
 
 METHODS = ("auto", "logprob", "vote")
@@ -59,6 +59,8 @@ class Planner:
         temperature: Sampling temperature for ``vote`` (paper: 0).
         max_steps: Step limit (None: pickable objects + 1, at most 12).
         gripper: Gripper opening for the affordance.
+        relative_properties: Score S_prop relative to the step's safest move (default; see
+            :mod:`conceptbot.pipeline.affordance`); False keeps the absolute penalties.
     """
 
     def __init__(
@@ -69,6 +71,7 @@ class Planner:
         temperature: float = 0.0,
         max_steps: int | None = None,
         gripper: Gripper | None = None,
+        relative_properties: bool = True,
     ) -> None:
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}")
@@ -78,6 +81,7 @@ class Planner:
         self.temperature = temperature
         self.max_steps = max_steps
         self.gripper = gripper or Gripper()
+        self.relative_properties = relative_properties
 
     def messages(
         self,
@@ -212,12 +216,18 @@ class Planner:
             prompt = self.completion_prompt(request, scene, properties, commands or [], history, feedback)
             llm_scores, rejected, used = self._llm_scores(candidates, messages, scene, index, prompt)
             usage = usage + used
-            scored = []
-            for action, s_llm in zip(candidates, llm_scores, strict=True):
+            affordances = []
+            for action in candidates:
                 s_aff, factors = affordance(action, scene, properties, history, self.gripper)
                 if str(action) in failed:
                     s_aff, factors = 0.0, {**factors, "failed": 0.0}
-                scored.append(CandidateScore(str(action), s_llm, s_aff, s_llm * s_aff, factors))
+                affordances.append((s_aff, factors))
+            if self.relative_properties:
+                affordances = relative_property_scores(affordances)
+            scored = [
+                CandidateScore(str(action), s_llm, s_aff, s_llm * s_aff, factors)
+                for action, s_llm, (s_aff, factors) in zip(candidates, llm_scores, affordances, strict=True)
+            ]
             best = max(scored, key=lambda c: c.combined)  # first of equals: deterministic
             if best.combined <= 0.0:
                 # Nothing the LLM wants is feasible (e.g. a one-hot vote for a repeat): stop.
