@@ -287,6 +287,8 @@ class PickAndPlace:
         while not result.ok and result.failure in RETRYABLE and attempts <= self.retries:
             self.world.settle(120)  # a dropped thing comes to rest (or falls off the table) first
             if self.world.off_table(obj):
+                if "fell off the table" not in result.message:
+                    result.message += "; it fell off the table"
                 break
             attempts += 1
             result = self._attempt(obj, target)
