@@ -33,6 +33,7 @@ from typing import Any
 from conceptbot import __version__
 from conceptbot.core.errors import ConfigError, KnowledgeUnavailableError
 from conceptbot.core.migrations import apply_migrations
+from conceptbot.core.sqlite import connect_shared
 from conceptbot.core.urls import check_http_url
 from conceptbot.knowledge.base import DEFAULT_LIMIT, ConceptEdges, Edge
 from conceptbot.knowledge.normalize import lookup
@@ -242,14 +243,8 @@ class ConceptNetAPI:
         conn: sqlite3.Connection | None = None
         try:
             self.cache_path.parent.mkdir(parents=True, exist_ok=True)
-            conn = sqlite3.connect(
-                self.cache_path, timeout=30.0, isolation_level=None, check_same_thread=False
-            )
-            # WAL lets readers and one writer work at once, so parallel benchmark runs, the web app
-            # and the CLI can share one cache; the busy time-out waits for the writer instead of failing.
-            conn.execute("PRAGMA journal_mode=WAL")
-            conn.execute("PRAGMA synchronous=NORMAL")
-            conn.execute("PRAGMA busy_timeout=30000")
+            # Shared with parallel benchmark runs, the web app and the CLI (WAL, busy time-out).
+            conn = connect_shared(self.cache_path)
             # Its own migrations table, so this cache may share a file with the LLM cache.
             apply_migrations(conn, MIGRATIONS, "conceptnet_migrations")
         except (OSError, sqlite3.Error) as exc:
