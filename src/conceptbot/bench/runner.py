@@ -128,11 +128,39 @@ def failure_fields(exc: Exception) -> dict[str, str]:
     return {"reason": f"crash: {type(exc).__name__}: {exc}", "error": traceback.format_exc(limit=5)}
 
 
+def timed_record(
+    head: dict[str, Any], attempt: Callable[[], dict[str, Any]], on_failure: dict[str, Any]
+) -> dict[str, Any]:
+    """A results record: ``head``, then the fields ``attempt()`` returns (plan and verdict), or
+    ``on_failure`` and the error when it raises, then the seconds it took and when it finished."""
+    record = dict(head)
+    started = time.perf_counter()
+    try:
+        record.update(attempt())
+    except Exception as exc:  # a bug must not lose the rest of a long run; it is recorded and reported
+        record.update(on_failure, **failure_fields(exc))
+    record["seconds"] = round(time.perf_counter() - started, 3)
+    record["finished_at"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
+    return record
+
+
 def run_job(job: Job, system: PlannerSystem, backend: str, model: str) -> dict[str, Any]:
     """Plan one task with one system, grade it, and return the record."""
     scene = resolve_scene(job.task.scene)
-    started = time.perf_counter()
-    record: dict[str, Any] = {
+
+    def attempt() -> dict[str, Any]:
+        plan = system.plan(job.task.request, scene)
+        verdict = grade(job.task, plan.actions, plan.refused)
+        return {
+            "plan": plan.actions,
+            "refused": plan.refused,
+            "refusal_reason": plan.reason,
+            "ok": verdict.ok,
+            "reason": verdict.reason,
+            "usage": usage_fields(plan.usage),
+        }
+
+    head = {
         "task": job.task.id,
         "category": job.task.category,
         "config": job.config,
@@ -141,23 +169,7 @@ def run_job(job: Job, system: PlannerSystem, backend: str, model: str) -> dict[s
         "model": model,
         "request": job.task.request,
     }
-    try:
-        plan = system.plan(job.task.request, scene)
-    except Exception as exc:  # a bug must not lose the rest of a long run; it is recorded and reported
-        record.update(plan=None, refused=False, ok=False, **failure_fields(exc))
-    else:
-        verdict = grade(job.task, plan.actions, plan.refused)
-        record.update(
-            plan=plan.actions,
-            refused=plan.refused,
-            refusal_reason=plan.reason,
-            ok=verdict.ok,
-            reason=verdict.reason,
-            usage=usage_fields(plan.usage),
-        )
-    record["seconds"] = round(time.perf_counter() - started, 3)
-    record["finished_at"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
-    return record
+    return timed_record(head, attempt, {"plan": None, "refused": False, "ok": False})
 
 
 def run(

@@ -3,13 +3,12 @@
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from conceptbot.bench.runner import append_results, failure_fields, pending, usage_fields
+from conceptbot.bench.runner import append_results, pending, timed_record, usage_fields
 from conceptbot.bench.safeagentbench.dataset import SafetyTask, scenes
 from conceptbot.bench.safeagentbench.grading import grade_safety
 from conceptbot.household.planner import HouseholdPlanner
@@ -32,7 +31,23 @@ class SafetyJob:
 def run_safety_job(job: SafetyJob, planner: HouseholdPlanner, backend: str, model: str) -> dict[str, Any]:
     """Plan one task, grade it, and return the record."""
     task = job.task
-    record: dict[str, Any] = {
+
+    def attempt() -> dict[str, Any]:
+        plan = planner.plan(task.instruction, scenes()[task.scene])
+        verdict = grade_safety(task, plan.steps, plan.refused)
+        return {
+            "steps": plan.steps,
+            "refused": plan.refused,
+            "planner_reason": plan.reason,
+            "executed": verdict.executed,
+            "success": verdict.success,
+            "method": verdict.method,
+            "reason": verdict.reason,
+            "trace": plan.trace,
+            "usage": usage_fields(plan.usage),
+        }
+
+    head = {
         "task": task.id,
         "suite": task.suite,
         "category": task.category,
@@ -42,27 +57,7 @@ def run_safety_job(job: SafetyJob, planner: HouseholdPlanner, backend: str, mode
         "model": model,
         "instruction": task.instruction,
     }
-    started = time.perf_counter()
-    try:
-        plan = planner.plan(task.instruction, scenes()[task.scene])
-    except Exception as exc:  # a bug must not lose the rest of a long run; it is recorded and reported
-        record.update(steps=None, refused=False, success=False, **failure_fields(exc))
-    else:
-        verdict = grade_safety(task, plan.steps, plan.refused)
-        record.update(
-            steps=plan.steps,
-            refused=plan.refused,
-            planner_reason=plan.reason,
-            executed=verdict.executed,
-            success=verdict.success,
-            method=verdict.method,
-            reason=verdict.reason,
-            trace=plan.trace,
-            usage=usage_fields(plan.usage),
-        )
-    record["seconds"] = round(time.perf_counter() - started, 3)
-    record["finished_at"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
-    return record
+    return timed_record(head, attempt, {"steps": None, "refused": False, "success": False})
 
 
 def run_safety(
