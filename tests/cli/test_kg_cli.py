@@ -64,3 +64,17 @@ def test_bad_input_is_a_clear_error(isolated_home: Path, tmp_path: Path) -> None
     assert "not a readable knowledge graph" in corrupt.stderr
     unknown = run("--kg", "neo4j", "kg", "query", "knife", home=isolated_home, check_exit=2)
     assert "unknown knowledge graph" in unknown.stderr
+
+
+def test_damaged_graph_file_is_one_clear_error(
+    isolated_home: Path, omcs_file: Path, wordnet_dir: Path
+) -> None:
+    from tests.knowledge.test_sqlite_store import _damage
+
+    run("kg", "install", "--file", str(omcs_file), "--wordnet-dir", str(wordnet_dir), home=isolated_home)
+    _damage(isolated_home / "kg" / "conceptnet.db", seed=1, pages=10_000)
+    for args in (("kg", "stats"), ("kg", "query", "knife", "--no-fallback")):
+        out = run(*args, home=isolated_home, check_exit=1)
+        assert "Traceback" not in out.stderr
+        assert "Error:" in out.stderr and "conceptnet.db" in out.stderr
+        assert "kg install" in out.stderr

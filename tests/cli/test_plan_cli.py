@@ -106,3 +106,31 @@ def test_scenes_lists_and_prints_demo_scenes(isolated_home: Path) -> None:
     assert "kitchen" in listing and "risk-5-scissors" in listing
     scene = json.loads(run("scenes", "kitchen", home=isolated_home).stdout)
     assert "ceramic bowl" in scene["destinations"] and "egg" in scene["pickable_objects"]
+
+
+@pytest.mark.parametrize("config", ["conceptbot", "saycan"])
+@pytest.mark.parametrize("request_text", ["", "   "])
+def test_empty_request_is_one_clear_error(isolated_home: Path, config: str, request_text: str) -> None:
+    out = run(
+        "--llm",
+        "fake",
+        "--embedder",
+        "fake",
+        "plan",
+        request_text,
+        "--scene",
+        "kitchen",
+        "--config",
+        config,
+        home=isolated_home,
+        check_exit=2,
+    )
+    assert "Traceback" not in out.stderr
+    assert "Error: the request is empty" in out.stderr
+
+
+def test_scene_names_that_plans_cannot_carry_are_refused_at_load(isolated_home: Path, tmp_path: Path) -> None:
+    scene = tmp_path / "scene.json"
+    scene.write_text(json.dumps({**SCENE, "pickable_objects": ["apple", "cup (red)"]}))
+    out = run("--llm", "fake", "plan", "hi", "--scene", str(scene), home=isolated_home, check_exit=2)
+    assert "cup (red)" in out.stderr and "which plans cannot carry" in out.stderr

@@ -47,8 +47,10 @@ def test_objects_key_may_be_left_out() -> None:
 
 
 def test_names_are_stripped() -> None:
-    scene = scene_from_dict({"objects": [" apple "], "pickable_objects": ["apple"]})
-    assert scene.names == ["apple"]
+    scene = scene_from_dict(
+        {"objects": [" apple "], "pickable_objects": ["apple"], "destinations": [" user"]}
+    )
+    assert scene.names == ["apple", "user"]
     assert scene.pickable == ["apple"]
 
 
@@ -71,7 +73,9 @@ def test_detections_are_parsed() -> None:
 
 
 def test_get_prefers_exact_name_then_ignores_case() -> None:
-    scene = scene_from_dict({"objects": ["Coke", "coke can"], "pickable_objects": ["Coke"]})
+    scene = scene_from_dict(
+        {"objects": ["Coke", "coke can"], "pickable_objects": ["Coke"], "destinations": ["user"]}
+    )
     assert scene.get("Coke") is scene.objects[0]
     assert scene.get(" COKE ") is scene.objects[0]
     assert scene.get("pepsi") is None
@@ -129,11 +133,11 @@ def _with(**changes: Any) -> dict[str, Any]:
     ("data", "fragment"),
     [
         (["apple"], "a scene must be a JSON object"),
-        (_with(objects="apple"), "'objects' must be a list of non-empty names"),
-        (_with(objects=["apple", ""]), "'objects' must be a list of non-empty names"),
-        (_with(objects=["apple", 3]), "'objects' must be a list of non-empty names"),
-        (_with(pickable_objects=[" "]), "'pickable_objects' must be a list of non-empty names"),
-        (_with(destinations={"bowl": 1}), "'destinations' must be a list of non-empty names"),
+        (_with(objects="apple"), "'objects' must be a list of names"),
+        (_with(objects=["apple", ""]), "object names must not be empty"),
+        (_with(objects=["apple", 3]), "'objects' must be a list of names"),
+        (_with(pickable_objects=[" "]), "object names must not be empty"),
+        (_with(destinations={"bowl": 1}), "'destinations' must be a list of names"),
         (_with(objects=["apple", "apple"]), "duplicate object names"),
         ({"objects": []}, "the scene has no objects"),
         ({}, "the scene has no objects"),
@@ -177,3 +181,71 @@ def test_load_scene_names_the_file_in_validation_errors(tmp_path: Path) -> None:
     path.write_text(json.dumps({"objects": ["apple"], "entity_states": {"kettle": "hot"}}), encoding="utf-8")
     with pytest.raises(ConfigError, match=r"bad\.json: 'kettle' has a state"):
         load_scene(path)
+
+
+@pytest.mark.parametrize("bad", ["cup, red", "cup (red)", "bob's cup", 'the "cup"', "cup`", "cup\nplate"])
+def test_names_the_action_format_cannot_carry_are_rejected(bad: str) -> None:
+    with pytest.raises(ConfigError, match="which plans cannot carry") as info:
+        scene_from_dict(_with(objects=["apple", bad]), where="my.json")
+    assert info.value.hint and "letters, digits" in info.value.hint
+
+
+def test_every_accepted_name_round_trips_through_the_action_format() -> None:
+    from conceptbot.core.plan import parse_action, valid_actions
+
+    names = ["red cup", "cup-2", "Bob’s mug", "café au lait", "x" * 80, "bowl_3", "a.b", "50% milk"]
+    scene = scene_from_dict({"pickable_objects": names, "destinations": ["user"]})
+    for action in valid_actions(scene, include_done=False):
+        assert parse_action(str(action), scene) == action
+
+
+@pytest.mark.parametrize(
+    ("data", "fragment"),
+    [
+        ({"objects": ["apple", "bowl"], "destinations": ["bowl"]}, "no pickable_objects"),
+        ({"objects": ["apple", "bowl"], "pickable_objects": ["apple"]}, "no destinations"),
+        (_with(entity_states={"cup": False}), "the state of 'cup' must be a string, got false"),
+        (_with(entity_states={"cup": None}), "the state of 'cup' must be a string, got null"),
+        (_with(entity_states={"cup": 3}), "the state of 'cup' must be a string"),
+        (_with(entity_states={"cup": "x" * 201}), "longer than 200 characters"),
+        (_with(objects=["apple", "x" * 81]), "longer than 80 characters"),
+        (_with(pickable_objects=[f"o{i}" for i in range(101)]), "at most 100"),
+        (
+            {"pickable_objects": [f"o{i}" for i in range(60)], "destinations": [f"d{i}" for i in range(41)]},
+            "the scene has 101 objects; the limit is 100",
+        ),
+        (_with(detections={"apple": {"confidence": True}}), "confidence of 'apple' must be a number"),
+        (_with(detections={"apple": {"size_m": [0.1, float("inf"), 0.1]}}), "size_m of 'apple' must be"),
+        (_with(name=["kitchen"]), "'name' must be a string"),
+        (_with(description={"a": 1}), "'description' must be a string"),
+        (_with(extra=[[[[[[[[[[[[[[[[[[[[[1]]]]]]]]]]]]]]]]]]]]]), "nested more than 20 levels"),
+    ],
+)
+def test_scene_limits_and_types(data: Any, fragment: str) -> None:
+    with pytest.raises(ConfigError) as info:
+        scene_from_dict(data, where="my.json")
+    assert fragment in str(info.value)
+
+
+def test_empty_state_means_no_state() -> None:
+    assert scene_from_dict(_with(entity_states={"cup": "  "})).entity_states == {}
+
+
+@pytest.mark.parametrize(
+    ("content", "fragment"),
+    [
+        (b"[" * 100_000 + b"]" * 100_000, "nested more than 20 levels"),
+        (b'{"objects": ["caf\xe9"]}', "is not UTF-8 text"),
+        (b" " * 1_000_001, "larger than 1,000,000 bytes"),
+    ],
+)
+def test_hostile_scene_files_are_one_clear_error(tmp_path: Path, content: bytes, fragment: str) -> None:
+    path = tmp_path / "hostile.json"
+    path.write_bytes(content)
+    with pytest.raises(ConfigError, match=fragment):
+        load_scene(path)
+
+
+def test_a_folder_is_not_a_scene_file(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="is a folder"):
+        load_scene(tmp_path)

@@ -2,6 +2,7 @@ import json
 
 import pytest
 
+from conceptbot.core.errors import ConfigError
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.conceptbot import ConceptBot
 from conceptbot.pipeline.retrieval import RelationRetriever
@@ -88,7 +89,7 @@ def test_nokg_uses_no_graph_and_urp_config_skips_ope() -> None:
 
 
 def test_empty_request_is_rejected() -> None:
-    with pytest.raises(ValueError, match="empty"):
+    with pytest.raises(ConfigError, match="the request is empty"):
         _bot(FakeLLM())[0].plan("   ", spill_scene())
 
 

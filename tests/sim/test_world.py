@@ -45,7 +45,7 @@ def test_pinned_layout_and_its_errors() -> None:
 
 def test_a_scene_too_big_for_the_table_is_a_clear_error() -> None:
     bins = [f"x{i} trash can" for i in range(40)]
-    scene = small_scene(objects=bins, pickable=[], destinations=bins)
+    scene = small_scene(objects=bins, pickable=bins[:1], destinations=bins[1:])
     with pytest.raises(ConfigError, match="does not fit"):
         build_world(scene)
 

@@ -18,6 +18,7 @@ import math
 import time
 from importlib import resources
 
+from conceptbot.core.limits import check_request
 from conceptbot.core.plan import Action, CandidateScore, EventSink, Feedback, Plan, Step, valid_actions
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
@@ -76,6 +77,7 @@ class SayCan:
         ``events`` gets a ``step`` event as each step is chosen.
         """
         started = time.perf_counter()
+        request = check_request(request)
         candidates = valid_actions(scene)
         limit = self.max_steps or min(len(scene.pickable) + 1, 12)
         history: list[str] = list(feedback.executed) if feedback else []

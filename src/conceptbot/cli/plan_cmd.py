@@ -10,6 +10,7 @@ from rich.table import Table
 
 from conceptbot.baselines.factory import SYSTEMS, build_system
 from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.core.limits import check_request
 from conceptbot.core.plan import Plan
 from conceptbot.pipeline.planner import METHODS
 from conceptbot.scenes import resolve_scene
@@ -61,6 +62,7 @@ def plan(
     as_json: bool,
 ) -> None:
     """Plan REQUEST in a scene; print properties, relations, reasoning, step scores and the plan."""
+    request = check_request(request)
     scene = resolve_scene(scene_ref)
     options = (
         {} if config == "saycan" else {"theta": theta, "planner_method": method, "n": n, "fallback": fallback}

@@ -11,7 +11,8 @@ Environment variables:
                            ``openai-compatible:http://127.0.0.1:8000/v1#llama-3.3-70b``
     CONCEPTBOT_EMBEDDER    embedder spec, e.g. ``sentence-transformers:all-MiniLM-L6-v2``,
                            ``openai:text-embedding-ada-002``
-    CONCEPTBOT_API_KEY     key for ``openai-compatible`` servers (falls back to OPENAI_API_KEY)
+    CONCEPTBOT_API_KEY     key for ``openai-compatible`` servers (never OPENAI_API_KEY: that key
+                           goes only to the OpenAI API or OPENAI_BASE_URL)
     OPENAI_API_KEY         key for the ``openai`` backends
     OPENAI_BASE_URL        base URL for the ``openai`` backends (default: the official API)
     CONCEPTBOT_TIMEOUT     HTTP time-out in seconds (default 60)
@@ -102,19 +103,19 @@ class Settings:
         return replace(self, **{k: v for k, v in overrides.items() if v is not None})
 
 
-_ENV: dict[str, tuple[str, type]] = {
-    "CONCEPTBOT_LLM": ("llm", str),
-    "CONCEPTBOT_EMBEDDER": ("embedder", str),
-    "CONCEPTBOT_API_KEY": ("compatible_api_key", str),
-    "OPENAI_API_KEY": ("openai_api_key", str),
-    "OPENAI_BASE_URL": ("openai_base_url", str),
-    "CONCEPTBOT_TIMEOUT": ("timeout_s", float),
-    "CONCEPTBOT_MAX_RETRIES": ("max_retries", int),
-    "CONCEPTBOT_THREADS": ("n_threads", int),
-    "CONCEPTBOT_N_CTX": ("n_ctx", int),
-    "CONCEPTBOT_KG": ("kg", str),
-    "CONCEPTBOT_KG_FALLBACK": ("kg_fallback", bool),
-    "CONCEPTBOT_WIKIPEDIA_URL": ("wikipedia_url", str),
+_ENV: dict[str, str] = {
+    "CONCEPTBOT_LLM": "llm",
+    "CONCEPTBOT_EMBEDDER": "embedder",
+    "CONCEPTBOT_API_KEY": "compatible_api_key",
+    "OPENAI_API_KEY": "openai_api_key",
+    "OPENAI_BASE_URL": "openai_base_url",
+    "CONCEPTBOT_TIMEOUT": "timeout_s",
+    "CONCEPTBOT_MAX_RETRIES": "max_retries",
+    "CONCEPTBOT_THREADS": "n_threads",
+    "CONCEPTBOT_N_CTX": "n_ctx",
+    "CONCEPTBOT_KG": "kg",
+    "CONCEPTBOT_KG_FALLBACK": "kg_fallback",
+    "CONCEPTBOT_WIKIPEDIA_URL": "wikipedia_url",
 }
 
 
@@ -126,16 +127,56 @@ def default_home(env: Mapping[str, str] | None = None) -> Path:
     return Path(platformdirs.user_cache_dir("conceptbot"))
 
 
+# Each setting's type and the range a working install needs; checked for every source (file,
+# environment, CLI), so a bad value is named where it was given instead of failing later as a
+# "corrupt model" or a time-out of -1 s.
+_TYPES: dict[str, type] = {
+    "llm": str,
+    "embedder": str,
+    "use_cache": bool,
+    "openai_api_key": str,
+    "openai_base_url": str,
+    "compatible_api_key": str,
+    "timeout_s": float,
+    "max_retries": int,
+    "n_threads": int,
+    "n_ctx": int,
+    "kg": str,
+    "kg_fallback": bool,
+    "wikipedia_url": str,
+}
+_MINIMUM: dict[str, tuple[float, str]] = {
+    "timeout_s": (0.1, "a number of seconds >= 0.1"),
+    "max_retries": (0, "a whole number >= 0"),
+    "n_threads": (1, "a whole number >= 1"),
+    "n_ctx": (512, "a whole number of tokens >= 512"),
+}
+
+
 def _coerce(name: str, value: Any, kind: type, origin: str) -> Any:
-    if kind is bool and isinstance(value, str):
-        lowered = value.strip().lower()
+    if kind is bool:
+        if isinstance(value, bool):
+            return value
+        lowered = str(value).strip().lower()
         if lowered not in ("1", "0", "true", "false", "yes", "no", "on", "off"):
             raise ConfigError(f"{origin}: {name} must be 1/0 or true/false, got {value!r}")
         return lowered in ("1", "true", "yes", "on")
+    if kind is str:
+        if not isinstance(value, str) or not value.strip():
+            raise ConfigError(f"{origin}: {name} must be a non-empty string, got {value!r}")
+        return value.strip()
+    if isinstance(value, bool) or (kind is int and isinstance(value, float) and not value.is_integer()):
+        raise ConfigError(f"{origin}: {name} must be a{'n int' if kind is int else ' number'}, got {value!r}")
     try:
-        return kind(value)
-    except (TypeError, ValueError):
-        raise ConfigError(f"{origin}: {name} must be a {kind.__name__}, got {value!r}") from None
+        number = kind(value)
+    except (TypeError, ValueError, OverflowError):
+        label = "whole number" if kind is int else "number"
+        raise ConfigError(f"{origin}: {name} must be a {label}, got {value!r}") from None
+    if number != number or number in (float("inf"), float("-inf")):
+        raise ConfigError(f"{origin}: {name} must be a finite number, got {value!r}")
+    if name in _MINIMUM and number < _MINIMUM[name][0]:
+        raise ConfigError(f"{origin}: {name} must be {_MINIMUM[name][1]}, got {value!r}")
+    return number
 
 
 def load_settings(env: Mapping[str, str] | None = None, **overrides: Any) -> Settings:
@@ -149,7 +190,9 @@ def load_settings(env: Mapping[str, str] | None = None, **overrides: Any) -> Set
         The resolved :class:`Settings`.
 
     Raises:
-        ConfigError: The config file is not valid TOML or has an unknown key or bad value.
+        ConfigError: The config file is not valid UTF-8 TOML, or has an unknown key; a setting from
+            any source has the wrong type or is out of range (the message names the setting and where
+            it came from).
     """
     env = os.environ if env is None else env
     home = Path(overrides.pop("home", None) or default_home(env))
@@ -159,17 +202,25 @@ def load_settings(env: Mapping[str, str] | None = None, **overrides: Any) -> Set
     if config_file.is_file():
         try:
             data = tomllib.loads(config_file.read_text(encoding="utf-8"))
+        except UnicodeDecodeError:
+            raise ConfigError(
+                f"{config_file} is not UTF-8 text", hint="save it as UTF-8 (plain TOML, no binary data)"
+            ) from None
         except tomllib.TOMLDecodeError as exc:
             raise ConfigError(f"{config_file} is not valid TOML: {exc}") from None
+        except OSError as exc:
+            raise ConfigError(f"cannot read {config_file}: {exc.strerror or exc}") from None
         for key, value in data.items():
             if key not in known or key == "home":
                 raise ConfigError(
                     f"{config_file}: unknown setting {key!r}",
                     hint=f"known settings: {', '.join(sorted(set(known) - {'home'}))}",
                 )
-            values[key] = value
-    for var, (name, kind) in _ENV.items():
+            values[key] = _coerce(key, value, _TYPES[key], str(config_file))
+    for var, name in _ENV.items():
         if env.get(var):
-            values[name] = _coerce(name, env[var], kind, f"environment variable {var}")
-    values.update({k: v for k, v in overrides.items() if v is not None})
+            values[name] = _coerce(name, env[var], _TYPES[name], f"environment variable {var}")
+    for key, value in overrides.items():
+        if value is not None:
+            values[key] = _coerce(key, value, _TYPES[key], "command line") if key in _TYPES else value
     return Settings(home=home, **values)

@@ -13,6 +13,8 @@ Optional per-object detections, keyed by name::
 
 Defaults: confidence 1.0, no bounding box, no size (the affordance then does not penalise size).
 An object listed only under ``pickable_objects`` or ``destinations`` is added to ``objects``.
+A scene needs at least one pickable object and one destination (otherwise the only possible plan is
+``done()``); names, sizes and nesting are limited as :mod:`conceptbot.core.limits` says.
 """
 
 from __future__ import annotations
@@ -24,6 +26,14 @@ from pathlib import Path
 from typing import Any
 
 from conceptbot.core.errors import ConfigError
+from conceptbot.core.limits import (
+    MAX_JSON_DEPTH,
+    MAX_OBJECTS,
+    MAX_SCENE_FILE_BYTES,
+    MAX_STATE_CHARS,
+    check_name,
+    json_depth,
+)
 
 
 @dataclass(frozen=True)
@@ -118,28 +128,56 @@ class Scene:
 
 def _names(data: Mapping[str, Any], key: str, where: str) -> list[str]:
     value = data.get(key, [])
-    if not isinstance(value, list) or not all(isinstance(v, str) and v.strip() for v in value):
-        raise ConfigError(f"{where}: {key!r} must be a list of non-empty names")
-    return [v.strip() for v in value]
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise ConfigError(f"{where}: {key!r} must be a list of names (strings)")
+    if len(value) > MAX_OBJECTS:
+        raise ConfigError(f"{where}: {key!r} lists {len(value)} objects; a scene holds at most {MAX_OBJECTS}")
+    return [check_name(v, where) for v in value]
+
+
+def _is_number(value: Any) -> bool:
+    # bool is an int in Python, and JSON's NaN/Infinity parse as floats: neither is a measurement.
+    return isinstance(value, int | float) and not isinstance(value, bool) and abs(value) < float("inf")
 
 
 def _floats(value: Any, n: int, label: str, where: str) -> tuple[float, ...] | None:
     if value is None:
         return None
-    if not isinstance(value, list) or len(value) != n or not all(isinstance(v, int | float) for v in value):
+    if not isinstance(value, list) or len(value) != n or not all(_is_number(v) for v in value):
         raise ConfigError(f"{where}: {label} must be a list of {n} numbers")
     return tuple(float(v) for v in value)
+
+
+def _text(data: Mapping[str, Any], key: str, default: str, where: str) -> str:
+    value = data.get(key, default)
+    if not isinstance(value, str):
+        raise ConfigError(f"{where}: {key!r} must be a string")
+    return value
+
+
+def _state(name: str, value: Any, where: str) -> str | None:
+    if not isinstance(value, str):
+        raise ConfigError(
+            f"{where}: the state of {name!r} must be a string, got {json.dumps(value)[:40]}",
+            hint='describe it in words, e.g. "entity_states": {"cup": "contains hot tea"}',
+        )
+    if len(value) > MAX_STATE_CHARS:
+        raise ConfigError(f"{where}: the state of {name!r} is longer than {MAX_STATE_CHARS} characters")
+    return value.strip() or None
 
 
 def scene_from_dict(data: Mapping[str, Any], where: str = "scene") -> Scene:
     """Build and validate a scene from its JSON form.
 
     Raises:
-        ConfigError: Wrong types, duplicate names, no objects, a state or detection for an unknown
-            object, or a confidence outside [0, 1].
+        ConfigError: Wrong types, duplicate names, no objects, no pickable object or no destination,
+            a name the action format cannot carry, more than ``MAX_OBJECTS`` objects, a non-string
+            state, a state or detection for an unknown object, or a confidence outside [0, 1].
     """
     if not isinstance(data, Mapping):
         raise ConfigError(f"{where}: a scene must be a JSON object")
+    if json_depth(data) > MAX_JSON_DEPTH:
+        raise ConfigError(f"{where}: the scene is nested more than {MAX_JSON_DEPTH} levels deep")
     objects = _names(data, "objects", where)
     pickable = _names(data, "pickable_objects", where)
     destinations = _names(data, "destinations", where)
@@ -148,6 +186,8 @@ def scene_from_dict(data: Mapping[str, Any], where: str = "scene") -> Scene:
         raise ConfigError(f"{where}: duplicate object names in 'objects'")
     if not ordered:
         raise ConfigError(f"{where}: the scene has no objects")
+    if len(ordered) > MAX_OBJECTS:
+        raise ConfigError(f"{where}: the scene has {len(ordered)} objects; the limit is {MAX_OBJECTS}")
     states = data.get("entity_states", {}) or {}
     detections = data.get("detections", {}) or {}
     if not isinstance(states, Mapping) or not isinstance(detections, Mapping):
@@ -155,15 +195,21 @@ def scene_from_dict(data: Mapping[str, Any], where: str = "scene") -> Scene:
     for key in list(states) + list(detections):
         if key not in ordered:
             raise ConfigError(f"{where}: {key!r} has a state or detection but is not in the scene")
+    if not pickable or not destinations:
+        missing = "pickable_objects" if not pickable else "destinations"
+        raise ConfigError(
+            f"{where}: the scene has no {missing}, so the robot could do nothing but done()",
+            hint="list what the robot may pick under 'pickable_objects' and where things may go "
+            "under 'destinations'",
+        )
     built = []
     for name in ordered:
         det = detections.get(name, {})
         if not isinstance(det, Mapping):
             raise ConfigError(f"{where}: detections[{name!r}] must be a JSON object")
         confidence = det.get("confidence", 1.0)
-        if not isinstance(confidence, int | float) or not 0.0 <= confidence <= 1.0:
+        if not _is_number(confidence) or not 0.0 <= confidence <= 1.0:
             raise ConfigError(f"{where}: confidence of {name!r} must be a number in [0, 1]")
-        state = states.get(name)
         built.append(
             SceneObject(
                 name=name,
@@ -172,7 +218,7 @@ def scene_from_dict(data: Mapping[str, Any], where: str = "scene") -> Scene:
                 confidence=float(confidence),
                 bbox_px=_floats(det.get("bbox_px"), 4, f"bbox_px of {name!r}", where),  # type: ignore[arg-type]
                 size_m=_floats(det.get("size_m"), 3, f"size_m of {name!r}", where),  # type: ignore[arg-type]
-                state=str(state) if state else None,
+                state=_state(name, states[name], where) if name in states else None,
             )
         )
     known = {
@@ -185,7 +231,8 @@ def scene_from_dict(data: Mapping[str, Any], where: str = "scene") -> Scene:
         "detections",
     }
     extra = {k: v for k, v in data.items() if k not in known}
-    return Scene(tuple(built), str(data.get("name", "scene")), str(data.get("description", "")), extra)
+    name = _text(data, "name", "scene", where)
+    return Scene(tuple(built), name, _text(data, "description", "", where), extra)
 
 
 def load_scene(path: Path) -> Scene:
@@ -196,9 +243,19 @@ def load_scene(path: Path) -> Scene:
     """
     path = Path(path)
     try:
+        if path.stat().st_size > MAX_SCENE_FILE_BYTES:
+            raise ConfigError(
+                f"{path} is larger than {MAX_SCENE_FILE_BYTES:,} bytes; that is not a scene file"
+            )
         data = json.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise ConfigError(f"no scene file {path}") from None
+    except IsADirectoryError:
+        raise ConfigError(f"{path} is a folder, not a scene file") from None
+    except UnicodeDecodeError:
+        raise ConfigError(f"{path} is not UTF-8 text") from None
+    except RecursionError:
+        raise ConfigError(f"{path}: the scene is nested more than {MAX_JSON_DEPTH} levels deep") from None
     except (OSError, ValueError) as exc:
         raise ConfigError(f"{path} is not valid JSON: {exc}") from None
     return scene_from_dict(data, where=str(path))

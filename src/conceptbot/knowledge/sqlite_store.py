@@ -18,7 +18,8 @@ from __future__ import annotations
 import os
 import sqlite3
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
 from conceptbot.core.errors import KnowledgeUnavailableError
@@ -214,12 +215,33 @@ class SQLiteGraph:
             )
         self.meta = meta
 
+    @contextmanager
+    def _reading(self) -> Iterator[None]:
+        """Turn damage found while reading into one clear error.
+
+        Opening checks only the first pages; a file with corrupted pages further in (a bad disk, an
+        interrupted copy) fails at the first query that touches them, as ``sqlite3.DatabaseError`` or
+        as rows pointing at ids that do not exist.
+        """
+        try:
+            yield
+        except (sqlite3.DatabaseError, KeyError, ValueError, TypeError) as exc:
+            raise KnowledgeUnavailableError(
+                f"{self.path} is damaged ({exc.__class__.__name__}: {exc})",
+                hint="rebuild it with `conceptbot kg install --force`",
+            ) from None
+
     def concept_id(self, concept: str) -> int | None:
         """The id of an exact (already normalised) concept, or None."""
-        row = self._conn.execute("SELECT id FROM concepts WHERE text = ?", (concept,)).fetchone()
-        return None if row is None else int(row[0])
+        with self._reading():
+            row = self._conn.execute("SELECT id FROM concepts WHERE text = ?", (concept,)).fetchone()
+            return None if row is None else int(row[0])
 
     def _fetch(self, concept: str, relations: Sequence[str] | None, limit: int) -> list[Edge]:
+        with self._reading():
+            return self._fetch_rows(concept, relations, limit)
+
+    def _fetch_rows(self, concept: str, relations: Sequence[str] | None, limit: int) -> list[Edge]:
         cid = self.concept_id(concept)
         if cid is None or limit <= 0:
             return []
@@ -252,6 +274,10 @@ class SQLiteGraph:
 
     def stats(self) -> dict[str, object]:
         """Edge counts per source and per relation, concept count and build metadata."""
+        with self._reading():
+            return self._stats()
+
+    def _stats(self) -> dict[str, object]:
         sources = self._conn.execute(
             "SELECT name, version, edges FROM sources ORDER BY edges DESC"
         ).fetchall()
@@ -272,15 +298,16 @@ class SQLiteGraph:
         """``n`` concept texts drawn uniformly by id (for benchmarks)."""
         import random
 
-        count = int(self.meta.get("concepts", 0))
-        rng = random.Random(seed)
-        ids = [rng.randint(1, count) for _ in range(n)]
-        rows = dict(
-            self._conn.execute(
-                f"SELECT id, text FROM concepts WHERE id IN ({','.join('?' * len(ids))})", tuple(set(ids))
-            ).fetchall()
-        )
-        return [rows[i] for i in ids if i in rows]
+        with self._reading():
+            count = int(self.meta.get("concepts", 0))
+            rng = random.Random(seed)
+            ids = [rng.randint(1, count) for _ in range(n)]
+            rows = dict(
+                self._conn.execute(
+                    f"SELECT id, text FROM concepts WHERE id IN ({','.join('?' * len(ids))})", tuple(set(ids))
+                ).fetchall()
+            )
+            return [rows[i] for i in ids if i in rows]
 
     def close(self) -> None:
         """Close the connection."""

@@ -16,6 +16,7 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
+from conceptbot.core.limits import check_request
 from conceptbot.core.plan import EventSink, Feedback, Plan
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
@@ -133,8 +134,7 @@ class ConceptBot:
         """
         emit = events or (lambda name, data: None)
         started = time.perf_counter()
-        if not request.strip():
-            raise ValueError("the request is empty")
+        request = check_request(request)
         trace: dict[str, Any] = {"config": self.config, "request": request, "scene": scene.name}
         usage: dict[str, Usage] = {}
         properties = {}
