@@ -83,7 +83,8 @@ def test_resolve_scene_takes_a_path(tmp_path: Path) -> None:
 
 def test_an_existing_file_wins_over_a_demo_name(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.chdir(tmp_path)
-    Path("kitchen").write_text(json.dumps({"objects": ["pear"], "pickable_objects": ["pear"], "destinations": ["user"]}))
+    scene = {"objects": ["pear"], "pickable_objects": ["pear"], "destinations": ["user"]}
+    Path("kitchen").write_text(json.dumps(scene))
     assert resolve_scene("kitchen").names == ["pear", "user"]
 
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
@@ -41,7 +41,15 @@ def scripted_bot() -> ConceptBot:
 def make_client(tmp_path: Path) -> Callable[..., TestClient]:
     managers: list[RunManager] = []
 
-    def make(worker: Any = None, backends: list[str] | None = None, can_simulate: bool = False) -> TestClient:
+    def make(
+        worker: Any = None,
+        backends: list[str] | None = None,
+        can_simulate: bool = False,
+        allowed_hosts: Iterable[str] = ("testserver",),
+        base_url: str = "http://testserver",
+    ) -> TestClient:
+        """A client with the session cookie. The app answers only ``allowed_hosts``: TestClient's
+        own "testserver" unless a test gives the hosts of a real address (with its ``base_url``)."""
         worker = worker or make_worker(lambda config, backend: scripted_bot(), can_simulate=False)
         manager = RunManager(worker)
         managers.append(manager)
@@ -50,9 +58,10 @@ def make_client(tmp_path: Path) -> Callable[..., TestClient]:
             backends=backends or ["llamacpp:qwen2.5-coder-1.5b", "llamacpp:smollm2-135m"],
             results_dir=tmp_path / "results",
             can_simulate=can_simulate,
+            allowed_hosts=allowed_hosts,
         )
-        client = TestClient(app)
-        client.get("/")  # the session cookie
+        client = TestClient(app, base_url=base_url)
+        assert client.get("/").status_code == 200  # the session cookie
         return client
 
     yield make

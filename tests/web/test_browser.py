@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 import uvicorn
 
-from conceptbot.web.app import create_app
+from conceptbot.web.app import create_app, local_hosts
 from conceptbot.web.runs import RunManager
 from conceptbot.web.worker import make_worker
 from tests.web.conftest import REQUEST, scripted_bot
@@ -32,10 +32,14 @@ def _free_port() -> int:
 @pytest.fixture
 def server(tmp_path: Path) -> Iterator[str]:
     manager = RunManager(make_worker(lambda config, backend: scripted_bot(), can_simulate=False))
-    app = create_app(
-        manager, backends=["llamacpp:qwen2.5-coder-1.5b"], results_dir=tmp_path, can_simulate=False
-    )
     port = _free_port()
+    app = create_app(
+        manager,
+        backends=["llamacpp:qwen2.5-coder-1.5b"],
+        results_dir=tmp_path,
+        can_simulate=False,
+        allowed_hosts=local_hosts("127.0.0.1", port),
+    )
     server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning"))
     thread = threading.Thread(target=server.run, daemon=True)
     thread.start()

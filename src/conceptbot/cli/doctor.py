@@ -1,11 +1,20 @@
-"""``conceptbot doctor``: what is installed and working, one line each."""
+"""``conceptbot doctor``: what is installed and working, one line each.
+
+Every check runs on its own: an unexpected exception in one (a corrupt database page, a broken
+native library) becomes a failing line, never a stack trace, and the other checks still run.
+HTTP backends are contacted once with a one-token request, so "doctor is green" means the server
+is up, knows the model and accepts the key. Everything printed is passed through
+:func:`conceptbot.core.urls.redact_secrets`: specs may carry keys in their URLs.
+"""
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import importlib
 import importlib.metadata
 import os
+import sqlite3
 import sys
 import time
 from collections.abc import Callable
@@ -16,10 +25,16 @@ import click
 from conceptbot.cli.main import AppContext, pass_app
 from conceptbot.core.config import DEFAULT_EMBEDDER, DEFAULT_LLM, Settings
 from conceptbot.core.errors import ConceptBotError
+from conceptbot.core.urls import redact_secrets
 from conceptbot.knowledge.registry import create_graph
 from conceptbot.knowledge.sqlite_store import SQLiteGraph
 from conceptbot.models import store
-from conceptbot.models.registry import create_embedder, open_store, split_spec
+from conceptbot.models.llm import ChatRequest
+from conceptbot.models.registry import create_embedder, create_llm, open_store, split_spec
+
+HTTP_BACKENDS = ("openai", "openai-compatible")
+# A health check should answer within seconds; the user's time-out is for long generations.
+PROBE_TIMEOUT_S = 20.0
 
 
 @dataclass(frozen=True)
@@ -60,8 +75,31 @@ def check_model(settings: Settings) -> Check:
     try:
         path = store.verify(settings.models_dir, model, full=True)
     except ConceptBotError as exc:
-        return Check(f"model {model}", False, str(exc).replace("\n", " "))
+        return Check(f"model {model}", False, _one_line(exc))
     return Check(f"model {model}", True, f"sha256 ok ({time.perf_counter() - started:.1f} s) {path}")
+
+
+def check_llm_server(settings: Settings) -> Check:
+    """An HTTP LLM backend answers a one-token chat request (server up, model known, key accepted).
+
+    Sent once, without retries, so a dead server fails in one time-out rather than after backoff.
+    """
+    name, _ = split_spec(settings.llm)
+    if name not in HTTP_BACKENDS:
+        return Check("LLM server", True, f"not used (LLM is {name})", required=False)
+    probe = settings.with_overrides(max_retries=0, timeout_s=min(settings.timeout_s, PROBE_TIMEOUT_S))
+    started = time.perf_counter()
+    try:
+        llm = create_llm(settings.llm, probe)
+        llm.chat(ChatRequest.of("Say OK.", max_tokens=1))
+    except ConceptBotError as exc:
+        return Check(f"LLM server ({name})", False, _one_line(exc))
+    elapsed = time.perf_counter() - started
+    return Check(f"LLM server ({name})", True, f"model {llm.model!r} answered in {elapsed:.2f} s")
+
+
+def _one_line(exc: ConceptBotError) -> str:
+    return exc.message if not exc.hint else f"{exc.message} ({exc.hint})"
 
 
 def check_embedder(settings: Settings) -> Check:
@@ -71,7 +109,7 @@ def check_embedder(settings: Settings) -> Check:
         vectors = create_embedder(settings.embedder, settings).embed(["a knife is a sharp object"])
         elapsed = time.perf_counter() - started
     except ConceptBotError as exc:
-        return Check("embedder", False, str(exc).replace("\n", " "))
+        return Check("embedder", False, _one_line(exc))
     return Check(
         "embedder",
         True,
@@ -81,16 +119,28 @@ def check_embedder(settings: Settings) -> Check:
 
 def check_knowledge(settings: Settings) -> Check:
     """The configured knowledge graph opens and knows about a common object."""
+    graph = None
     try:
         graph = create_graph(settings.kg, settings)
         found = graph.edges("knife", limit=100)
+        detail = f"{settings.kg}: 'knife' has {len(found.edges)} edges"
+        if isinstance(graph, SQLiteGraph):
+            stats = graph.stats()
+            per_source = ", ".join(f"{s['name']} {s['edges']:,}" for s in stats["sources"])
+            detail = f"{stats['edges']:,} edges ({per_source}); " + detail
     except ConceptBotError as exc:
-        return Check("knowledge graph", False, str(exc).replace("\n", " "))
-    detail = f"{settings.kg}: 'knife' has {len(found.edges)} edges"
-    if isinstance(graph, SQLiteGraph):
-        stats = graph.stats()
-        per_source = ", ".join(f"{s['name']} {s['edges']:,}" for s in stats["sources"])
-        detail = f"{stats['edges']:,} edges ({per_source}); " + detail
+        return Check("knowledge graph", False, _one_line(exc))
+    except sqlite3.DatabaseError as exc:  # pages corrupted past the header, found only when read
+        where = settings.kg_path if split_spec(settings.kg)[0] == "sqlite" else settings.kg
+        return Check(
+            "knowledge graph", False, f"{where} is damaged ({exc}); rebuild it with `conceptbot kg install`"
+        )
+    finally:
+        close = getattr(graph, "close", None)
+        # A failure to close a read-only graph changes nothing the user can act on.
+        if callable(close):
+            with contextlib.suppress(Exception):
+                close()
     return Check("knowledge graph", bool(found.edges), detail)
 
 
@@ -131,14 +181,33 @@ def check_cache(settings: Settings) -> Check:
     return Check("cache database", True, f"{settings.cache_db} (schema v{migrations[-1][0]}, WAL)")
 
 
-CHECKS: list[Callable[[Settings], Check]] = [
-    lambda s: check_llama(),
-    check_model,
-    check_embedder,
-    check_knowledge,
-    lambda s: check_pybullet(),
-    check_cache,
+# (name for the failing line if the check itself crashes, check)
+CHECKS: list[tuple[str, Callable[[Settings], Check]]] = [
+    ("llama.cpp runtime", lambda s: check_llama()),
+    ("local model", check_model),
+    ("LLM server", check_llm_server),
+    ("embedder", check_embedder),
+    ("knowledge graph", check_knowledge),
+    ("pybullet", lambda s: check_pybullet()),
+    ("cache database", check_cache),
 ]
+
+
+def run_check(name: str, check: Callable[[Settings], Check], settings: Settings) -> Check:
+    """Run one check; any exception it lets through becomes a required failure named ``name``."""
+    try:
+        return check(settings)
+    except ConceptBotError as exc:
+        return Check(name, False, _one_line(exc))
+    except Exception as exc:  # doctor exists to report breakage, so it must not crash on it
+        return Check(name, False, f"unexpected {type(exc).__name__}: {exc}")
+
+
+def _version_or_unknown(dist: str) -> str:
+    try:
+        return _version(dist)
+    except importlib.metadata.PackageNotFoundError:
+        return "(not installed as a package)"
 
 
 @click.command()
@@ -146,19 +215,21 @@ CHECKS: list[Callable[[Settings], Check]] = [
 def doctor(app: AppContext) -> None:
     """Check what is installed and working; exit 1 when the default stack is broken."""
     settings = app.settings
-    click.echo(
-        f"conceptbot {_version('conceptbot')} | home {settings.home}"
+    header = (
+        f"conceptbot {_version_or_unknown('conceptbot')} | home {settings.home}"
         f" | llm {settings.llm} | embedder {settings.embedder}"
     )
+    click.echo(redact_secrets(header))
     broken = False
-    for run in CHECKS:
-        check = run(settings)
+    for name, run in CHECKS:
+        check = run_check(name, run, settings)
+        detail = redact_secrets(" ".join(str(check.detail).split()))
         if check.ok:
             mark, colour = "ok  ", "green"
         elif check.required:
             mark, colour, broken = "FAIL", "red", True
         else:
             mark, colour = "warn", "yellow"
-        click.echo(click.style(f"[{mark}] ", fg=colour) + f"{check.name}: {check.detail}")
+        click.echo(click.style(f"[{mark}] ", fg=colour) + f"{check.name}: {detail}")
     if broken:
         raise click.exceptions.Exit(1)

@@ -67,5 +67,9 @@ def install_model(app: AppContext, name: str, force: bool) -> None:
             force=force,
             progress=lambda n: progress.advance(task, n),
             on_total=lambda total: progress.update(task, total=total),
+            on_cleaned=lambda stale, size: progress.console.print(
+                f"removed {stale.name} ({size / 1e6:,.1f} MB), left by an interrupted install",
+                soft_wrap=True,
+            ),
         )
     click.echo(f"{name}: installed and verified (sha256 {entry.sha256[:16]}...) at {path}")

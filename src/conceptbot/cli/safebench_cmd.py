@@ -20,6 +20,7 @@ from conceptbot.cli.bench_options import (
 )
 from conceptbot.cli.main import AppContext, pass_app
 from conceptbot.cli.progress import count_progress
+from conceptbot.core.urls import redact_secrets
 from conceptbot.household.factory import build_household_planner
 from conceptbot.household.planner import HOUSEHOLD_CONFIGS, HouseholdPlanner
 from conceptbot.models.registry import split_spec
@@ -71,6 +72,7 @@ def run_cmd(
     """Plan and grade each task with each configuration; results go to --out."""
     settings = app.settings
     backend, model = split_spec(settings.llm)
+    model = redact_secrets(model)  # records name the model; an openai-compatible URL may carry a key
     workers = effective_workers(backend, workers)
     tasks = select(suites or SUITES, levels or (1, 2, 3, 4), limit, ids)
     if not tasks:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ipaddress
+import socket
 from pathlib import Path
 
 import click
@@ -23,9 +24,17 @@ from conceptbot.cli.main import AppContext, pass_app
 @pass_app
 def serve(app: AppContext, host: str, port: int, results_dir: Path) -> None:
     """Start the web page: pick a scene, type a request, watch each module's reasoning and the plan."""
+    from conceptbot.web.server import bind
+
+    sock = bind(host, port)  # first: a taken port fails at once, before the slow imports
+    with sock:
+        _serve_on(sock, app, host, port, results_dir)
+
+
+def _serve_on(sock: socket.socket, app: AppContext, host: str, port: int, results_dir: Path) -> None:
     import uvicorn
 
-    from conceptbot.web.app import create_app
+    from conceptbot.web.app import create_app, local_hosts
     from conceptbot.web.runs import RunManager
     from conceptbot.web.worker import available_backends, cached_systems, make_worker, simulator_available
 
@@ -42,10 +51,19 @@ def serve(app: AppContext, host: str, port: int, results_dir: Path) -> None:
     can_simulate = simulator_available()
     manager = RunManager(make_worker(cached_systems(app.settings), can_simulate))
     web = create_app(
-        manager, backends=available_backends(app.settings), results_dir=results_dir, can_simulate=can_simulate
+        manager,
+        backends=available_backends(app.settings),
+        results_dir=results_dir,
+        can_simulate=can_simulate,
+        # The Host values of the address bound: a page that reaches the server under any other name
+        # (DNS rebinding) is refused.
+        allowed_hosts=local_hosts(host, port),
     )
-    click.echo(f"ConceptBot on http://{host}:{port}/  (Ctrl-C to stop)")
+    shown = f"[{host}]" if ":" in host else host
+    click.echo(f"ConceptBot on http://{shown}:{port}/  (Ctrl-C to stop)")
     try:
-        uvicorn.run(web, host=host, port=port, log_level="warning")
+        uvicorn.Server(uvicorn.Config(web, log_level="warning")).run(sockets=[sock])
+    except KeyboardInterrupt:
+        pass  # uvicorn re-raises Ctrl-C after shutting down; uvicorn.run() swallows it too
     finally:
         manager.close()

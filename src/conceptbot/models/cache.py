@@ -21,6 +21,7 @@ import numpy as np
 
 from conceptbot.core.migrations import apply_migrations
 from conceptbot.core.sqlite import connect_shared
+from conceptbot.core.urls import redact_secrets
 from conceptbot.models.migrations import MIGRATIONS
 
 
@@ -163,7 +164,11 @@ class CacheStore:
 
     # -- call log -------------------------------------------------------------------------------
     def log_call(self, record: CallRecord) -> None:
-        """Append a row to the call log."""
+        """Append a row to the call log.
+
+        The error text is masked again here (:func:`conceptbot.core.urls.redact_secrets`), whoever
+        built the record: the log outlives the run and may be shared in a bug report.
+        """
         with self._lock:
             self._conn.execute(
                 "INSERT INTO calls (ts, kind, module, backend, model, prompt_tokens, "
@@ -180,7 +185,7 @@ class CacheStore:
                     record.latency_s,
                     record.cost_usd,
                     int(record.cached),
-                    record.error,
+                    None if record.error is None else redact_secrets(record.error),
                 ),
             )
 

@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from conceptbot.core.urls import redact_secrets
 from conceptbot.core.usage import Usage
 from conceptbot.models.cache import CacheStore, CallRecord, request_key
 from conceptbot.models.embedder import Embedder
@@ -18,6 +19,14 @@ from conceptbot.models.pricing import estimate_cost
 
 def _usage_dict(usage: Usage) -> dict[str, Any]:
     return asdict(usage)
+
+
+def error_text(exc: BaseException) -> str:
+    """An exception as stored in the call log: type and message, credentials masked, 500 characters.
+
+    Masking comes before truncation so a cut can never leave half a URL with its key in it.
+    """
+    return redact_secrets(f"{type(exc).__name__}: {exc}")[:500]
 
 
 class CachedLLM:
@@ -100,7 +109,7 @@ class CachedLLM:
         try:
             response = self.inner.chat(request)
         except Exception as exc:
-            self._log("chat", Usage(calls=1), cached=False, error=f"{type(exc).__name__}: {exc}"[:500])
+            self._log("chat", Usage(calls=1), cached=False, error=error_text(exc))
             raise
         cost = estimate_cost(
             self.backend, self.model, response.usage.prompt_tokens, response.usage.completion_tokens
@@ -137,7 +146,7 @@ class CachedLLM:
         try:
             response = self.inner.score(request)
         except Exception as exc:
-            self._log("score", Usage(calls=1), cached=False, error=f"{type(exc).__name__}: {exc}"[:500])
+            self._log("score", Usage(calls=1), cached=False, error=error_text(exc))
             raise
         self._store(
             key,

@@ -3,7 +3,16 @@
 
 Time-outs and bounded retries with exponential backoff come from the SDK (``timeout``,
 ``max_retries``). API keys are only handed to the SDK client; they are never logged, cached or put
-in error messages.
+in error messages, and URLs in messages are redacted (:func:`conceptbot.core.urls.redact_url`).
+
+Key routing: the registry gives ``openai`` the user's OPENAI_API_KEY and ``openai-compatible`` only
+CONCEPTBOT_API_KEY. Without a key this backend sends no ``Authorization`` header at all, and it
+never lets the SDK fill in OPENAI_API_KEY, OPENAI_ORG_ID or OPENAI_PROJECT_ID from the environment
+for a third-party server.
+
+A server that answers 200 with something other than OpenAI-style JSON (an HTML page because the
+base URL is a web UI, a proxy's error text) is a :class:`BackendRequestError` naming the likely
+cause, not a stack trace.
 
 JSON-schema output: OpenAI and vLLM take ``response_format={"type": "json_schema", ...}``;
 llama.cpp's server only takes ``{"type": "json_object", "schema": ...}``. For ``openai-compatible``
@@ -15,9 +24,9 @@ continuations, so :meth:`OpenAILLM.score` raises :class:`NotSupportedError`.
 
 from __future__ import annotations
 
+import json
 import time
 from typing import Any
-from urllib.parse import urlsplit
 
 from conceptbot.core.errors import (
     BackendRequestError,
@@ -25,7 +34,7 @@ from conceptbot.core.errors import (
     ConfigError,
     NotSupportedError,
 )
-from conceptbot.core.urls import check_http_url
+from conceptbot.core.urls import check_http_url, redact_secrets, redact_url
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import Capabilities, ChatRequest, ChatResponse, ScoreRequest, ScoreResponse
 
@@ -35,11 +44,55 @@ def validate_base_url(url: str) -> str:
     return check_http_url(url, "base URL", "http://127.0.0.1:8000/v1")
 
 
-def _redact(url: str) -> str:
-    parts = urlsplit(url)
-    if parts.username or parts.password:
-        return url.replace(parts.netloc, parts.hostname or "", 1)
-    return url
+def not_openai_reply(where: str, got: str) -> BackendRequestError:
+    """The error for a 200 reply that is not OpenAI-style JSON (``got`` says what it was)."""
+    return BackendRequestError(
+        f"{where} answered with something that is not an OpenAI-style JSON reply ({got})",
+        hint="is the base URL the API root, e.g. http://127.0.0.1:8000/v1?",
+    )
+
+
+def describe_reply(out: Any) -> str:
+    """What a parsed reply was, for :func:`not_openai_reply` (the SDK returns the body as text when
+    the server's Content-Type is not JSON)."""
+    if isinstance(out, str):
+        head = out.lstrip()[:200].lower()
+        if head.startswith(("<!doctype html", "<html")) or "<html" in head:
+            return "an HTML page"
+        return "text, not JSON" if out.strip() else "an empty body"
+    return "JSON without the expected fields"
+
+
+def client_options(backend: str, api_key: str | None) -> dict[str, Any]:
+    """Keyword arguments for ``openai.OpenAI`` that send ``api_key`` and nothing else of the user's.
+
+    The SDK fills any argument left ``None`` from OPENAI_API_KEY, OPENAI_ORG_ID and
+    OPENAI_PROJECT_ID; for a third-party server those must not be sent, so the key is never
+    ``None`` and the organization and project headers are omitted.
+    """
+    import openai
+
+    if backend == "openai":
+        return {"api_key": api_key}
+    omit = openai.Omit()
+    # Without a key a placeholder, not None (None means "read OPENAI_API_KEY"); the header it would
+    # make is dropped on every request (see request_headers), so the placeholder is never sent.
+    return {
+        "api_key": api_key or "unused",
+        "default_headers": {"OpenAI-Organization": omit, "OpenAI-Project": omit},
+    }
+
+
+def request_headers(backend: str, api_key: str | None) -> dict[str, Any]:
+    """Per-request headers: no ``Authorization`` at all for a key-less ``openai-compatible`` server.
+
+    The SDK accepts an omitted ``Authorization`` only per request, not as a client default.
+    """
+    if backend == "openai" or api_key:
+        return {}
+    import openai
+
+    return {"Authorization": openai.Omit()}
 
 
 class OpenAILLM:
@@ -49,7 +102,8 @@ class OpenAILLM:
         model: Model name as the server knows it.
         backend: ``openai`` or ``openai-compatible``.
         base_url: Server URL (required for ``openai-compatible``).
-        api_key: Secret key (required for ``openai``; servers that need none get a placeholder).
+        api_key: Secret key (required for ``openai``; without one, ``openai-compatible`` requests
+            carry no ``Authorization`` header).
         timeout_s: Per-request time-out.
         max_retries: Retries with exponential backoff on connection errors, 408/409/429/5xx.
         client: A pre-built ``openai.OpenAI`` client (tests).
@@ -84,19 +138,20 @@ class OpenAILLM:
         self.base_url = validate_base_url(base_url) if base_url else None
         self.capabilities = Capabilities(scoring=False, json_schema=True, native_n=backend == "openai")
         self._json_mode = "json_schema"
+        self._headers = request_headers(backend, api_key) if client is None else {}
         if client is None:
             import openai
 
             client = openai.OpenAI(
-                api_key=api_key or "not-needed",
                 base_url=self.base_url,
                 timeout=timeout_s,
                 max_retries=max_retries,
+                **client_options(backend, api_key),
             )
         self._client = client
 
     def _where(self) -> str:
-        return _redact(self.base_url) if self.base_url else "the OpenAI API"
+        return redact_url(self.base_url) if self.base_url else "the OpenAI API"
 
     def _response_format(self, request: ChatRequest) -> dict[str, Any] | None:
         if request.json_schema is None:
@@ -122,6 +177,8 @@ class OpenAILLM:
         fmt = self._response_format(request)
         if fmt is not None:
             kwargs["response_format"] = fmt
+        if self._headers:
+            kwargs["extra_headers"] = self._headers
         try:
             return self._client.chat.completions.create(**kwargs)
         except openai.APIStatusError as exc:
@@ -134,6 +191,10 @@ class OpenAILLM:
                 self._json_mode = "json_object"  # llama.cpp-server style; remember for later calls
                 return self._create(request, n, seed)
             raise self._status_error(exc) from None
+        except openai.APIResponseValidationError:
+            raise not_openai_reply(self._where(), "a body the SDK could not read") from None
+        except json.JSONDecodeError:  # a 200 with a JSON Content-Type whose body is not JSON
+            raise not_openai_reply(self._where(), "invalid JSON") from None
         except openai.APITimeoutError:
             raise BackendUnavailableError(
                 f"{self._where()} did not answer in time", hint="raise CONCEPTBOT_TIMEOUT or check the server"
@@ -172,14 +233,12 @@ class OpenAILLM:
             want = request.n - len(choices)
             out = self._create(request, want, request.seed + len(choices))
             calls += 1
-            if not out.choices:
-                raise BackendRequestError(f"{self._where()} returned no choices")
-            for choice in out.choices[:want]:
-                choices.append(choice.message.content or "")
-                reasons.append(choice.finish_reason or "stop")
-            if out.usage is not None:
-                prompt_tokens += out.usage.prompt_tokens or 0
-                completion_tokens += out.usage.completion_tokens or 0
+            got, used = self._read(out, want)
+            for text, reason in got:
+                choices.append(text)
+                reasons.append(reason)
+            prompt_tokens += used[0]
+            completion_tokens += used[1]
         usage = Usage(prompt_tokens, completion_tokens, time.perf_counter() - started, 0.0, calls)
         return ChatResponse(
             choices=tuple(choices),
@@ -188,6 +247,34 @@ class OpenAILLM:
             model=self.model,
             finish_reasons=tuple(reasons),
         )
+
+    def _read(self, out: Any, want: int) -> tuple[list[tuple[str, str]], tuple[int, int]]:
+        """``[(text, finish_reason)]`` and ``(prompt, completion)`` tokens of one reply.
+
+        Raises:
+            BackendRequestError: The reply is not a chat completion, or has no choices.
+        """
+        try:
+            if not isinstance(out.choices, (list, tuple)):  # None when the JSON has no "choices"
+                raise TypeError("no choices list")
+            if not out.choices:
+                raise BackendRequestError(f"{self._where()} returned no choices")
+            got = []
+            for choice in out.choices[:want]:
+                content = choice.message.content
+                if content is not None and not isinstance(content, str):
+                    raise TypeError("message content is not text")
+                got.append((content or "", str(choice.finish_reason or "stop")))
+            usage = out.usage
+            used = (
+                (0, 0)
+                if usage is None
+                else (int(usage.prompt_tokens or 0), int(usage.completion_tokens or 0))
+            )
+        except (AttributeError, TypeError, ValueError, KeyError, IndexError):
+            # The SDK builds its reply objects without validation: any JSON (or a text body) gets here.
+            raise not_openai_reply(self._where(), describe_reply(out)) from None
+        return got, used
 
     def score(self, request: ScoreRequest) -> ScoreResponse:
         """Not supported: chat APIs do not return log-probabilities of given continuations."""
@@ -209,11 +296,16 @@ def _rejects_json_schema(exc: Any) -> bool:
 
 
 def _message(exc: Any) -> str:
+    """The server's error message, credentials masked (servers and proxies echo URLs and keys)."""
+    return redact_secrets(_raw_message(exc))[:300]
+
+
+def _raw_message(exc: Any) -> str:
     body = getattr(exc, "body", None)
     if isinstance(body, dict):
         error = body.get("error", body)
         if isinstance(error, dict) and error.get("message"):
-            return str(error["message"])[:300]
+            return str(error["message"])[:1000]
         if isinstance(body.get("detail"), (str, list)):
-            return str(body["detail"])[:300]
-    return str(getattr(exc, "message", exc))[:300]
+            return str(body["detail"])[:1000]
+    return str(getattr(exc, "message", exc))[:1000]

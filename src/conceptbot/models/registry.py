@@ -12,6 +12,10 @@ Embedder specs (``CONCEPTBOT_EMBEDDER`` or ``--embedder``)::
     sentence-transformers[:MODEL]        default all-MiniLM-L6-v2 (bundled, offline)
     openai:MODEL                         e.g. text-embedding-ada-002, text-embedding-3-small
     fake                                 hashing embedder (tests)
+
+Key routing: OPENAI_API_KEY goes only to the ``openai`` backends (LLM and embedder), that is to the
+OpenAI API or to OPENAI_BASE_URL when the user set it. ``openai-compatible`` servers get
+CONCEPTBOT_API_KEY or no key at all, never OPENAI_API_KEY: BASE_URL may point anywhere.
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ from pathlib import Path
 
 from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConfigError
+from conceptbot.core.urls import redact_secrets
 from conceptbot.models.cache import CacheStore
 from conceptbot.models.cached import CachedEmbedder, CachedLLM
 from conceptbot.models.embedder import Embedder
@@ -69,7 +74,8 @@ def create_llm(spec: str, settings: Settings) -> LLM:
     name, argument = split_spec(spec)
     if name not in _LLMS:
         raise ConfigError(
-            f"unknown LLM backend {name!r} in {spec!r}", hint=f"known backends: {', '.join(llm_backends())}"
+            f"unknown LLM backend {name!r} in {redact_secrets(spec)!r}",
+            hint=f"known backends: {', '.join(llm_backends())}",
         )
     return _LLMS[name](argument, settings)
 
@@ -83,7 +89,7 @@ def create_embedder(spec: str, settings: Settings) -> Embedder:
     name, argument = split_spec(spec)
     if name not in _EMBEDDERS:
         raise ConfigError(
-            f"unknown embedder backend {name!r} in {spec!r}",
+            f"unknown embedder backend {name!r} in {redact_secrets(spec)!r}",
             hint=f"known backends: {', '.join(embedder_backends())}",
         )
     return _EMBEDDERS[name](argument, settings)
@@ -140,14 +146,15 @@ def _openai_compatible(argument: str, settings: Settings) -> LLM:
     url, sep, model = argument.rpartition("#")
     if not sep or not url or not model:
         raise ConfigError(
-            f"openai-compatible spec needs BASE_URL#MODEL, got {argument!r}",
+            f"openai-compatible spec needs BASE_URL#MODEL, got {redact_secrets(argument)!r}",
             hint="e.g. openai-compatible:http://127.0.0.1:8000/v1#qwen2.5-coder-1.5b",
         )
     return OpenAILLM(
         model,
         backend="openai-compatible",
         base_url=url,
-        api_key=settings.compatible_api_key or settings.openai_api_key,
+        # Never OPENAI_API_KEY: the user's OpenAI key must not reach a server they merely point at.
+        api_key=settings.compatible_api_key,
         timeout_s=settings.timeout_s,
         max_retries=settings.max_retries,
     )

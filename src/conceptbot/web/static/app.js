@@ -158,9 +158,11 @@ function showStep(step) {
   const box = el("div", { class: "step" }, el("h3", {}, `Step ${step.index}: ${step.chosen}`));
   const top = Math.max(...step.candidates.map((c) => c.combined), 1e-9);
   for (const c of step.candidates) {
+    // Width through element.style: the Content-Security-Policy refuses style="..." attributes.
+    const fill = el("div", { class: "fill" });
+    fill.style.width = `${(100 * c.combined) / top}%`;
     const row = el("div", { class: c.action === step.chosen ? "bar chosen" : "bar" },
-      el("span", {}, c.action), el("div", { class: "fill", style: `width:${(100 * c.combined) / top}%` }),
-      el("span", {}, c.combined.toFixed(3)));
+      el("span", {}, c.action), fill, el("span", {}, c.combined.toFixed(3)));
     row.title = `LLM ${c.llm.toFixed(3)} × affordance ${c.affordance.toFixed(2)}`;
     box.append(row);
   }
