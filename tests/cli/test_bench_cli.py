@@ -38,6 +38,29 @@ def test_report_of_a_results_file_and_bad_path(isolated_home: Path, tmp_path: Pa
     assert "no results file" in missing.stderr
 
 
+def test_run_on_the_dev_split_records_it(isolated_home: Path, tmp_path: Path) -> None:
+    """--split dev plans dev tasks in dev scenes; the fake LLM has no replies, so each plan is an
+    error record (the plumbing, not the planning, is under test here)."""
+    replies = tmp_path / "replies.json"
+    replies.write_text("[]")
+    out = tmp_path / "dev.jsonl"
+    args = ["--llm", f"fake:{replies}", "--embedder", "fake", "bench", "run", "-c", "nokg", "--split", "dev"]
+    first = run(*args, "--category", "risk", "--limit", "2", "--out", str(out), home=isolated_home)
+    assert "split: dev" in first.stdout and "2 plans (2 tasks x 1 configs x 1 trials)" in first.stdout
+    records = [json.loads(line) for line in out.read_text().splitlines()]
+    assert [(r["task"], r["split"]) for r in records] == [("dev-risk-1", "dev"), ("dev-risk-2", "dev")]
+    assert all(r["reason"].startswith("error: ") for r in records), records
+    report = run("bench", "report", str(out), home=isolated_home).stdout
+    assert "Task split: dev;" in report and "[paper" not in report and "| risk | 0% (n=2) |" in report
+    bad = run(*args[:-1], "train", home=isolated_home, check_exit=2)
+    assert "'train' is not one of 'test', 'dev'" in bad.stderr
+
+
+def test_run_help_documents_the_split(isolated_home: Path) -> None:
+    out = run("bench", "run", "--help", home=isolated_home).stdout
+    assert "--split [test|dev]" in out and "with --split dev" in " ".join(out.split())
+
+
 @pytest.mark.slow
 def test_smoke_run_on_the_small_model(
     isolated_home: Path, smollm2_path: Path, omcs_file: Path, wordnet_dir: Path, tmp_path: Path

@@ -46,9 +46,23 @@ plastic bin (allowed: paper bin)``, ``order: medium block must come before small
 ``duplicate action: ...``, ``no done() at the end``, ``invalid action: ...``, ``refused a feasible task:
 ...``. On success the reason says what was checked (``all 3 required placements, order respected``).
 
-:func:`load_tasks` reads the task files shipped in ``conceptbot/bench/tasks/`` and validates every gold
-against its scene: every object and destination a gold names must exist in the scene with the right role
-(pickable object, destination), spelt as the scene spells it.
+:func:`load_tasks` reads the task files shipped with the package and validates every gold against its
+scene: every object and destination a gold names must exist in the scene with the right role (pickable
+object, destination), spelt as the scene spells it.
+
+Splits (``load_tasks(split=...)``, ``conceptbot bench run --split``)
+    ``"test"`` (the default)
+        The paper's 47 tasks, the measure of the product's quality: ``conceptbot/bench/tasks/<category>.json``
+        on the demo scenes of :mod:`conceptbot.scenes` (ids ``"<category>-<n>"``).
+    ``"dev"``
+        Tasks of our own to tune on, so that tuning never looks at the test set: at least 11 per
+        category, in new scenes with objects and requests that are not the paper's.
+        ``conceptbot/bench/dev/tasks/<category>.json`` (ids ``"dev-<category>-<n>"``) on the scenes in
+        ``conceptbot/bench/dev/scenes/<name>.json`` (:func:`load_dev_scene`; every name starts with
+        ``dev-`` and equals its file's stem, so no dev scene shares a name with a demo scene).
+
+    A task knows its split (:attr:`Task.split`); :func:`task_scene` loads its scene from the split's folder,
+    and the benchmark runner records the split with every result.
 """
 
 from __future__ import annotations
@@ -58,19 +72,23 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
 from importlib.resources import files
+from importlib.resources.abc import Traversable
 from typing import Any
 
 from conceptbot.core.errors import ConfigError
 from conceptbot.core.plan import DONE, Action, InvalidActionError, parse_action
-from conceptbot.core.scene import Scene
+from conceptbot.core.scene import Scene, scene_from_dict
 from conceptbot.scenes import load_demo_scene
 
 __all__ = [
     "CATEGORIES",
     "PAPER_RESULTS",
+    "SPLITS",
     "Task",
     "Verdict",
+    "dev_scene_names",
     "grade",
+    "load_dev_scene",
     "load_tasks",
     "reference_plan",
     "task_scene",
@@ -78,6 +96,10 @@ __all__ = [
 
 CATEGORIES: tuple[str, ...] = ("unambiguous", "ambiguous", "implicit", "risk", "materials", "toxic")
 """Task categories, in the order of the paper's tables."""
+
+SPLITS: tuple[str, ...] = ("test", "dev")
+"""Task splits: the paper's 47 tasks (``test``) and our own tuning tasks (``dev``); see the module
+docstring."""
 
 PAPER_RESULTS: dict[str, dict[str, float]] = {
     "saycan": {
@@ -117,12 +139,15 @@ class Task:
     """One benchmark task.
 
     Attributes:
-        id: ``"<category>-<n>"``, e.g. ``"implicit-10"``.
+        id: ``"<category>-<n>"``, e.g. ``"implicit-10"``; ``"dev-<category>-<n>"`` in the dev split.
         category: One of :data:`CATEGORIES`.
-        request: The user's request (the paper's words, except where ``notes`` says otherwise).
-        scene: The demo scene's name (:func:`conceptbot.scenes.load_demo_scene`).
+        request: The user's request (test split: the paper's words, except where ``notes`` says
+            otherwise).
+        scene: The scene's name: a demo scene (:func:`conceptbot.scenes.load_demo_scene`) in the test
+            split, a dev scene (:func:`load_dev_scene`) in the dev split.
         gold: The acceptance criterion (see the module docstring for its formats).
         notes: Every judgement call made in writing the gold.
+        split: ``"test"`` or ``"dev"`` (:data:`SPLITS`).
     """
 
     id: str
@@ -131,6 +156,7 @@ class Task:
     scene: str
     gold: Mapping[str, Any]
     notes: str
+    split: str = "test"
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -477,12 +503,55 @@ def _scene(name: str) -> Scene:
     return load_demo_scene(name)
 
 
-def task_scene(task: Task) -> Scene:
-    """The task's demo scene (loaded once per name and cached).
+def _dev_root() -> Traversable:
+    return files("conceptbot.bench").joinpath("dev")
+
+
+def _dev_scene_files() -> dict[str, Traversable]:
+    folder = _dev_root().joinpath("scenes")
+    if not folder.is_dir():
+        return {}
+    return {
+        e.name.removesuffix(".json"): e for e in folder.iterdir() if e.is_file() and e.name.endswith(".json")
+    }
+
+
+def dev_scene_names() -> list[str]:
+    """Names of the dev split's scenes (``conceptbot/bench/dev/scenes/*.json``), sorted."""
+    return sorted(_dev_scene_files())
+
+
+@cache
+def load_dev_scene(name: str) -> Scene:
+    """A dev split scene by name (loaded once per name and cached).
 
     Raises:
-        ConfigError: No demo scene has the task's scene name.
+        ConfigError: No dev scene has that name, or its file is invalid or names itself otherwise.
     """
+    resource = _dev_scene_files().get(name)
+    if resource is None:
+        raise ConfigError(
+            f"unknown dev scene {name!r}", hint=f"dev scenes: {', '.join(dev_scene_names()) or 'none'}"
+        )
+    where = f"dev scene {name!r}"
+    try:
+        data = json.loads(resource.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise ConfigError(f"{where} is not valid JSON: {exc}") from None
+    scene = scene_from_dict(data, where=where)
+    if scene.name != name:
+        raise ConfigError(f"{where}: its 'name' is {scene.name!r}; it must be the file's stem")
+    return scene
+
+
+def task_scene(task: Task) -> Scene:
+    """The task's scene: a demo scene (test split) or a dev scene (dev split); loaded once per name.
+
+    Raises:
+        ConfigError: No scene of the task's split has the task's scene name.
+    """
+    if task.split == "dev":
+        return load_dev_scene(task.scene)
     return _scene(task.scene)
 
 
@@ -566,7 +635,7 @@ def reference_plan(task: Task) -> list[str]:
 # Loading
 
 
-def _task_from(entry: Any, category: str, where: str) -> Task:
+def _task_from(entry: Any, category: str, where: str, split: str = "test") -> Task:
     if not isinstance(entry, Mapping):
         raise ConfigError(f"{where}: every task must be a JSON object")
     task_id = entry.get("id")
@@ -578,9 +647,10 @@ def _task_from(entry: Any, category: str, where: str) -> Task:
             raise ConfigError(f"{label}: {key!r} must be a non-empty string")
     if entry["category"] != category:
         raise ConfigError(f"{label}: category {entry['category']!r} in the file for {category!r}")
-    if not task_id.startswith(f"{category}-"):
-        raise ConfigError(f"{label}: the id must start with {category + '-'!r}")
-    task = Task(task_id, category, entry["request"], entry["scene"], entry["gold"], entry["notes"])
+    prefix = f"{category}-" if split == "test" else f"{split}-{category}-"
+    if not task_id.startswith(prefix):
+        raise ConfigError(f"{label}: the id must start with {prefix!r}")
+    task = Task(task_id, category, entry["request"], entry["scene"], entry["gold"], entry["notes"], split)
     try:
         scene = task_scene(task)
     except ConfigError as exc:
@@ -592,34 +662,38 @@ def _task_from(entry: Any, category: str, where: str) -> Task:
     return task
 
 
-def load_tasks(categories: Iterable[str] | None = None) -> list[Task]:
+def load_tasks(categories: Iterable[str] | None = None, split: str = "test") -> list[Task]:
     """Load and validate the benchmark tasks shipped with the package.
 
     Args:
         categories: Categories to load (default: all of :data:`CATEGORIES`). The result is in the
             paper's category order whatever the order given.
+        split: ``"test"``: the paper's 47 tasks; ``"dev"``: our own tuning tasks (see the module
+            docstring).
 
     Returns:
         The tasks, category by category, in file order.
 
     Raises:
-        ConfigError: An unknown category, an unreadable task file, or an invalid task (the message names
-            the task): missing keys, an unknown scene, or a gold naming an object or destination that the
-            scene lacks or has in another role.
+        ConfigError: An unknown category or split, an unreadable task file, or an invalid task (the
+            message names the task): missing keys, an unknown scene, or a gold naming an object or
+            destination that the scene lacks or has in another role.
     """
+    if split not in SPLITS:
+        raise ConfigError(f"unknown task split {split!r}", hint=f"use one of: {', '.join(SPLITS)}")
     wanted = set(CATEGORIES if categories is None else categories)
     unknown = sorted(wanted - set(CATEGORIES))
     if unknown:
         raise ConfigError(
             f"unknown task categories: {', '.join(unknown)}", hint=f"use one of: {', '.join(CATEGORIES)}"
         )
-    root = files("conceptbot.bench").joinpath("tasks")
+    root = files("conceptbot.bench").joinpath("tasks") if split == "test" else _dev_root().joinpath("tasks")
     tasks: list[Task] = []
     seen: set[str] = set()
     for category in CATEGORIES:
         if category not in wanted:
             continue
-        where = f"bench task file {category}.json"
+        where = f"bench task file {category}.json" if split == "test" else f"dev task file {category}.json"
         try:
             data = json.loads(root.joinpath(f"{category}.json").read_text(encoding="utf-8"))
         except FileNotFoundError:
@@ -629,7 +703,7 @@ def load_tasks(categories: Iterable[str] | None = None) -> list[Task]:
         if not isinstance(data, list):
             raise ConfigError(f"{where}: must be a list of tasks")
         for entry in data:
-            task = _task_from(entry, category, where)
+            task = _task_from(entry, category, where, split)
             if task.id in seen:
                 raise ConfigError(f"task {task.id!r} ({where}): duplicate id")
             seen.add(task.id)

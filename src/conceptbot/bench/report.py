@@ -1,5 +1,9 @@
 """Benchmark report: the paper's success table (categories x configurations) with the published
-numbers beside ours, per-module time/tokens/cost, as Markdown, JSON and a bar chart PNG."""
+numbers beside ours, per-module time/tokens/cost, as Markdown, JSON and a bar chart PNG.
+
+Records carry the task split (``"test"``: the paper's 47 tasks; ``"dev"``: our tuning tasks; records
+written before splits existed count as ``"test"``). The paper's numbers are shown only beside test-split
+results; the report of a dev (or mixed) results file says which split it covers instead."""
 
 from __future__ import annotations
 
@@ -61,7 +65,9 @@ def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
     }
     means = {cfg: {k: sum(v) / len(v) for k, v in parts.items() if v} for cfg, parts in usage.items()}
     models = sorted({f"{r['backend']}:{r['model']}" for r in records})
+    splits = sorted({r.get("split", "test") for r in records}, key=lambda s: (s != "test", s))
     return {
+        "splits": splits,
         "configs": configs,
         "success": success,
         "usage": means,
@@ -72,16 +78,25 @@ def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
 
 
 def markdown(summary: dict[str, Any]) -> str:
-    """The success table (ours, with the paper's published numbers in brackets) and usage."""
+    """The success table (ours, with the paper's published numbers in brackets for the test split) and
+    usage."""
     configs = summary["configs"]
-    lines = [f"Model: {', '.join(summary['models'])}; {summary['records']} graded plans.", ""]
+    splits = summary.get("splits", ["test"])
+    with_paper = splits == ["test"]
+    lines = [f"Model: {', '.join(summary['models'])}; {summary['records']} graded plans."]
+    if not with_paper:
+        mixed = " (mixed in one table: give each split its own results file)" if len(splits) > 1 else ""
+        lines.append(
+            f"Task split: {', '.join(splits)}{mixed}; the paper's numbers apply to the test split only."
+        )
+    lines.append("")
     lines.append("| category | " + " | ".join(configs) + " |")
     lines.append("|---|" + "---|" * len(configs))
     for cat in (*CATEGORIES, "all"):
         row = [cat]
         for cfg in configs:
             cell = summary["success"][cfg].get(cat)
-            paper = PAPER_RESULTS.get(cfg, {}).get(cat)
+            paper = PAPER_RESULTS.get(cfg, {}).get(cat) if with_paper else None
             text = f"{cell[0]:.0f}% (n={cell[1]})" if cell else "—"
             if paper is not None:
                 text += f" [paper {paper:.0f}%]"
@@ -117,7 +132,8 @@ def bar_chart(summary: dict[str, Any], path: Path) -> None:
     ax.set_xticks([x + width * (len(configs) - 1) / 2 for x in range(len(CATEGORIES))], CATEGORIES)
     ax.set_ylabel("success rate (%)")
     ax.set_ylim(0, 100)
-    ax.set_title(f"ConceptBot benchmark ({', '.join(summary['models'])})")
+    split = "" if summary.get("splits", ["test"]) == ["test"] else f", {'+'.join(summary['splits'])} split"
+    ax.set_title(f"ConceptBot benchmark ({', '.join(summary['models'])}{split})")
     ax.legend()
     fig.tight_layout()
     fig.savefig(path, dpi=110)

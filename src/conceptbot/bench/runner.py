@@ -20,10 +20,9 @@ from pathlib import Path
 from typing import Any, Protocol, TypeVar
 
 from conceptbot.baselines.factory import PlannerSystem
-from conceptbot.bench.grading import Task, grade
+from conceptbot.bench.grading import Task, grade, task_scene
 from conceptbot.core.errors import ConceptBotError
 from conceptbot.core.usage import Usage
-from conceptbot.scenes import resolve_scene
 
 J = TypeVar("J")
 
@@ -146,7 +145,7 @@ def timed_record(
 
 def run_job(job: Job, system: PlannerSystem, backend: str, model: str) -> dict[str, Any]:
     """Plan one task with one system, grade it, and return the record."""
-    scene = resolve_scene(job.task.scene)
+    scene = task_scene(job.task)
 
     def attempt() -> dict[str, Any]:
         plan = system.plan(job.task.request, scene)
@@ -163,6 +162,7 @@ def run_job(job: Job, system: PlannerSystem, backend: str, model: str) -> dict[s
     head = {
         "task": job.task.id,
         "category": job.task.category,
+        "split": job.task.split,
         "config": job.config,
         "trial": job.trial,
         "backend": backend,

@@ -1,4 +1,4 @@
-"""``conceptbot bench``: run the paper's benchmark and report it."""
+"""``conceptbot bench``: run the paper's benchmark (or the dev split, to tune on) and report it."""
 
 from __future__ import annotations
 
@@ -7,24 +7,31 @@ from pathlib import Path
 import click
 
 from conceptbot.baselines.factory import SYSTEMS, build_system
-from conceptbot.bench.grading import CATEGORIES, load_tasks
+from conceptbot.bench.grading import CATEGORIES, SPLITS, load_tasks
 from conceptbot.bench.report import load_records, markdown, summarise, write_report
 from conceptbot.bench.runner import Job, pending, run
 from conceptbot.cli.bench_options import (
     echo_report,
     effective_workers,
     out_dir_option,
-    results_option,
     workers_option,
 )
 from conceptbot.cli.main import AppContext, pass_app
 from conceptbot.cli.progress import count_progress
+from conceptbot.core.urls import redact_secrets
 from conceptbot.models.registry import split_spec
+
+DEFAULT_RESULTS = {"test": Path("results/bench.jsonl"), "dev": Path("results/bench-dev.jsonl")}
+"""Results file of each task split when --out is not given."""
 
 
 @click.group()
 def bench() -> None:
-    """Run the paper's 47-task benchmark (ConceptBot vs SayCan, ablations) and report it."""
+    """Run the paper's 47-task benchmark (ConceptBot vs SayCan, ablations) and report it.
+
+    Tune on the dev split (`bench run --split dev`: our own tasks in new scenes), measure on the
+    test split (the paper's 47 tasks, the default).
+    """
 
 
 @bench.command("run")
@@ -39,6 +46,13 @@ def bench() -> None:
 @click.option(
     "--category", "categories", multiple=True, type=click.Choice(CATEGORIES), help="Only these categories."
 )
+@click.option(
+    "--split",
+    default="test",
+    show_default=True,
+    type=click.Choice(SPLITS),
+    help="Task split: test (the paper's 47 tasks) or dev (our own tasks to tune on, in new scenes).",
+)
 @click.option("--limit", type=click.IntRange(1), help="At most this many tasks (after the category filter).")
 @click.option("--trials", default=1, show_default=True, type=click.IntRange(1, 20))
 @click.option(
@@ -50,24 +64,32 @@ def bench() -> None:
 )
 @click.option("--seed", default=0, show_default=True, type=int, help="Base seed (trial i uses seed + i).")
 @workers_option
-@results_option(Path("results/bench.jsonl"))
+@click.option(
+    "--out",
+    type=click.Path(dir_okay=False, path_type=Path),
+    help="JSONL results file; finished runs in it are skipped (resume). "
+    f"Default: {DEFAULT_RESULTS['test']}, or {DEFAULT_RESULTS['dev']} with --split dev.",
+)
 @pass_app
 def run_cmd(
     app: AppContext,
     configs: tuple[str, ...],
     categories: tuple[str, ...],
+    split: str,
     limit: int | None,
     trials: int,
     temperature: float,
     seed: int,
     workers: int,
-    out: Path,
+    out: Path | None,
 ) -> None:
-    """Plan and grade every task with each configuration; results go to --out."""
+    """Plan and grade every task of the split with each configuration; results go to --out."""
     settings = app.settings
     backend, model = split_spec(settings.llm)
+    model = redact_secrets(model)  # records name the model; an openai-compatible URL may carry a key
     workers = effective_workers(backend, workers)
-    tasks = load_tasks(list(categories) or None)[:limit]
+    out = out or DEFAULT_RESULTS[split]
+    tasks = load_tasks(list(categories) or None, split=split)[:limit]
     configs = configs or ("saycan", "nokg", "conceptbot")
     # Task-major order: an interrupted run still compares every configuration on the same tasks.
     jobs = [Job(t, c, i) for t in tasks for c in configs for i in range(trials)]
@@ -80,6 +102,8 @@ def run_cmd(
         return systems[config]
 
     todo = len(pending(jobs, out, backend, model or ""))
+    if split != "test":
+        click.echo(f"split: {split} (our own tasks for tuning, not the paper's 47)")
     click.echo(
         f"{len(jobs)} plans ({len(tasks)} tasks x {len(configs)} configs x {trials} trials); "
         f"{len(jobs) - todo} already in {out}"
