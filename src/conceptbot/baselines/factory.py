@@ -13,7 +13,9 @@ from conceptbot.models.registry import open_llm, open_store
 from conceptbot.pipeline.conceptbot import CONFIGS as CONCEPTBOT_CONFIGS
 from conceptbot.pipeline.factory import build_conceptbot
 
-SYSTEMS = ("saycan", *CONCEPTBOT_CONFIGS)
+SYSTEMS = ("saycan", *CONCEPTBOT_CONFIGS, "goal", "goal-nokg")
+"""Every system by name: SayCan, the ConceptBot configurations (the paper's pipeline), and the
+experimental goal planner with and without the knowledge graph (``goal``, ``goal-nokg``)."""
 
 
 class PlannerSystem(Protocol):
@@ -34,7 +36,7 @@ class PlannerSystem(Protocol):
 
 
 def build_system(settings: Settings, config: str, **options) -> PlannerSystem:
-    """The system called ``config`` (``saycan``, ``conceptbot``, ``urp``, ``ope``, ``nokg``).
+    """The system called ``config`` (one of :data:`SYSTEMS`).
 
     Raises:
         ConfigError: Unknown configuration.
@@ -48,6 +50,9 @@ def build_system(settings: Settings, config: str, **options) -> PlannerSystem:
                 hint="use the llamacpp backend for SayCan",
             )
         return SayCan(llm)
+    if config in ("goal", "goal-nokg"):
+        base = "conceptbot" if config == "goal" else "nokg"
+        return build_conceptbot(settings, base, planner="goal", **options)
     if config in CONCEPTBOT_CONFIGS:
         return build_conceptbot(settings, config, **options)
     raise ConfigError(f"unknown configuration {config!r}", hint=f"use one of {', '.join(SYSTEMS)}")

@@ -110,6 +110,7 @@ def show(result: Plan, console: Console) -> None:
         console.print(f"[bold]Commands:[/bold] {', '.join(urp['commands']) or '(none)'}")
         for rejected in urp["rejected_commands"]:
             console.print(f"  [yellow]rejected:[/yellow] {rejected}")
+    _goal(console, trace)
     for step in result.steps:
         table = Table(
             "action", "S_LLM", "S_aff", "combined", "factors", title=f"Step {step.index} ({step.method})"
@@ -139,6 +140,29 @@ def show(result: Plan, console: Console) -> None:
             f"{usage.cost_usd:.6f}",
         )
     console.print(table)
+
+
+def _goal(console: Console, trace: dict) -> None:
+    """The goal planner's goal, per-object decisions and risk checks (absent for the step planner)."""
+    goal = trace.get("goal")
+    if not goal:
+        return
+    console.print("\n[bold]Goal[/bold]" + (" (stack)" if goal["stack"] else ""))
+    for selection in goal["selections"]:
+        named = f" [dim](named: {', '.join(selection['named'])})[/dim]" if selection["named"] else ""
+        console.print(f"  {selection['count']} that fits {selection['what']!r} -> {selection['to']}{named}")
+    for decision in trace.get("decisions", []):
+        if not decision["decided"]:
+            continue
+        table = Table("object", "P(yes)", "calibrated", "facts", title=f"Decisions: {decision['what']!r}")
+        for row in sorted(decision["objects"], key=lambda r: -r["score"]):
+            table.add_row(
+                row["object"], f"{row['p_yes']:.2f}", f"{row['score']:+.2f}", "; ".join(row["facts"])[:80]
+            )
+        console.print(table)
+    for check in trace.get("risk", []):
+        verdict = f"[red]dropped: {check['why']}[/red]" if check["dropped"] else "ok"
+        console.print(f"  risk: {check['move']}: P(dangerous) {check['p_dangerous']:.2f} -> {verdict}")
 
 
 def _relations(console: Console, title: str, retrievals: dict, per_concept: int = 5) -> None:

@@ -1,13 +1,23 @@
-"""ConceptBot composed: OPE -> URP -> Planner, with the paper's ablations.
+"""ConceptBot composed, with the paper's ablations and two planners.
+
+Planners (``planner=``):
+
+* ``goal`` (experimental, ``--config goal``) — the request compiled into a goal, each object
+  decided by a scored yes/no question with its graph facts, the plan assembled from the
+  decisions and checked for risk (:mod:`conceptbot.pipeline.goal_planner`);
+* ``steps`` (default) — the paper's pipeline: OPE -> URP -> greedy step-by-step Planner
+  (:mod:`conceptbot.pipeline.planner`).
 
 Configurations:
 
-* ``conceptbot`` — URP & OPE: object properties, request interpretation, both with graph relations.
-* ``urp``        — URP only: the planner gets URP's commands but no object properties.
-* ``ope``        — OPE only: the planner gets object properties but no URP.
-* ``nokg``       — the full pipeline with no knowledge-graph relations anywhere.
+* ``conceptbot`` — everything, with graph relations.
+* ``urp``        — without OPE (goal planner: no object properties as risk evidence; steps: the
+  planner gets URP's commands but no properties).
+* ``ope``        — OPE only, no request interpretation: the paper's step planner (the goal planner
+  cannot run without compiling the request).
+* ``nokg``       — everything, with no knowledge-graph relations anywhere.
 
-A refusal from URP (an unsafe request) makes the plan just ``done()`` with ``refused: true``.
+A refusal (an unsafe request) makes the plan just ``done()`` with ``refused: true``.
 """
 
 from __future__ import annotations
@@ -23,12 +33,16 @@ from conceptbot.core.usage import Usage
 from conceptbot.models.cache import CacheStore
 from conceptbot.models.llm import LLM
 from conceptbot.pipeline import modes
+from conceptbot.pipeline.decide import Decider, FactFinder
+from conceptbot.pipeline.goal import GoalCompiler
+from conceptbot.pipeline.goal_planner import GoalPlanner, GoalPlanResult, Thresholds
 from conceptbot.pipeline.ope import ObjectPropertiesExtractor, Progress
 from conceptbot.pipeline.planner import Planner
 from conceptbot.pipeline.retrieval import RelationRetriever, Retrieval, edge_text
 from conceptbot.pipeline.urp import URPResult, UserRequestProcessor
 
 CONFIGS = ("conceptbot", "urp", "ope", "nokg")
+PLANNERS = ("auto", "goal", "steps")
 
 
 @dataclass(frozen=True)
@@ -86,8 +100,11 @@ class ConceptBot:
         config: One of :data:`CONFIGS`.
         store: Cache database for OPE results, or None.
         graph_version: Identifies the graph's contents in OPE cache keys.
-        planner_method: ``auto``, ``logprob`` or ``vote``.
+        planner_method: ``auto``, ``logprob`` or ``vote`` (the step planner's LLM score).
         n: Completions per step for ``vote``.
+        planner: ``goal``, ``steps`` or ``auto`` (``steps``); ``goal`` falls back to ``steps`` for
+            ``ope`` and when the backend cannot score options.
+        thresholds: The goal planner's decision thresholds.
     """
 
     def __init__(
@@ -99,9 +116,13 @@ class ConceptBot:
         graph_version: str = "",
         planner_method: str = "auto",
         n: int = 5,
+        planner: str = "auto",
+        thresholds: Thresholds | None = None,
     ) -> None:
         if config not in SWITCHES:
             raise ValueError(f"config must be one of {CONFIGS}")
+        if planner not in PLANNERS:
+            raise ValueError(f"planner must be one of {PLANNERS}")
         self.config = config
         self.switches = SWITCHES[config]
         retriever = retriever if self.switches.knowledge else None
@@ -110,6 +131,19 @@ class ConceptBot:
         self.ope = ObjectPropertiesExtractor(self._llm_for("ope"), retriever, store, graph_version)
         self.urp = UserRequestProcessor(self._llm_for("urp"), retriever)
         self.planner = Planner(self._llm_for("planner"), method=planner_method, n=n)
+        if planner == "auto":
+            # The step planner stays the default until the goal planner measures better on the
+            # dev split (docs/planner-redesign.md has the figures so far).
+            planner = "steps"
+        if planner == "goal" and not (self.switches.urp and llm.capabilities.scoring):
+            planner = "steps"  # the goal planner needs the request compiled and options scored
+        self.planner_kind = planner
+        self.goal_planner = GoalPlanner(
+            GoalCompiler(self._llm_for("goal")),
+            Decider(self._llm_for("decide"), FactFinder(retriever)),
+            self.ope if self.switches.ope else None,
+            thresholds,
+        )
 
     def plan(
         self,
@@ -135,7 +169,15 @@ class ConceptBot:
         emit = events or (lambda name, data: None)
         started = time.perf_counter()
         request = check_request(request)
-        trace: dict[str, Any] = {"config": self.config, "request": request, "scene": scene.name}
+        trace: dict[str, Any] = {
+            "config": self.config,
+            "planner_kind": self.planner_kind,
+            "request": request,
+            "scene": scene.name,
+        }
+        if self.planner_kind == "goal":
+            result = self.goal_planner.plan(request, scene, risk, progress, events)
+            return self._from_goal(result, trace, feedback, started)
         usage: dict[str, Usage] = {}
         properties = {}
         mode, why = modes.choose_mode(request, scene.names, force_risk=risk)
@@ -177,6 +219,32 @@ class ConceptBot:
         trace["planner"] = {"method": self.planner.method, "steps": len(steps)}
         usage["total"] = _total(usage, started)
         return Plan(actions, steps, False, None, trace, usage)
+
+    def _from_goal(
+        self, result: GoalPlanResult, trace: dict[str, Any], feedback: Feedback | None, started: float
+    ) -> Plan:
+        trace.update(result.trace)
+        trace["planner"] = {"method": "decide", "steps": len(result.steps)}
+        if result.properties:
+            any_props = next(iter(result.properties.values()))
+            trace["ope"] = {
+                "mode": any_props.mode,
+                "why": "objects the plan moves",
+                "objects": {
+                    n: {"values": p.values, "cached": p.cached, "relations_used": p.relations}
+                    for n, p in result.properties.items()
+                },
+                "retrieval": {},
+            }
+        actions = result.actions
+        if feedback is not None:
+            # Closed loop: keep what ran, never retry what failed, then the rest of the plan.
+            done = list(feedback.executed)
+            rest = [a for a in actions[:-1] if a not in done and a not in feedback.failed_actions]
+            actions = [*done, *rest, "done()"]
+        usage = dict(result.usage)
+        usage["total"] = _total(usage, started)
+        return Plan(actions, result.steps, result.refused, result.reason, trace, usage)
 
 
 def _total(usage: dict[str, Usage], started: float) -> Usage:

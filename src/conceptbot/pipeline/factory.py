@@ -17,6 +17,7 @@ def build_conceptbot(
     planner_method: str = "auto",
     n: int = 5,
     fallback: bool | None = None,
+    planner: str = "auto",
 ) -> ConceptBot:
     """The configured system (raises the layers' clear errors when a part is missing)."""
     store = open_store(settings)
@@ -31,4 +32,4 @@ def build_conceptbot(
         retriever = RelationRetriever(
             graph, embedder, theta if theta is not None else default_theta(embedder.model)
         )
-    return ConceptBot(llm, retriever, config, store, graph_version, planner_method, n)
+    return ConceptBot(llm, retriever, config, store, graph_version, planner_method, n, planner)

@@ -183,15 +183,25 @@ class ObjectPropertiesExtractor:
         return hashlib.sha256(json.dumps(payload).encode()).hexdigest()
 
     def run(
-        self, objects: list[str], mode: str, request: str = "", progress: Progress | None = None
+        self,
+        objects: list[str],
+        mode: str,
+        request: str = "",
+        progress: Progress | None = None,
+        scene_objects: list[str] | None = None,
     ) -> tuple[dict[str, ObjectProperties], dict[str, Retrieval], Usage]:
-        """Properties for every object, the retrievals behind them, and the module's usage."""
+        """Properties for every object, the retrievals behind them, and the module's usage.
+
+        ``scene_objects`` (default: ``objects``) are the objects the Risk Index rates interactions
+        with, when only some of a scene's objects are asked about.
+        """
+        scene_objects = list(scene_objects or objects)
         started = time.perf_counter()
         usage = Usage(calls=0)
         retrievals = self.retriever.retrieve_many(objects, targets_for(mode)) if self.retriever else {}
         results: dict[str, ObjectProperties] = {}
         # The Risk Index judges interactions, so it depends on the other objects and the request.
-        context = json.dumps([sorted(objects), request]) if mode == modes.RISK else ""
+        context = json.dumps([sorted(scene_objects), request]) if mode == modes.RISK else ""
         for name in objects:
             kept = (
                 [edge_text(s.edge) for s in retrievals[name].kept[: self.max_relations]] if retrievals else []
@@ -204,13 +214,13 @@ class ObjectPropertiesExtractor:
             relations = "\n".join(f"- {r}" for r in kept) or "- (none)"
             user = f"Object: {name}\nRelations:\n{relations}\n"
             if mode == modes.RISK:
-                others = ", ".join(o for o in objects if o != name)
+                others = ", ".join(o for o in scene_objects if o != name)
                 user += f"Other objects in the scene: {others}\nUser request: {request}\n"
             request_obj = ChatRequest.of(user, system=prompts.render(f"ope_{mode}"), max_tokens=200)
-            value, response = chat_json(self.llm, request_obj, schema_for(mode, name, objects))
+            value, response = chat_json(self.llm, request_obj, schema_for(mode, name, scene_objects))
             value["object"] = name  # the model sometimes rewrites the name; the scene's name is the truth
             if mode == modes.RISK:
-                value["dangerous_with"] = _known_partners(value["dangerous_with"], objects, name)
+                value["dangerous_with"] = _known_partners(value["dangerous_with"], scene_objects, name)
             usage = usage + response.usage
             if self.store:
                 self.store.put_value("ope", key, value)
