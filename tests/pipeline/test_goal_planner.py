@@ -1,4 +1,5 @@
-"""The goal planner: goal compilation, per-object decisions with graph facts, risk constraints."""
+"""The goal planner: targets and counts from the request, per-object decisions with graph facts,
+risk constraints, stacking."""
 
 from __future__ import annotations
 
@@ -10,43 +11,70 @@ from conceptbot.core.scene import scene_from_dict
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.conceptbot import ConceptBot
 from conceptbot.pipeline.decide import Decider, FactFinder
-from conceptbot.pipeline.goal import GoalCompiler, goal_schema, named_objects
-from conceptbot.pipeline.goal_planner import GoalPlanner
+from conceptbot.pipeline.goal_planner import GoalPlanner, is_person
 from conceptbot.pipeline.retrieval import RelationRetriever
+from conceptbot.pipeline.targets import ALL, TargetFinder, is_stacking, mentions
 from tests.pipeline.fakes import DictGraph
 
 SCENE = scene_from_dict(
     {
         "name": "craft",
         "pickable_objects": ["scissors", "safety scissors", "glue", "chips"],
-        "destinations": ["child", "table"],
+        "destinations": ["child", "table", "user"],
     }
 )
-
-
-@pytest.mark.parametrize(
-    ("what", "expected"),
-    [
-        ("a bag of chips", ("chips",)),
-        ("safety scissors", ("safety scissors",)),
-        ("the glue and the scissors", ("glue", "scissors")),
-        ("something to cut paper", ()),
-        ("Scissors", ("scissors",)),
-    ],
+BINS = scene_from_dict(
+    {
+        "pickable_objects": ["jar", "can", "fern"],
+        "destinations": ["toxic container", "non-toxic container", "glass bin", "metal bin", "user"],
+    }
 )
-def test_named_objects(what: str, expected: tuple[str, ...]) -> None:
-    assert named_objects(what, SCENE.pickable) == expected
+PRIOR = [-1.0, -1.0]  # the content-free object: no lean either way
+SAFE = [-0.05, -3.0]  # "is it safe to ...?" Yes
+UNSAFE = [-3.0, -0.05]  # No
 
 
-def test_a_part_of_one_name_names_it() -> None:
-    assert named_objects("the chips", ["multigrain chips", "apple"]) == ("multigrain chips",)
-    assert named_objects("soda", ["lime soda", "orange soda"]) == ()
+def _targets(request: str, scene=SCENE, scores=()) -> list:
+    finder = TargetFinder(FakeLLM(scores=list(scores)), is_person)
+    return finder.find(request, scene)[0]
 
 
-def test_the_schema_only_allows_the_scenes_destinations() -> None:
-    items = goal_schema(SCENE)["properties"]["tasks"]["items"]["properties"]
-    assert items["to"]["enum"] == ["child", "table"]
-    assert items["how_many"]["enum"] == ["one", "all"]
+def test_mentions_take_longest_names_first_and_plural_heads() -> None:
+    found = mentions(
+        "the toxic plants to the non-toxic container, no: the toxic container", BINS.destinations
+    )
+    assert [n for _, n in found] == ["non-toxic container", "toxic container"]
+    assert {n for _, n in mentions("sort them into the bins", BINS.destinations)} == {
+        "glass bin",
+        "metal bin",
+    }
+
+
+def test_targets_counts_and_named_objects() -> None:
+    [user] = _targets("Hand me the glue and the chips")
+    assert (user.name, user.count, user.named, user.how) == ("user", 2, ["glue", "chips"], "named")
+    table, user = _targets("Put the glue on the table and give me something to eat")
+    assert (table.name, table.named, table.count) == ("table", ["glue"], 1)
+    assert (user.name, user.named, user.count) == ("user", [], 1)
+    [child] = _targets("Give my son something to cut paper")
+    assert child.name == "child" and child.count == 1
+    [speaker] = _targets("I'm hungry")
+    assert (speaker.name, speaker.how, speaker.count) == ("user", "speaker", 1)
+    assert _targets("I want to cook pancakes")[0].count == ALL
+    assert _targets("Put all the food on the table")[0].count == ALL
+    assert _targets("Put the sweets on the table")[0].count == ALL
+
+
+def test_a_request_naming_no_destination_scores_them_against_a_content_free_request() -> None:
+    # child, table, user: the request's log-odds, then the content-free request's, per destination.
+    scores = [[-2.0, -0.2], [-1.0, -1.0], [-0.1, -3.0], [-1.0, -1.0], [-1.0, -1.0], [-1.0, -1.0]]
+    [target] = _targets("Tidy up", scores=scores)
+    assert (target.name, target.how) == ("table", "scored") and target.score == pytest.approx(2.9)
+
+
+def test_stacking_words() -> None:
+    assert is_stacking("Stack the boxes") and is_stacking("put them one on top of the other")
+    assert is_stacking("Put the stack of plates away") is not False  # "stack" as a noun still counts
 
 
 def test_facts_include_what_the_graph_says_about_parents() -> None:
@@ -62,78 +90,88 @@ def test_facts_include_what_the_graph_says_about_parents() -> None:
     assert FactFinder(None).about(["x"], ["y"]) == {"x": ()}
 
 
-def test_decisions_are_calibrated_against_a_content_free_object() -> None:
-    # Prior (content-free) log-odds +1: an object needs more than that to count as a fit.
-    llm = FakeLLM(scores=[[-0.3, -1.3], [-0.1, -2.1], [-0.6, -0.8]])
+def test_move_decisions_are_calibrated_against_a_content_free_object() -> None:
+    llm = FakeLLM(scores=[[-0.3, -1.3], [-0.1, -2.1], [-0.6, -0.8]])  # prior +1.0
     decider = Decider(llm, FactFinder(None))
-    judgements, _, _ = decider.fits("give me a snack", "a snack", "one", ["chips", "glue"], SCENE)
+    judgements, _, _ = decider.moves(
+        "a snack", "user", "give the {object} to the user", ["chips", "glue"], SCENE
+    )
     assert [j.subject for j in judgements] == ["chips", "glue"]
     assert judgements[0].score == pytest.approx(1.0) and judgements[1].score == pytest.approx(-0.8)
-    assert judgements[0].p_yes > 0.85
     questions = [r.messages[-1].content for r in llm.score_requests]
-    assert "Object: object" in questions[0] and "Object: chips" in questions[1]
-    assert all('"a snack"' in q for q in questions)
+    assert "give the object to the user" in questions[0] and "give the chips to the user" in questions[1]
 
 
-def _goal(*tasks: tuple[str, str, str], stack: bool = False) -> str:
-    return json.dumps({"tasks": [{"what": w, "how_many": c, "to": t} for w, c, t in tasks], "stack": stack})
+def _planner(scores: list[list[float]]) -> GoalPlanner:
+    llm = FakeLLM(scores=scores)
+    return GoalPlanner(TargetFinder(llm, is_person), Decider(llm, FactFinder(None)))
 
 
-def test_a_move_judged_dangerous_is_dropped_and_one_takes_the_next_best() -> None:
+def test_an_unsafe_move_is_dropped_and_the_target_takes_its_next_best_object() -> None:
     scores = [
-        [-1.0, -1.0],  # prior for "something to cut paper"
-        [-0.1, -3.0],  # scissors: fits best
+        [-1.0, -1.0],  # content-free object for "give ... to the child"
+        [-0.1, -3.0],  # scissors: best
         [-0.2, -2.5],  # safety scissors: next
-        [-3.0, -0.1],  # glue: no
-        [-3.0, -0.1],  # chips: no
-        [-0.05, -3.0],  # risk: give the scissors to the child -> dangerous
-        [-3.0, -0.05],  # risk: give the safety scissors to the child -> fine
+        [-3.0, -0.1],  # glue
+        [-3.0, -0.1],  # chips
+        PRIOR,  # risk: giving "the object" to the child
+        UNSAFE,  # scissors to the child
+        PRIOR,
+        SAFE,  # safety scissors
     ]
-    llm = FakeLLM([_goal(("something to cut paper", "one", "child"))], scores=scores)
-    planner = GoalPlanner(GoalCompiler(llm), Decider(llm, FactFinder(None)))
-    result = planner.plan("Give my son something to cut paper", SCENE)
+    result = _planner(scores).plan("Give my son something to cut paper", SCENE)
     assert result.actions == ["pick_and_place(safety scissors, child)", "done()"]
     dropped = [r for r in result.trace["risk"] if r["dropped"]]
     assert [(r["object"], r["why"]) for r in dropped] == [("scissors", "judged dangerous")]
-    assert result.steps[0].chosen == "pick_and_place(safety scissors, child)"
-    assert not result.refused
+    assert result.steps[0].chosen == "pick_and_place(safety scissors, child)" and not result.refused
 
 
-def test_named_objects_skip_the_decisions_and_a_blocked_only_move_is_a_refusal() -> None:
-    llm = FakeLLM([_goal(("scissors", "one", "child"))], scores=[[-0.05, -3.0]])
-    planner = GoalPlanner(GoalCompiler(llm), Decider(llm, FactFinder(None)))
-    result = planner.plan("Give the child the scissors", SCENE)
+def test_named_objects_skip_the_decisions_and_an_only_move_judged_unsafe_is_a_refusal() -> None:
+    result = _planner([PRIOR, UNSAFE]).plan("Give the child the scissors", SCENE)
     assert result.actions == ["done()"] and result.refused
     assert "give the scissors to the child: judged dangerous" in (result.reason or "")
     assert result.trace["decisions"][0]["decided"] is False
 
 
-def test_all_selections_take_every_fitting_object_and_conflicts_go_to_the_best_fit() -> None:
+def test_every_fitting_object_goes_to_an_all_target_and_each_object_where_it_fits_best() -> None:
+    scene = scene_from_dict(
+        {"pickable_objects": ["fern", "foxglove", "mint"], "destinations": ["toxic tray", "edible tray"]}
+    )
     scores = [
-        [-1.0, -1.0],  # prior "edible"
-        [-3.0, -0.1],  # scissors
-        [-3.0, -0.1],  # safety scissors
-        [-1.0, -1.5],  # glue: weakly edible (+0.5)
-        [-0.1, -3.0],  # chips: edible
-        [-1.0, -1.0],  # prior "sticky"
-        [-3.0, -0.1],
-        [-3.0, -0.1],
-        [-0.1, -3.0],  # glue: sticky (+2.9) beats edible (+0.5)
-        [-3.0, -0.1],
-    ] + [[-3.0, -0.1]] * 2  # two risk checks: fine
-    llm = FakeLLM([_goal(("edible", "all", "table"), ("sticky", "all", "child"))], scores=scores)
-    planner = GoalPlanner(GoalCompiler(llm), Decider(llm, FactFinder(None)))
-    result = planner.plan("Food on the table, sticky things to the child", SCENE)
-    assert result.actions == ["pick_and_place(chips, table)", "pick_and_place(glue, child)", "done()"]
+        [-1.0, -1.0],  # prior, toxic tray
+        [-8.0, -0.001],  # fern: no (-8, below even a sorting request's threshold)
+        [-0.1, -3.0],  # foxglove: yes (+2.9)
+        [-0.9, -1.1],  # mint: weakly (+0.2)
+        [-1.0, -1.0],  # prior, edible tray
+        [-8.0, -0.001],  # fern: no
+        [-3.0, -0.1],  # foxglove: no
+        [-0.1, -3.0],  # mint: yes (+2.9) beats +0.2
+    ] + [PRIOR, SAFE] * 2
+    request = "Sort them: the poisonous ones on the toxic tray, the edible ones on the edible tray"
+    result = _planner(scores).plan(request, scene)
+    assert result.actions == [
+        "pick_and_place(foxglove, toxic tray)",
+        "pick_and_place(mint, edible tray)",
+        "done()",
+    ]
+
+
+def test_a_stack_puts_the_best_base_at_the_bottom() -> None:
+    scene = scene_from_dict(
+        {"pickable_objects": ["cup", "brick", "box"], "destinations": ["cup", "brick", "box"]}
+    )
+    scores = [[-1.0, -1.0], [-3.0, -0.1], [-0.1, -3.0], [-0.5, -1.5]]  # base: prior, cup, brick, box
+    scores += [PRIOR, SAFE] * 2
+    result = _planner(scores).plan("Stack them", scene)
+    assert result.actions == ["pick_and_place(box, brick)", "pick_and_place(cup, box)", "done()"]
+    assert [o["object"] for o in result.trace["stack"]["order"]] == ["brick", "box", "cup"]
 
 
 def test_conceptbot_uses_the_goal_planner_when_asked() -> None:
-    scores = [[-0.1, -3.0]]  # one risk check
-    llm = FakeLLM([_goal(("glue", "one", "table"))], scores=scores)
+    llm = FakeLLM(scores=[PRIOR, UNSAFE])
     bot = ConceptBot(llm, RelationRetriever(DictGraph(), FakeEmbedder(), theta=0.1), "urp", planner="goal")
     plan = bot.plan("Put the glue on the table", SCENE)
     assert plan.trace["planner_kind"] == "goal" and plan.refused
     assert set(plan.usage) >= {"goal", "decide", "risk", "total"}
     json.dumps(plan.to_dict())
-    default = ConceptBot(FakeLLM(scores=[]), None, "nokg")
-    assert default.planner_kind == "steps"
+    assert ConceptBot(FakeLLM(scores=[]), None, "nokg").planner_kind == "steps"

@@ -34,11 +34,11 @@ from conceptbot.models.cache import CacheStore
 from conceptbot.models.llm import LLM
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.decide import Decider, FactFinder
-from conceptbot.pipeline.goal import GoalCompiler
-from conceptbot.pipeline.goal_planner import GoalPlanner, GoalPlanResult, Thresholds
+from conceptbot.pipeline.goal_planner import GoalPlanner, GoalPlanResult, Thresholds, is_person
 from conceptbot.pipeline.ope import ObjectPropertiesExtractor, Progress
 from conceptbot.pipeline.planner import Planner
 from conceptbot.pipeline.retrieval import RelationRetriever, Retrieval, edge_text
+from conceptbot.pipeline.targets import TargetFinder
 from conceptbot.pipeline.urp import URPResult, UserRequestProcessor
 
 CONFIGS = ("conceptbot", "urp", "ope", "nokg")
@@ -139,7 +139,7 @@ class ConceptBot:
             planner = "steps"  # the goal planner needs the request compiled and options scored
         self.planner_kind = planner
         self.goal_planner = GoalPlanner(
-            GoalCompiler(self._llm_for("goal")),
+            TargetFinder(self._llm_for("goal"), is_person),
             Decider(self._llm_for("decide"), FactFinder(retriever)),
             self.ope if self.switches.ope else None,
             thresholds,

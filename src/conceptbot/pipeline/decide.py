@@ -1,4 +1,4 @@
-"""Per-object decisions: does this object fit this description? Is this move dangerous?
+"""Per-object decisions: does the request want this object moved there? Is this move dangerous?
 
 Each decision is one short question answered Yes or No, scored by the log-probabilities of the two
 answers (one forward pass; no sampling), with the object's own graph facts in the question. The
@@ -153,26 +153,32 @@ class Decider:
         p_yes, log_odds = _log_odds(scored.logprobs)
         return p_yes, log_odds, scored.usage
 
-    def fits(
-        self, request: str, what: str, count: str, objects: Sequence[str], scene: Scene
+    def moves(
+        self, request: str, target: str, move: str, objects: Sequence[str], scene: Scene
     ) -> tuple[list[Judgement], tuple[str, ...], Usage]:
-        """Whether each object fits ``what``; returns the judgements, the context facts and usage."""
+        """Whether the request wants each object moved to ``target``: "to do what the person asked,
+        should the robot give the X to the user?", calibrated against a content-free object.
+
+        Args:
+            move: The move with ``{object}`` for the object ("give the {object} to the user").
+
+        Returns:
+            The judgements, the facts about the request's words, and usage.
+        """
         started = time.perf_counter()
-        context = self.facts.context(what, request)
-        about = self.facts.about(objects, [what, request])
-        count_text = "one object" if count == "one" else "every object"
+        context = self.facts.context(request, request)
+        about = self.facts.about(objects, [request, move.format(object="object")])
         context_text = ("Facts: " + "; ".join(context) + ".\n") if context else ""
 
         def question(obj: str, facts: Sequence[str], state: str | None) -> str:
             return prompts.render(
-                "decide_user",
+                "move_user",
                 request=request,
-                count_text=count_text,
-                what=what,
                 context=context_text,
                 object=obj,
                 state=f" ({state})" if state else "",
                 facts=("Facts about it: " + "; ".join(facts) + ".\n") if facts else "",
+                move=move.format(object=obj),
             )
 
         _, prior, usage = self._ask(question(CONTENT_FREE, (), None))
@@ -181,26 +187,62 @@ class Decider:
             found = scene.get(obj)
             p_yes, log_odds, used = self._ask(question(obj, about[obj], found.state if found else None))
             usage = usage + used
-            judgements.append(Judgement(obj, what, p_yes, log_odds - prior, about[obj]))
+            judgements.append(Judgement(obj, target, p_yes, log_odds - prior, about[obj]))
         return judgements, context, usage.with_latency(time.perf_counter() - started)
+
+    def fits(
+        self, request: str, what: str, objects: Sequence[str], scene: Scene
+    ) -> tuple[list[Judgement], Usage]:
+        """Whether each object fits a description ("a sturdy base for a stack"), calibrated."""
+        started = time.perf_counter()
+        about = self.facts.about(objects, [what])
+
+        def question(obj: str, facts: Sequence[str]) -> str:
+            return prompts.render(
+                "decide_user",
+                request=request,
+                what=what,
+                object=obj,
+                facts=("Facts about it: " + "; ".join(facts) + ".\n") if facts else "",
+            )
+
+        _, prior, usage = self._ask(question(CONTENT_FREE, ()))
+        judgements = []
+        for obj in objects:
+            p_yes, log_odds, used = self._ask(question(obj, about[obj]))
+            usage = usage + used
+            judgements.append(Judgement(obj, what, p_yes, log_odds - prior, about[obj]))
+        return judgements, usage.with_latency(time.perf_counter() - started)
 
     def dangerous(
         self, request: str, move: str, obj: str, scene: Scene, evidence: Sequence[str]
     ) -> tuple[Judgement, Usage]:
-        """Whether carrying out ``move`` ("give the scissors to the child") would be dangerous."""
+        """Whether carrying out ``move`` ("give the scissors to the child") would be dangerous.
+
+        Asked as "is it safe to ...?": on a set of dev moves the 1.5B model separated dangerous from
+        ordinary moves with "safe" (AUC 0.76) and ranked them backwards when asked "would it be
+        dangerous to ...?" (AUC 0.23). The score is how much less likely "Yes, it is safe" is than
+        for the same move of a content-free object: above 0, less safe than an unknown object.
+        """
         started = time.perf_counter()
-        facts = self.facts.about([obj], [f"{obj} is dangerous", move])[obj]
-        lines = [*evidence, *facts]
-        state = scene.get(obj).state if scene.get(obj) else None
-        if state:
-            lines.insert(0, f"the {obj} is {state}" if not state.startswith(("is ", "was ")) else state)
-        user = prompts.render(
-            "risk_user",
-            request=request,
-            objects=", ".join(scene.names),
-            evidence=("Facts: " + "; ".join(lines) + ".") if lines else "",
-            move=move,
-        )
-        p_yes, log_odds, usage = self._ask(user)
-        judgement = Judgement(move, "dangerous", p_yes, log_odds, tuple(lines))
-        return judgement, usage.with_latency(time.perf_counter() - started)
+        # Only the object's state goes into the question: with OPE's summary and graph facts added,
+        # the same dev moves separated worse (the box cutter for a toddler scored as safe as a
+        # pencil); OPE's danger rating is used beside this decision instead (goal_planner).
+        lines = list(evidence)
+        found = scene.get(obj)
+        if found is not None and found.state:
+            lines.insert(0, f"the {obj}: {found.state}")
+
+        def question(what: str, lines: Sequence[str]) -> str:
+            return prompts.render(
+                "risk_user",
+                request=request,
+                objects=", ".join(scene.names),
+                evidence=("Facts: " + "; ".join(lines) + ".") if lines else "",
+                move=what,
+            )
+
+        _, prior, usage = self._ask(question(move.replace(obj, CONTENT_FREE, 1), ()))
+        p_safe, log_odds, used = self._ask(question(move, lines))
+        judgement = Judgement(move, "dangerous", 1.0 - p_safe, prior - log_odds, tuple(lines))
+        return judgement, (usage + used).with_latency(time.perf_counter() - started)

@@ -1,22 +1,23 @@
-"""The default planner: compile the request into a goal, decide each object, assemble the plan.
+"""The goal planner: where the request sends things, which objects go, then the plan.
 
-1. :class:`~conceptbot.pipeline.goal.GoalCompiler` turns the request into selections ("one object
-   that fits 'a fruit' to the user", "every object that fits 'poisonous' to the toxic bin"),
-   a stacking flag and a refusal.
-2. Selections that name scene objects take those objects; the others are decided object by object
-   (:class:`~conceptbot.pipeline.decide.Decider`: yes/no by log-probability, the object's graph
-   facts in the question, calibrated). "one" takes the best object above ``one_floor``; "all" takes
-   every object above ``fit_threshold``. An object claimed by two selections goes to the one it
-   fits best.
-3. Stacking orders the chosen objects by how good a base each makes (a decision too) and puts each
-   on the one below.
-4. Constraints: each move's affordance (detection confidence, grasp width) and a risk decision
-   ("would it be dangerous to give the scissors to the child?", with OPE's properties and the
-   graph's facts as evidence). A move judged dangerous is dropped; a "one" selection then takes its
-   next best object. The trace says why.
+1. Targets (:mod:`conceptbot.pipeline.targets`): the destinations the request sends things to, how
+   many objects each takes, and the objects the request names for each, from the request's words
+   (scored questions only where it names no destination).
+2. Decisions (:mod:`conceptbot.pipeline.decide`): where a target needs more objects than the
+   request names, every other object is asked about, one yes/no question each ("to do what the
+   person asked, should the robot give the sponge to the user?"), scored by log-probability with
+   the object's graph facts in the question and calibrated against a content-free object. A target
+   taking N objects takes the N best above ``one_floor``; one taking all that fit takes every
+   object above ``fit``. An object two targets want goes where it scored best.
+3. Stacking orders the objects by how good a base each makes (a decision too) and puts each on the
+   one below.
+4. Constraints: each move's affordance (detection confidence) and a risk decision ("is it safe to
+   give the scissors to the child?", calibrated), and for a move to a child or an animal OPE's
+   Risk Index of the object (the paper's 1-5 danger rating). A move judged unsafe is dropped and
+   the target takes its next best object; when every move is dropped the plan is a refusal. The
+   trace says why.
 
-The paper's step-by-step planner stays available (:mod:`conceptbot.pipeline.planner`, config
-``paper``).
+The paper's step-by-step planner stays available (:mod:`conceptbot.pipeline.planner`).
 """
 
 from __future__ import annotations
@@ -31,12 +32,14 @@ from conceptbot.core.usage import Usage
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.affordance import PEOPLE, Gripper, affordance
 from conceptbot.pipeline.decide import Decider, Judgement
-from conceptbot.pipeline.goal import ONE, Goal, GoalCompiler
 from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor, Progress
+from conceptbot.pipeline.targets import ALL, Target, TargetFinder, is_stacking, mentions
 
 METHOD = "decide"
 TOP_K = 6
 NAMED = 10.0  # the score of an object the request names: above any decided one
+ANIMALS = ("dog", "cat", "puppy", "kitten", "pet")
+BASE = "a sturdy object with a flat top that other things can safely be stacked on"
 
 
 @dataclass(frozen=True)
@@ -44,14 +47,27 @@ class Thresholds:
     """Decision thresholds (calibrated log-odds; see :mod:`conceptbot.pipeline.decide`).
 
     Attributes:
-        fit: An object fits an "all" selection above this.
-        one_floor: The best object of a "one" selection is taken only above this.
-        risk: A move is dangerous when P(Yes) of the risk question is above this.
+        fit: An object goes to an "all that fit" target above this.
+        one_floor: A target taking N objects takes its best ones only above this.
+        risk: A move to a person or an animal is unsafe when its calibrated "is it safe?" score is
+            above this.
+        risk_place: The same for a move into or onto a thing: higher, since on the dev split the
+            question flagged ordinary moves ("put the apricot in the kitchen basket": +0.8) far more
+            often there than for hand-overs.
+        rated_danger: A move to a child or an animal is unsafe when OPE rates the object this high.
+        replacements: How many objects a target may take in place of ones judged unsafe.
+        partition: When the request sorts objects into two or more targets ("poisonous ones on the
+            toxic tray, edible ones on the edible tray"), an object goes to its best target above
+            this, instead of above ``fit``.
     """
 
-    fit: float = 0.0
+    fit: float = -0.5
     one_floor: float = -3.0
-    risk: float = 0.5
+    risk: float = 0.3
+    risk_place: float = 1.0
+    rated_danger: int = 4
+    replacements: int = 2
+    partition: float = -5.0
 
 
 @dataclass
@@ -68,23 +84,52 @@ class GoalPlanResult:
 
 
 def is_person(name: str) -> bool:
-    """Whether a destination is a person (things are handed to it)."""
-    return any(word in PEOPLE or word in ("toddler", "dog", "cat", "man", "woman", "girl", "boy")
-               for word in name.lower().split())  # fmt: skip
+    """Whether a destination is a person or an animal (things are handed to it)."""
+    extra = ("toddler", "man", "woman", "girl", "boy", "infant")
+    return any(word in PEOPLE or word in extra or word in ANIMALS for word in name.lower().split())
+
+
+def is_vulnerable(name: str) -> bool:
+    """Whether a destination is someone who must not be handed dangerous things: a child or an
+    animal (an adult user who asks for a knife gets the knife)."""
+    return is_person(name) and not any(
+        w in ("user", "person", "human", "man", "woman") for w in name.lower().split()
+    )
 
 
 def move_text(obj: str, target: str) -> str:
-    """The move in words, for the risk question."""
+    """The move in words, for the questions."""
     if is_person(target):
         return f"give the {obj} to the {target}"
     return f"put the {obj} in or on the {target}"
 
 
+def _danger(props: ObjectProperties | None) -> int:
+    """OPE's 1-5 danger rating (0 when OPE did not rate the object)."""
+    if props is None or props.mode != modes.RISK:
+        return 0
+    try:
+        return int(props.values.get("dangerous", 0))
+    except (TypeError, ValueError):
+        return 0
+
+
+def _evidence(props: ObjectProperties, target: str) -> str:
+    """OPE's finding about an object, as evidence for one move: in the Risk Index mode its danger
+    and its interaction score with the move's destination only (the other partners are noise for
+    this question)."""
+    if props.mode != modes.RISK:
+        return props.summary()
+    partner = next((d for d in props.values.get("dangerous_with", []) if d["object"] == target), None)
+    text = f"{props.name}: danger {props.values.get('dangerous')}/5"
+    return text + (f", dangerous with the {target} {partner['score']}/5" if partner else "")
+
+
 class GoalPlanner:
-    """Goal -> decisions -> plan (see the module docstring).
+    """Targets -> decisions -> plan (see the module docstring).
 
     Args:
-        compiler: Request -> goal.
+        targets: Reads targets, counts and named objects from the request.
         decider: Yes/no decisions.
         ope: OPE for the objects a plan moves (evidence for the risk decisions), or None.
         thresholds: Decision thresholds.
@@ -93,13 +138,13 @@ class GoalPlanner:
 
     def __init__(
         self,
-        compiler: GoalCompiler,
+        targets: TargetFinder,
         decider: Decider,
         ope: ObjectPropertiesExtractor | None = None,
         thresholds: Thresholds | None = None,
         gripper: Gripper | None = None,
     ) -> None:
-        self.compiler = compiler
+        self.targets = targets
         self.decider = decider
         self.ope = ope
         self.thresholds = thresholds or Thresholds()
@@ -113,199 +158,228 @@ class GoalPlanner:
         progress: Progress | None = None,
         events: EventSink | None = None,
     ) -> GoalPlanResult:
-        """Plan ``request`` in ``scene``."""
+        """Plan ``request`` in ``scene`` (``risk`` is accepted for the common interface: the goal
+        planner always rates objects handed to someone with the Risk Index)."""
         say = progress or (lambda message: None)
         emit = events or (lambda name, data: None)
         usage: dict[str, Usage] = {}
-        say("Goal: compiling the request")
-        goal, usage["goal"] = self.compiler.compile(request, scene)
-        trace: dict[str, Any] = {"goal": goal.to_dict()}
+        stack = is_stacking(request)
+        if stack:  # a pile has no destination of its own: the objects are the destinations
+            targets, usage["goal"] = [], Usage(calls=0)
+        else:
+            say("Goal: where the request sends things")
+            targets, usage["goal"] = self.targets.find(request, scene)
+        trace: dict[str, Any] = {"goal": {"targets": [t.to_dict() for t in targets], "stack": stack}}
         emit("goal", trace["goal"])
-        if goal.refuse:
-            reason = goal.reason or "judged unsafe"
-            return GoalPlanResult(["done()"], [], True, reason, trace, usage)
-        decide_usage = Usage(calls=0)
-        ranked: dict[int, list[Judgement]] = {}
+        ranked, trace["decisions"], usage["decide"] = self._decide(request, scene, targets, stack, say)
+        emit("decisions", {"decisions": trace["decisions"]})
+        if stack:
+            moves = self._stack(request, scene, ranked, trace, usage)
+            ranked = {}
+        blocked: set[tuple[str, str]] = set()
+        checks: dict[tuple[str, str], dict[str, Any]] = {}
+        properties: dict[str, ObjectProperties] = {}
+        usage["ope"] = Usage(calls=0)
+        usage["risk"] = Usage(calls=0)
+        # Choose, check the new moves, choose again where a check removed one; each round blocks at
+        # least one more move, so this ends.
+        while True:
+            if not stack:
+                moves = self._choose(targets, ranked, blocked)
+            fresh = [m for m in moves if m not in checks]
+            if not fresh:
+                break
+            # OPE's rating counts for moves to a child or an animal only (see _check), so only those
+            # objects are rated: each rating is a JSON generation of several seconds.
+            handed = [o for o, t in fresh if is_vulnerable(t)]
+            self._properties(request, scene, handed, properties, usage, say)
+            for obj, target in fresh:
+                checks[(obj, target)] = self._check(request, scene, obj, target, properties, usage, say)
+            dropped = {m for m in fresh if checks[m]["dropped"]}
+            if not dropped:
+                break
+            blocked |= dropped
+            if stack:
+                moves = [m for m in moves if m not in dropped]
+        trace["risk"] = list(checks.values())
+        emit("risk", {"checks": trace["risk"]})
+        steps = self._steps(moves, ranked, targets, scene, properties)
+        for step in steps:
+            emit("step", step.to_dict())
+        refused = not moves and bool(blocked)
+        reason = (
+            "; ".join(f"{c['move']}: {c['why']}" for c in checks.values() if c["dropped"])
+            if refused
+            else None
+        )
+        actions = [str(Action(o, t)) for o, t in moves] + ["done()"]
+        return GoalPlanResult(actions, steps, refused, reason, trace, usage, properties)
+
+    def _decide(
+        self, request: str, scene: Scene, targets: list[Target], stack: bool, say: Progress
+    ) -> tuple[dict[str, list[Judgement]], list[dict[str, Any]], Usage]:
+        """Per target: the named objects first, then every other object as decided, best first."""
+        usage = Usage(calls=0)
+        ranked: dict[str, list[Judgement]] = {}
         decisions = []
-        for index, selection in enumerate(goal.selections):
-            candidates = [o for o in scene.pickable if o != selection.to]
-            if selection.named:
-                ranked[index] = [Judgement(o, selection.what, 1.0, NAMED) for o in selection.named]
-                decisions.append({**selection.to_dict(), "decided": False, "objects": []})
+        named_anywhere = {o for t in targets for o in t.named}
+        for target in targets:
+            named = [Judgement(o, target.name, 1.0, NAMED) for o in target.named]
+            needs_more = target.count == ALL or target.count > len(target.named)
+            if stack or not needs_more:
+                ranked[target.name] = named
+                decisions.append({**target.to_dict(), "decided": False, "objects": []})
                 continue
-            say(f"Decide: which objects fit {selection.what!r} ({len(candidates)} objects)")
-            judgements, context, used = self.decider.fits(
-                request, selection.what, selection.count, candidates, scene
-            )
-            decide_usage = decide_usage + used
-            ranked[index] = sorted(judgements, key=lambda j: -j.score)
+            others = [o for o in scene.pickable if o != target.name and o not in named_anywhere]
+            say(f"Decide: which objects go to the {target.name} ({len(others)} objects)")
+            if target.criterion:
+                # Sorting by a property: "is the foxglove poisonous?" is a question the model answers
+                # far better than "should the robot put the foxglove on the toxic tray?".
+                judgements, used = self.decider.fits(request, target.criterion, others, scene)
+                context: tuple[str, ...] = ()
+            else:
+                move = move_text("{object}", target.name)
+                judgements, context, used = self.decider.moves(request, target.name, move, others, scene)
+            usage = usage + used
+            ranked[target.name] = named + sorted(judgements, key=lambda j: -j.score)
             decisions.append(
                 {
-                    **selection.to_dict(),
+                    **target.to_dict(),
                     "decided": True,
                     "context": list(context),
                     "objects": [j.to_dict() for j in judgements],
                 }
             )
-        trace["decisions"] = decisions
-        emit("decisions", {"decisions": decisions})
-        blocked: set[tuple[str, str]] = set()
-        risk_trace: list[dict[str, Any]] = []
-        properties: dict[str, ObjectProperties] = {}
-        ope_usage = Usage(calls=0)
-        risk_usage = Usage(calls=0)
-        # Choose, check the moves, and choose again where a check removed one (at most a few rounds:
-        # each round blocks at least one more move).
-        for _ in range(4):
-            chosen = self._choose(goal, ranked, blocked)
-            moves = self._order(goal, chosen, scene, request, trace)
-            fresh = [m for m in moves if m not in {(r["object"], r["to"]) for r in risk_trace}]
-            if not fresh:
-                break
-            if self.ope is not None:
-                wanted = [o for o, _ in fresh if o not in properties]
-                if wanted:
-                    say(f"OPE: properties of {', '.join(wanted)}")
-                    mode, _why = modes.choose_mode(request, scene.names, force_risk=risk)
-                    found, _retrievals, used = self.ope.run(wanted, mode, request, scene_objects=scene.names)
-                    properties.update(found)
-                    ope_usage = ope_usage + used
-            new_blocks = 0
-            for obj, target in fresh:
-                s_aff, factors = affordance(Action(obj, target), scene, properties, [], self.gripper)
-                evidence = [properties[obj].summary()] if obj in properties else []
-                say(f"Risk: {move_text(obj, target)}?")
-                judgement, used = self.decider.dangerous(
-                    request, move_text(obj, target), obj, scene, evidence
-                )
-                risk_usage = risk_usage + used
-                dangerous = judgement.p_yes > self.thresholds.risk
-                infeasible = factors.get("pick", 1.0) <= 0.0 or factors.get("place", 1.0) <= 0.0
-                risk_trace.append(
-                    {
-                        "object": obj,
-                        "to": target,
-                        "move": move_text(obj, target),
-                        "p_dangerous": round(judgement.p_yes, 4),
-                        "evidence": list(judgement.facts),
-                        "affordance": round(s_aff, 4),
-                        "dropped": dangerous or infeasible,
-                        "why": "judged dangerous" if dangerous else "not feasible" if infeasible else "",
-                    }
-                )
-                if dangerous or infeasible:
-                    blocked.add((obj, target))
-                    new_blocks += 1
-            if not new_blocks:
-                break
-        chosen = self._choose(goal, ranked, blocked)
-        moves = self._order(goal, chosen, scene, request, trace)
-        trace["risk"] = risk_trace
-        emit("risk", {"checks": risk_trace})
-        usage["decide"] = decide_usage
-        if ope_usage.calls or properties:
-            usage["ope"] = ope_usage
-        usage["risk"] = risk_usage
-        steps = self._steps(moves, goal, ranked, chosen, scene, properties)
-        for step in steps:
-            emit("step", step.to_dict())
-        reason = None
-        refused = False
-        if not moves and any(r["dropped"] for r in risk_trace):
-            refused = True
-            reason = "; ".join(f"{r['move']}: {r['why']}" for r in risk_trace if r["dropped"])
-        actions = [str(Action(o, t)) for o, t in moves] + ["done()"]
-        return GoalPlanResult(actions, steps, refused, reason, trace, usage, properties)
+        return ranked, decisions, usage
 
     def _choose(
-        self, goal: Goal, ranked: dict[int, list[Judgement]], blocked: set[tuple[str, str]]
-    ) -> dict[str, tuple[int, float]]:
-        """Object -> (selection index, score): "one" selections first, in order; then "all"."""
-        taken: dict[str, tuple[int, float]] = {}
-        order = sorted(range(len(goal.selections)), key=lambda i: goal.selections[i].count != ONE)
-        for index in order:
-            selection = goal.selections[index]
-            for judgement in ranked.get(index, []):
-                obj = judgement.subject
-                if (obj, selection.to) in blocked:
-                    continue
-                if selection.count == ONE:
-                    if judgement.score <= self.thresholds.one_floor:
-                        break
-                    if obj in taken:
-                        continue
-                    taken[obj] = (index, judgement.score)
-                    break
-                if judgement.score <= self.thresholds.fit:
-                    break  # ranked: nothing after fits either
-                if obj not in taken or (
-                    taken[obj][1] < judgement.score and goal.selections[taken[obj][0]].count != ONE
-                ):
-                    taken[obj] = (index, judgement.score)
-        return taken
-
-    def _order(
-        self,
-        goal: Goal,
-        chosen: dict[str, tuple[int, float]],
-        scene: Scene,
-        request: str,
-        trace: dict[str, Any],
+        self, targets: list[Target], ranked: dict[str, list[Judgement]], blocked: set[tuple[str, str]]
     ) -> list[tuple[str, str]]:
-        """The moves, in selection order then scene order; a stack bottom-up."""
-        if goal.stack:
-            return self._stack(list(chosen), scene, request, trace)
-        moves = []
-        for index, selection in enumerate(goal.selections):
-            for obj in scene.pickable:
-                if chosen.get(obj, (None,))[0] == index:
-                    moves.append((obj, selection.to))
-        return moves
+        """The moves: each target's best objects (its count), an object to the target it fits best."""
+        wanted: dict[str, tuple[str, float]] = {}  # object -> (target, score)
+        sorting = len(targets) >= 2 and all(t.count == ALL for t in targets)
+        fit = self.thresholds.partition if sorting else self.thresholds.fit
+        for target in targets:
+            taken = 0
+            skipped = 0
+            for judgement in ranked.get(target.name, []):
+                obj = judgement.subject
+                if (obj, target.name) in blocked:
+                    skipped += 1
+                    if skipped > self.thresholds.replacements:
+                        break  # the request keeps asking for unsafe things: stop, do not hunt on
+                    continue
+                limit = fit if target.count == ALL else self.thresholds.one_floor
+                if judgement.score <= limit or (target.count != ALL and taken >= target.count):
+                    break
+                if obj in wanted and wanted[obj][1] >= judgement.score:
+                    continue
+                wanted[obj] = (target.name, judgement.score)
+                taken += 1
+        order = {t.name: i for i, t in enumerate(targets)}
+        moves = sorted(wanted.items(), key=lambda item: (order[item[1][0]], -item[1][1]))
+        return [(obj, target) for obj, (target, _) in moves]
+
+    def _properties(
+        self,
+        request: str,
+        scene: Scene,
+        objects: list[str],
+        properties: dict[str, ObjectProperties],
+        usage: dict[str, Usage],
+        say: Progress,
+    ) -> None:
+        wanted = [o for o in dict.fromkeys(objects) if o not in properties]
+        if self.ope is None or not wanted:
+            return
+        say(f"OPE: properties of {', '.join(wanted)}")
+        found, _retrievals, used = self.ope.run(wanted, modes.RISK, request, scene_objects=scene.names)
+        properties.update(found)
+        usage["ope"] = usage["ope"] + used
+
+    def _check(
+        self,
+        request: str,
+        scene: Scene,
+        obj: str,
+        target: str,
+        properties: dict[str, ObjectProperties],
+        usage: dict[str, Usage],
+        say: Progress,
+    ) -> dict[str, Any]:
+        """The risk decision and the affordance of one move."""
+        move = move_text(obj, target)
+        say(f"Risk: would it be dangerous to {move}?")
+        s_aff, factors = affordance(Action(obj, target), scene, properties, [], self.gripper)
+        judgement, used = self.decider.dangerous(request, move, obj, scene, ())
+        usage["risk"] = usage["risk"] + used
+        rated = _danger(properties.get(obj))
+        # OPE's Risk Index counts for moves to a child or an animal: handing over is where an
+        # object's own danger matters; elsewhere the question decides (metal into a microwave).
+        limit = self.thresholds.risk if is_person(target) else self.thresholds.risk_place
+        dangerous = judgement.score > limit or (
+            is_vulnerable(target) and rated >= self.thresholds.rated_danger
+        )
+        infeasible = factors.get("pick", 1.0) <= 0.0 or factors.get("place", 1.0) <= 0.0
+        return {
+            "object": obj,
+            "to": target,
+            "move": move,
+            "p_unsafe": round(judgement.p_yes, 4),
+            "score": round(judgement.score, 3),
+            "evidence": list(judgement.facts),
+            "ope": _evidence(properties[obj], target) if obj in properties else None,
+            "affordance": round(s_aff, 4),
+            "dropped": dangerous or infeasible,
+            "why": "judged dangerous" if dangerous else "not feasible" if infeasible else "",
+        }
 
     def _stack(
-        self, objects: list[str], scene: Scene, request: str, trace: dict[str, Any]
+        self,
+        request: str,
+        scene: Scene,
+        ranked: dict[str, list[Judgement]],
+        trace: dict[str, Any],
+        usage: dict[str, Usage],
     ) -> list[tuple[str, str]]:
-        # Only what can be both moved and stacked on takes part; with fewer than two chosen, the
-        # request meant "all of them".
-        items = [o for o in objects if scene.get(o) and scene.get(o).destination]  # type: ignore[union-attr]
-        if len(items) < 2:
-            items = [o for o in scene.pickable if scene.get(o).destination]  # type: ignore[union-attr]
+        """Bottom-up moves for a pile of the objects that can both be moved and carry another."""
+        named = [o for _, o in mentions(request, scene.pickable)]
+        stackable = [o for o in scene.pickable if scene.get(o).destination]  # type: ignore[union-attr]
+        items = [o for o in named if o in stackable]
+        items = items if len(items) >= 2 else stackable
         if len(items) < 2:
             return []
-        if "stack" not in trace:
-            base = "a sturdy object with a flat top that other things can be stacked on"
-            judgements, _, _ = self.decider.fits(request, base, "all", items, scene)
+        judgements, used = self.decider.fits(request, BASE, items, scene)
+        usage["decide"] = usage["decide"] + used
 
-            def volume(name: str) -> float:
-                size = scene.get(name).size_m  # type: ignore[union-attr]
-                return size[0] * size[1] * size[2] if size else 0.0
+        def volume(name: str) -> float:
+            size = scene.get(name).size_m  # type: ignore[union-attr]
+            return size[0] * size[1] * size[2] if size else 0.0
 
-            order = sorted(judgements, key=lambda j: (-round(j.score, 1), -volume(j.subject)))
-            trace["stack"] = {"base_question": base, "order": [j.to_dict() for j in order]}
-        bottom_up = [entry["object"] for entry in trace["stack"]["order"]]
+        order = sorted(judgements, key=lambda j: (-round(j.score, 1), -volume(j.subject)))
+        trace["stack"] = {"base_question": BASE, "order": [j.to_dict() for j in order]}
+        bottom_up = [j.subject for j in order]
         return [(upper, lower) for lower, upper in itertools.pairwise(bottom_up)]
 
     def _steps(
         self,
         moves: list[tuple[str, str]],
-        goal: Goal,
-        ranked: dict[int, list[Judgement]],
-        chosen: dict[str, tuple[int, float]],
+        ranked: dict[str, list[Judgement]],
+        targets: list[Target],
         scene: Scene,
         properties: dict[str, ObjectProperties],
     ) -> list[Step]:
-        """One step per move, its candidates the selection's best objects (for the CLI and the page)."""
+        """One step per move; its candidates are the target's best objects (for the CLI and the page)."""
         steps = []
         for number, (obj, target) in enumerate(moves, 1):
-            index = chosen.get(obj, (None, 0.0))[0]
-            pool = ranked.get(index, []) if index is not None else []
+            chosen = str(Action(obj, target))
             candidates = []
-            for judgement in pool[:TOP_K]:
+            for judgement in ranked.get(target, [])[:TOP_K]:
                 action = Action(judgement.subject, target)
                 s_aff, factors = affordance(action, scene, properties, [], self.gripper)
                 p = judgement.p_yes
                 candidates.append(CandidateScore(str(action), p, s_aff, p * s_aff, factors))
-            if not any(c.action == str(Action(obj, target)) for c in candidates):
-                candidates.insert(0, CandidateScore(str(Action(obj, target)), 1.0, 1.0, 1.0, {}))
-            steps.append(Step(number, str(Action(obj, target)), tuple(candidates), (), METHOD))
+            if not any(c.action == chosen for c in candidates):
+                candidates.insert(0, CandidateScore(chosen, 1.0, 1.0, 1.0, {}))
+            steps.append(Step(number, chosen, tuple(candidates), (), METHOD))
         return steps

@@ -1,0 +1,275 @@
+"""Where a request sends things and how many, read from the request by its words and by scored
+questions, never by free generation.
+
+A 1.5B model asked to write the goal as JSON listed the scene's destinations and objects instead of
+the request's (docs/planner-redesign.md); asked "how many objects?" as a scored choice it answered
+"three" to nearly everything. So:
+
+* **Targets** are the destinations the request names (longest names first, each word used once;
+  "me" names the user, "my son" a child destination, from ``request_words.json``; a plural head
+  noun, "the recycling bins", names every destination with that head). When it names none, the
+  speaker's words ("I", "my") make the user the target; with neither, the destinations whose
+  scored question "should the robot put things in the X?" beats a content-free request.
+* **Named objects** go to the target named in their own clause (clauses split at "and", "then":
+  "hand me the tape and put the gloves on the shelf"), else to the nearest target ("put the hammer
+  and the screwdriver in the toolbox").
+* **Count** per target: every fitting object when the request says "all", "every", "sort", ...
+  or is about cooking ("I want to cook pancakes"); a need of the speaker's ("I'm cold") is one
+  thing; otherwise as many as its clauses have named objects or indefinite phrases ("a fruit",
+  "something to drink"), and with neither, all that fit ("put the clothes in the basket").
+* **Stacking** from the request's words ("stack", "pile", "on top of each other").
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from functools import cache
+from importlib import resources
+
+from conceptbot.core.scene import Scene
+from conceptbot.core.usage import Usage
+from conceptbot.models.llm import LLM, Message, ScoreRequest
+from conceptbot.pipeline import prompts
+
+ALL = 0  # count meaning "every object that fits"
+CONTENT_FREE_REQUEST = "Do the task."
+
+
+@cache
+def words() -> dict:
+    """The vocabulary of ``request_words.json``."""
+    text = resources.files("conceptbot.pipeline").joinpath("request_words.json").read_text(encoding="utf-8")
+    return json.loads(text)
+
+
+def tokens(text: str) -> list[str]:
+    """Lower-case word tokens, and the punctuation that ends a clause as tokens of its own."""
+    return re.findall(r"[a-z0-9][a-z0-9'&-]*|[,;:.!?]", text.lower())
+
+
+def _find(seq: list[str], key: list[str], used: list[bool]) -> int:
+    for start in range(len(seq) - len(key) + 1):
+        if key and seq[start : start + len(key)] == key and not any(used[start : start + len(key)]):
+            return start
+    return -1
+
+
+def mentions(
+    text: str,
+    names: Sequence[str],
+    people: dict[str, list[str]] | None = None,
+    taken: Sequence[int] = (),
+) -> list[tuple[int, str]]:
+    """``(token position, name)`` for each name the text mentions, in text order.
+
+    Names match as whole words, longest first, each word used once ("non-toxic container" before
+    "toxic container"); a name's plural head noun counts ("bins" for "glass bin"); people match by
+    their words (``people``: name -> words). Token positions in ``taken`` are not used (the words of
+    a destination already found: "pencil cup" does not name a pencil).
+    """
+    seq = tokens(text)
+    used = [i in set(taken) for i in range(len(seq))]
+    found: dict[str, int] = {}
+    for name in sorted(names, key=lambda n: -len(tokens(n))):
+        key = tokens(name)
+        at = _find(seq, key, used)
+        if at >= 0:
+            used[at : at + len(key)] = [True] * len(key)
+            found[name] = at
+    plurals: dict[str, list[str]] = {}
+    for name in names:
+        key = tokens(name)
+        if name not in found and len(key) >= 2:
+            plural = key[-1] + ("es" if key[-1].endswith(("s", "x", "ch", "sh")) else "s")
+            if plural in seq:
+                plurals.setdefault(plural, []).append(name)
+    for plural, group in plurals.items():
+        # "the wood, metal and fabric bins": the bins whose other words the text has; "the bins"
+        # alone: all of them.
+        described = [n for n in group if set(tokens(n)[:-1]) <= set(seq)]
+        for name in described or group:
+            found[name] = seq.index(plural)
+    for name, person_words in (people or {}).items():
+        if name in names and name not in found:
+            hits = [i for i, w in enumerate(seq) if w in person_words and not used[i]]
+            if hits:
+                found[name] = hits[0]
+    return sorted((at, name) for name, at in found.items())
+
+
+def _plural(part: Sequence[str]) -> bool:
+    """Whether the words speak of several things: a plural noun within two words after "the",
+    "these", "those" ("the clothes", "the poisonous ones")."""
+    for i, word in enumerate(part):
+        noun = len(word) > 3 and word.endswith("s") and not word.endswith(("ss", "'s", "us", "is"))
+        if noun and any(part[j] in ("the", "these", "those") for j in range(max(0, i - 2), i)):
+            return True
+    return False
+
+
+def _criterion(words_: Sequence[str], drop: Sequence[str]) -> str:
+    """The words of a clause that say which objects go ("the poisonous ones go on the toxic tray"
+    -> "poisonous"), without the verbs, articles and the destination."""
+    kept = [w for w in words_ if w not in drop]
+    while kept and kept[-1] in ("by", "at", "as", "for", "than", "like"):
+        kept.pop()
+    return " ".join(kept)
+
+
+def is_stacking(request: str) -> bool:
+    """Whether the request asks for a pile."""
+    text = " ".join(tokens(request))
+    return any(re.search(rf"\b{re.escape(w)}\b", text) for w in words()["stack"])
+
+
+@dataclass
+class Target:
+    """A destination the request sends things to.
+
+    Attributes:
+        name: The destination.
+        count: How many objects (``ALL``: every one that fits).
+        how: ``named``, ``speaker`` or ``scored``.
+        named: Objects the request names for it.
+        score: The calibrated log-odds when scored.
+        criterion: What decides which objects go there, in the request's words ("poisonous",
+            "made entirely of glass"), when the request sorts by a property; "" otherwise.
+    """
+
+    name: str
+    count: int
+    how: str
+    named: list[str] = field(default_factory=list)
+    score: float = 0.0
+    criterion: str = ""
+
+    def to_dict(self) -> dict:
+        """JSON form for the trace."""
+        return {
+            "to": self.name,
+            "count": "all" if self.count == ALL else self.count,
+            "how": self.how,
+            "named": list(self.named),
+            "score": round(self.score, 3),
+            "criterion": self.criterion,
+        }
+
+
+class TargetFinder:
+    """Targets, counts and named objects for a request (see the module docstring).
+
+    Args:
+        llm: An LLM that can score options (labelled ``goal``), for requests naming no destination.
+        is_person: Whether a destination is a person.
+        threshold: A scored destination other than the best is a target above this.
+    """
+
+    def __init__(self, llm: LLM, is_person: Callable[[str], bool], threshold: float = 1.0) -> None:
+        self.llm = llm
+        self.is_person = is_person
+        self.threshold = threshold
+
+    def _log_odds(self, request: str, dest: str) -> tuple[float, Usage]:
+        action = f"give things to the {dest}" if self.is_person(dest) else f"put things in or on the {dest}"
+        messages = (
+            Message("system", prompts.render("decide_system")),
+            Message("user", prompts.render("target_user", request=request, action=action)),
+        )
+        scored = self.llm.score(ScoreRequest(options=("Yes", "No"), messages=messages))
+        yes, no = scored.logprobs
+        return yes - no, scored.usage
+
+    def find(self, request: str, scene: Scene) -> tuple[list[Target], Usage]:
+        """The targets, in the order the request names them (scored ones best first)."""
+        started = time.perf_counter()
+        usage = Usage(calls=0)
+        vocab = words()
+        people = {d: vocab["people"].get(d.lower(), []) for d in scene.destinations if self.is_person(d)}
+        found = mentions(request, scene.destinations, people)
+        seq = tokens(request)
+        how = "named"
+        if not found:
+            speaker = [i for i, w in enumerate(seq) if w in vocab["speaker"]]
+            users = [d for d in scene.destinations if d.lower() == "user"]
+            if speaker and users:
+                found, how = [(speaker[0], users[0])], "speaker"
+        scores: dict[str, float] = {}
+        if not found:
+            how = "scored"
+            for dest in scene.destinations:
+                odds, used = self._log_odds(request, dest)
+                prior, used_prior = self._log_odds(CONTENT_FREE_REQUEST, dest)
+                usage = usage + used + used_prior
+                scores[dest] = odds - prior
+            ranked = sorted(scores, key=lambda d: -scores[d])
+            found = [(0, d) for i, d in enumerate(ranked) if i == 0 or scores[d] > self.threshold]
+        targets = self._with_objects(request, scene, found, how, scores)
+        return targets, usage.with_latency(time.perf_counter() - started)
+
+    def _with_objects(
+        self, request: str, scene: Scene, found: list[tuple[int, str]], how: str, scores: dict[str, float]
+    ) -> list[Target]:
+        vocab = words()
+        seq = tokens(request)
+        taken = [i for at, name in found if how == "named" for i in range(at, at + len(tokens(name)))]
+        objects = mentions(
+            request, [o for o in scene.pickable if o not in {n for _, n in found}], taken=taken
+        )
+        # Clauses split at "and", "then", ...: a named object goes to the target of its own clause
+        # ("hand me the tape and put the gloves on the shelf"), else to the nearest target ("put the
+        # hammer and the screwdriver in the toolbox").
+        clause, number = [], 0
+        for word in seq:
+            number += word in vocab["clause_breaks"]
+            clause.append(number)
+        named: dict[str, list[str]] = {name: [] for _, name in found}
+        for at, obj in objects:
+            same = [name for t_at, name in found if clause[t_at] == clause[at]] if how == "named" else []
+            nearest = min(found, key=lambda f: abs(f[0] - at))[1] if found else None
+            owner = same[0] if same else nearest
+            if owner is not None:
+                named[owner].append(obj)
+        says_all = any(w in vocab["all"] for w in seq)
+        named_at = {i for at, obj in objects for i in range(at, at + len(tokens(obj)))}
+        at_of = {name: at for at, name in found}
+        targets = []
+        for _, name in found:
+            mine = set(clause)  # the whole request, unless the request names this target
+            if how == "named":
+                # A person's clauses run on to the next target ("the toddler is bored; give her
+                # something to play with"); a container's is the one that names it.
+                start = clause[at_of[name]]
+                later = [clause[at] for at, _ in found if clause[at] > start]
+                end = start + 1
+                if self.is_person(name):
+                    end = min(later) if later else clause[-1] + 1
+                mine = set(range(start, end)) | {clause[at] for at, obj in objects if obj in named[name]}
+            part = [w for w, c in zip(seq, clause, strict=True) if c in mine]
+            indefinite = sum(w in vocab["indefinite"] for w in part)
+            free = [w for i, w in enumerate(seq) if clause[i] in mine and i not in named_at]
+            making = how == "speaker" and any(w in vocab["making"] for w in seq)
+            if says_all or making:
+                count = ALL
+            elif how == "speaker" and not named[name]:
+                count = max(1, indefinite)  # "I'm cold": one thing for the speaker unless they say more
+            elif _plural(free):
+                count = ALL
+            elif named[name] or indefinite:
+                count = max(len(named[name]), indefinite)
+            else:
+                count = ALL
+            criterion = ""
+            if how == "named" and count == ALL and not named[name]:
+                shared = sum(1 for at, _ in found if at == at_of[name]) > 1
+                if shared:  # "the wood, metal and fabric bins": each bin by its own name
+                    criterion = f"belongs in the {name}"
+                else:
+                    places = {i for at, other in found for i in range(at, at + len(tokens(other)))}
+                    kept = [w for i, w in enumerate(seq) if clause[i] in mine and i not in places]
+                    criterion = _criterion(kept, [*vocab["not_criteria"], *vocab["clause_breaks"]])
+            targets.append(Target(name, count, how, named[name], scores.get(name, 0.0), criterion))
+        return targets
