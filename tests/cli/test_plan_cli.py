@@ -134,3 +134,23 @@ def test_scene_names_that_plans_cannot_carry_are_refused_at_load(isolated_home: 
     scene.write_text(json.dumps({**SCENE, "pickable_objects": ["apple", "cup (red)"]}))
     out = run("--llm", "fake", "plan", "hi", "--scene", str(scene), home=isolated_home, check_exit=2)
     assert "cup (red)" in out.stderr and "which plans cannot carry" in out.stderr
+
+
+def test_readable_output_of_the_goal_planner_shows_targets_decisions_and_risk() -> None:
+    from rich.console import Console
+
+    import conceptbot.cli.main  # noqa: F401  (the command modules are imported through it)
+    from conceptbot.cli.plan_cmd import show
+    from conceptbot.core.scene import scene_from_dict
+    from conceptbot.models.fake import FakeLLM
+    from conceptbot.pipeline.conceptbot import ConceptBot
+
+    scene = scene_from_dict(SCENE)
+    prior, yes, no = [-1.0, -1.0], [-0.1, -3.0], [-3.0, -0.1]
+    llm = FakeLLM(scores=[prior, yes, no, prior, yes])  # decisions (apple, sponge), then one risk check
+    plan = ConceptBot(llm, None, "urp", planner="goal").plan("Bring me something to eat", scene)
+    console = Console(record=True, width=160)
+    show(plan, console)
+    text = console.export_text()
+    assert "-> user: 1 (named)" in text and "Decisions for the user" in text
+    assert "risk: give the apple to the user" in text and "pick_and_place(apple, user)" in text

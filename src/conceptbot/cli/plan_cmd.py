@@ -143,26 +143,31 @@ def show(result: Plan, console: Console) -> None:
 
 
 def _goal(console: Console, trace: dict) -> None:
-    """The goal planner's goal, per-object decisions and risk checks (absent for the step planner)."""
+    """The goal planner's targets, per-object decisions and risk checks (absent for the step planner)."""
     goal = trace.get("goal")
     if not goal:
         return
     console.print("\n[bold]Goal[/bold]" + (" (stack)" if goal["stack"] else ""))
-    for selection in goal["selections"]:
-        named = f" [dim](named: {', '.join(selection['named'])})[/dim]" if selection["named"] else ""
-        console.print(f"  {selection['count']} that fits {selection['what']!r} -> {selection['to']}{named}")
+    for target in goal["targets"]:
+        named = f", named: {', '.join(target['named'])}" if target["named"] else ""
+        criterion = f", objects that fit {target['criterion']!r}" if target["criterion"] else ""
+        console.print(f"  -> {target['to']}: {target['count']} ({target['how']}{named}{criterion})")
     for decision in trace.get("decisions", []):
         if not decision["decided"]:
             continue
-        table = Table("object", "P(yes)", "calibrated", "facts", title=f"Decisions: {decision['what']!r}")
+        title = f"Decisions for the {decision['to']} (calibrated log-odds of yes)"
+        table = Table("object", "P(yes)", "score", "graph facts in the question", title=title)
         for row in sorted(decision["objects"], key=lambda r: -r["score"]):
-            table.add_row(
-                row["object"], f"{row['p_yes']:.2f}", f"{row['score']:+.2f}", "; ".join(row["facts"])[:80]
-            )
+            facts = "; ".join(row["facts"])[:80]
+            table.add_row(row["object"], f"{row['p_yes']:.2f}", f"{row['score']:+.2f}", facts)
         console.print(table)
+    stack = trace.get("stack")
+    if stack:
+        console.print("  stack, bottom first: " + ", ".join(o["object"] for o in stack["order"]))
     for check in trace.get("risk", []):
         verdict = f"[red]dropped: {check['why']}[/red]" if check["dropped"] else "ok"
-        console.print(f"  risk: {check['move']}: P(dangerous) {check['p_dangerous']:.2f} -> {verdict}")
+        numbers = f"P(unsafe) {check['p_unsafe']:.2f}, score {check['score']:+.2f}"
+        console.print(f"  risk: {check['move']}: {numbers} -> {verdict}")
 
 
 def _relations(console: Console, title: str, retrievals: dict, per_concept: int = 5) -> None:
