@@ -208,3 +208,26 @@ def test_simulated_run_serves_its_pictures(make_client) -> None:
     assert sim["verdict"]
     gif = client.get(f"/api/runs/{run_id}/files/execution.gif")
     assert gif.status_code == 200 and gif.headers["content-type"] == "image/gif" and gif.content[:3] == b"GIF"
+
+
+def test_a_goal_planner_run_streams_its_targets_decisions_and_risk_checks(make_client) -> None:
+    from conceptbot.models.fake import FakeLLM
+    from conceptbot.pipeline.conceptbot import ConceptBot
+    from conceptbot.web.worker import make_worker
+    from tests.pipeline.fakes import risk_reply
+
+    def goal_bot(config: str, backend: str) -> ConceptBot:
+        # OPE rates the scissors 4/5 for the child; the risk question itself leans safe.
+        llm = FakeLLM([risk_reply(4, [])], scores=[[-1.0, -1.0], [-0.5, -1.5]])
+        return ConceptBot(llm, None, "nokg", planner="goal")
+
+    client = make_client(worker=make_worker(goal_bot, can_simulate=False))
+    events = events_of(client, client.post("/api/runs", json=RUN).json()["id"])
+    kinds = [e["type"] for e in events]
+    assert kinds.index("goal") < kinds.index("decisions") < kinds.index("risk") < kinds.index("plan")
+    goal = next(e for e in events if e["type"] == "goal")["data"]
+    assert goal["targets"][0]["to"] == "child" and goal["targets"][0]["named"] == ["scissors"]
+    [check] = next(e for e in events if e["type"] == "risk")["data"]["checks"]
+    assert check["dropped"] and check["ope"] == "scissors: danger 4/5"
+    plan = next(e for e in events if e["type"] == "plan")
+    assert plan["plan"] == ["done()"] and plan["refused"]

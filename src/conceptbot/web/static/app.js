@@ -53,8 +53,8 @@ async function init() {
 }
 
 function clear() {
-  for (const id of ["refusal", "plan-box", "sim-box", "ope-box", "urp-box", "steps-box"]) $(id).hidden = true;
-  for (const id of ["plan", "properties", "relations", "keyword-relations", "steps", "sim-pictures"]) $(id).replaceChildren();
+  for (const id of ["refusal", "plan-box", "sim-box", "ope-box", "urp-box", "goal-box", "steps-box"]) $(id).hidden = true;
+  for (const id of ["plan", "properties", "relations", "keyword-relations", "targets", "decisions", "risk-checks", "steps", "sim-pictures"]) $(id).replaceChildren();
 }
 
 async function start(event) {
@@ -100,6 +100,9 @@ function handle(id, e) {
     case "ope": showOpe(e.data); break;
     case "urp": showUrp(e.data); break;
     case "step": showStep(e.data); break;
+    case "goal": showGoal(e.data); break;
+    case "decisions": showDecisions(e.data.decisions); break;
+    case "risk": showRisk(e.data.checks); break;
     case "plan": showPlan(e); break;
     case "sim": showSim(id, e); break;
     case "error":
@@ -167,6 +170,31 @@ function showStep(step) {
     box.append(row);
   }
   $("steps").append(box);
+}
+
+function showGoal(goal) {
+  $("goal-box").hidden = false;
+  $("targets").replaceChildren(...goal.targets.map((t) => el("li", {},
+    `→ ${t.to}: ${t.count} (${t.how}${t.named.length ? ", named: " + t.named.join(", ") : ""}` +
+    `${t.criterion ? ", objects that fit “" + t.criterion + "”" : ""})`)));
+  if (goal.stack) $("targets").append(el("li", {}, "stack the objects"));
+}
+
+function showDecisions(decisions) {
+  for (const d of decisions.filter((x) => x.decided)) {
+    const table = el("table", {}, el("tr", {}, el("th", {}, `for the ${d.to}`), el("th", {}, "P(yes)"),
+      el("th", {}, "score"), el("th", {}, "graph facts in the question")));
+    for (const o of d.objects.slice().sort((a, b) => b.score - a.score)) {
+      table.append(el("tr", { class: o.score > 0 ? "kept" : "dropped" }, el("td", {}, o.object),
+        el("td", {}, o.p_yes.toFixed(2)), el("td", {}, o.score.toFixed(2)), el("td", {}, o.facts.join("; "))));
+    }
+    $("decisions").append(table);
+  }
+}
+
+function showRisk(checks) {
+  $("risk-checks").replaceChildren(...checks.map((c) => el("li", { class: c.dropped ? "error" : "kept" },
+    `${c.move}: P(unsafe) ${c.p_unsafe.toFixed(2)}${c.dropped ? " — dropped: " + c.why : " — ok"}`)));
 }
 
 function showRefusal(reason) {
