@@ -13,7 +13,10 @@ SCENE_OBJECTS = 5
 
 def _bot(llm: FakeLLM, config: str = "conceptbot") -> tuple[ConceptBot, DictGraph]:
     graph = DictGraph()
-    return ConceptBot(llm, RelationRetriever(graph, FakeEmbedder(), theta=0.1), config), graph
+    # These tests script the paper's pipeline (OPE -> URP -> step planner).
+    return ConceptBot(
+        llm, RelationRetriever(graph, FakeEmbedder(), theta=0.1), config, planner="steps"
+    ), graph
 
 
 def test_full_pipeline_with_relations_properties_and_refusal_free_plan() -> None:

@@ -174,4 +174,6 @@ def test_conceptbot_uses_the_goal_planner_when_asked() -> None:
     assert plan.trace["planner_kind"] == "goal" and plan.refused
     assert set(plan.usage) >= {"goal", "decide", "risk", "total"}
     json.dumps(plan.to_dict())
-    assert ConceptBot(FakeLLM(scores=[]), None, "nokg").planner_kind == "steps"
+    assert ConceptBot(FakeLLM(scores=[]), None, "nokg").planner_kind == "goal"  # the default
+    assert ConceptBot(FakeLLM(), None, "nokg").planner_kind == "steps"  # cannot score: the paper's votes
+    assert ConceptBot(FakeLLM(scores=[]), None, "ope").planner_kind == "steps"

@@ -153,6 +153,9 @@ def test_mutated_scenes_plan_or_fail_with_one_clear_message(tmp_path: Path) -> N
     llm = SchemaFillingLLM()
     bots = [
         ConceptBot(llm, RelationRetriever(DictGraph(), FakeEmbedder(), theta=0.1), "conceptbot"),
+        ConceptBot(
+            llm, RelationRetriever(DictGraph(), FakeEmbedder(), theta=0.1), "conceptbot", planner="steps"
+        ),
         SayCan(llm),
     ]
     outcomes = {"plan": 0, "error": 0}
@@ -165,7 +168,7 @@ def test_mutated_scenes_plan_or_fail_with_one_clear_message(tmp_path: Path) -> N
         path.write_text(text, encoding="utf-8")
         try:
             scene = resolve_scene(str(path))
-            result = bots[case % 2].plan(rng.choice([*REQUESTS, "  ", "x" * 600]), scene)
+            result = bots[case % 3].plan(rng.choice([*REQUESTS, "  ", "x" * 600]), scene)
             assert isinstance(result, Plan)
             outcomes["plan"] += 1
         except ConceptBotError as exc:

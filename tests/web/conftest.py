@@ -34,7 +34,9 @@ def scripted_bot() -> ConceptBot:
     first[actions.index("pick_and_place(safety scissors, child)")] = 0.0
     second[actions.index("done()")] = 0.0
     llm = FakeLLM(replies, scores=[first, second])
-    return ConceptBot(llm, RelationRetriever(DictGraph(), FakeEmbedder(), theta=0.1), "conceptbot")
+    return ConceptBot(
+        llm, RelationRetriever(DictGraph(), FakeEmbedder(), theta=0.1), "conceptbot", planner="steps"
+    )
 
 
 @pytest.fixture

@@ -13,9 +13,11 @@ from conceptbot.models.registry import open_llm, open_store
 from conceptbot.pipeline.conceptbot import CONFIGS as CONCEPTBOT_CONFIGS
 from conceptbot.pipeline.factory import build_conceptbot
 
-SYSTEMS = ("saycan", *CONCEPTBOT_CONFIGS, "goal", "goal-nokg")
-"""Every system by name: SayCan, the ConceptBot configurations (the paper's pipeline), and the
-experimental goal planner with and without the knowledge graph (``goal``, ``goal-nokg``)."""
+SYSTEMS = ("saycan", *CONCEPTBOT_CONFIGS, "paper", "paper-nokg")
+"""Every system by name: SayCan; the ConceptBot configurations (the goal planner: ``conceptbot``,
+``urp`` without OPE, ``nokg`` without the graph; ``ope`` is the paper's OPE-only ablation); and the
+paper's pipeline with its step-by-step planner, with and without the graph (``paper``,
+``paper-nokg``)."""
 
 
 class PlannerSystem(Protocol):
@@ -50,9 +52,9 @@ def build_system(settings: Settings, config: str, **options) -> PlannerSystem:
                 hint="use the llamacpp backend for SayCan",
             )
         return SayCan(llm)
-    if config in ("goal", "goal-nokg"):
-        base = "conceptbot" if config == "goal" else "nokg"
-        return build_conceptbot(settings, base, planner="goal", **options)
+    if config in ("paper", "paper-nokg"):
+        base = "conceptbot" if config == "paper" else "nokg"
+        return build_conceptbot(settings, base, planner="steps", **options)
     if config in CONCEPTBOT_CONFIGS:
         return build_conceptbot(settings, config, **options)
     raise ConfigError(f"unknown configuration {config!r}", hint=f"use one of {', '.join(SYSTEMS)}")
