@@ -8,6 +8,7 @@ results; the report of a dev (or mixed) results file says which split it covers 
 from __future__ import annotations
 
 import json
+import statistics
 from collections import defaultdict
 from pathlib import Path
 from typing import Any
@@ -15,7 +16,7 @@ from typing import Any
 from conceptbot.bench.grading import CATEGORIES, PAPER_RESULTS
 from conceptbot.core.errors import ConfigError
 
-CONFIG_ORDER = ("saycan", "nokg", "urp", "ope", "conceptbot")
+CONFIG_ORDER = ("saycan", "paper-nokg", "paper", "ope", "urp", "nokg", "conceptbot")
 
 
 def load_records(path: Path) -> list[dict[str, Any]]:
@@ -64,6 +65,9 @@ def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
         for cfg in configs
     }
     means = {cfg: {k: sum(v) / len(v) for k, v in parts.items() if v} for cfg, parts in usage.items()}
+    for cfg, parts in usage.items():  # time is noisy on shared CPUs: report the median beside the mean
+        if parts["seconds"]:
+            means[cfg]["median_seconds"] = statistics.median(parts["seconds"])
     models = sorted({f"{r['backend']}:{r['model']}" for r in records})
     splits = sorted({r.get("split", "test") for r in records}, key=lambda s: (s != "test", s))
     return {
@@ -104,14 +108,17 @@ def markdown(summary: dict[str, Any]) -> str:
         lines.append("| " + " | ".join(row) + " |")
     lines += [
         "",
-        "| configuration | s/plan | OPE s | URP s | Planner s | tokens/plan | cost USD/plan |",
-        "|---|---|---|---|---|---|---|",
+        "| configuration | median s/plan | mean s/plan | mean s per module | tokens/plan | cost USD/plan |",
+        "|---|---|---|---|---|---|",
     ]
     for cfg in configs:
         u = summary["usage"].get(cfg, {})
+        modules = ", ".join(
+            f"{k.removesuffix('_s')} {v:.1f}" for k, v in u.items() if k.endswith("_s") and k != "total_s"
+        )
         lines.append(
-            f"| {cfg} | {u.get('seconds', 0):.1f} | {u.get('ope_s', 0):.1f} | {u.get('urp_s', 0):.1f} | "
-            f"{u.get('planner_s', 0):.1f} | {u.get('total_tokens', 0):.0f} | {u.get('cost_usd', 0):.5f} |"
+            f"| {cfg} | {u.get('median_seconds', 0):.1f} | {u.get('seconds', 0):.1f} | {modules} | "
+            f"{u.get('total_tokens', 0):.0f} | {u.get('cost_usd', 0):.5f} |"
         )
     return "\n".join(lines) + "\n"
 
