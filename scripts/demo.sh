@@ -7,6 +7,6 @@ echo
 .venv/bin/conceptbot doctor
 echo
 echo '$ conceptbot plan "I would like a hollandaise sauce" --scene kitchen'
-echo '(first run: every object of the 25-object kitchen is analysed by the embedded LLM, a few minutes on'
+echo '(first run: one scored question per object of the 25-object kitchen, about half a minute on'
 echo ' 2 cores; later runs come from the cache in seconds)'
 .venv/bin/conceptbot plan "I would like a hollandaise sauce" --scene kitchen

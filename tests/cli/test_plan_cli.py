@@ -80,11 +80,15 @@ def test_plan_end_to_end_with_the_real_small_model(
     data = json.loads(out.stdout)
     valid = {"pick_and_place(apple, user)", "pick_and_place(sponge, user)", "done()"}
     assert data["plan"][-1] == "done()" and set(data["plan"]) <= valid
-    # A 135M model may well refuse; either way the output must follow the contract.
+    # The request names the apple and "me": the goal planner moves it unless the 135M model's risk
+    # check judges handing it over unsafe (then a refusal with the reason); either way the contract.
+    assert data["trace"]["goal"]["targets"][0]["named"] == ["apple"]
     if data["refused"]:
-        assert data["plan"] == ["done()"] and data["steps"] == [] and data["reason"]
+        assert data["plan"] == ["done()"] and data["steps"] == [] and "give the apple" in data["reason"]
     else:
-        assert data["steps"][0]["method"] == "logprob" and len(data["steps"][0]["candidates"]) == 3
+        assert data["plan"] == ["pick_and_place(apple, user)", "done()"]
+        assert data["steps"][0]["method"] == "decide"
+    assert len(data["trace"]["risk"]) == 1
     assert data["usage"]["total"]["prompt_tokens"] > 0
     readable = run(
         "--llm",
@@ -96,9 +100,7 @@ def test_plan_end_to_end_with_the_real_small_model(
         "--no-fallback",
         home=graph_home,
     )
-    assert (
-        "Object properties" in readable.stdout and "Plan:" in readable.stdout and "Usage" in readable.stdout
-    )
+    assert "Goal" in readable.stdout and "Plan:" in readable.stdout and "Usage" in readable.stdout
 
 
 def test_scenes_lists_and_prints_demo_scenes(isolated_home: Path) -> None:
@@ -152,5 +154,5 @@ def test_readable_output_of_the_goal_planner_shows_targets_decisions_and_risk() 
     console = Console(record=True, width=160)
     show(plan, console)
     text = console.export_text()
-    assert "-> user: 1 (named)" in text and "Decisions for the user" in text
+    assert "-> user (named in the request): 1" in text and "Decisions for the user" in text
     assert "risk: give the apple to the user" in text and "pick_and_place(apple, user)" in text

@@ -149,9 +149,10 @@ def _goal(console: Console, trace: dict) -> None:
         return
     console.print("\n[bold]Goal[/bold]" + (" (stack)" if goal["stack"] else ""))
     for target in goal["targets"]:
-        named = f", named: {', '.join(target['named'])}" if target["named"] else ""
-        criterion = f", objects that fit {target['criterion']!r}" if target["criterion"] else ""
-        console.print(f"  -> {target['to']}: {target['count']} ({target['how']}{named}{criterion})")
+        how = {"named": "named in the request", "speaker": "the speaker", "scored": "scored"}[target["how"]]
+        named = f"; objects named: {', '.join(target['named'])}" if target["named"] else ""
+        criterion = f"; objects that fit {target['criterion']!r}" if target["criterion"] else ""
+        console.print(f"  -> {target['to']} ({how}): {target['count']}{named}{criterion}")
     for decision in trace.get("decisions", []):
         if not decision["decided"]:
             continue

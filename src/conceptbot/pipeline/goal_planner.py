@@ -309,7 +309,7 @@ class GoalPlanner:
     ) -> dict[str, Any]:
         """The risk decision and the affordance of one move."""
         move = move_text(obj, target)
-        say(f"Risk: would it be dangerous to {move}?")
+        say(f"Risk: is it safe to {move}?")
         s_aff, factors = affordance(Action(obj, target), scene, properties, [], self.gripper)
         judgement, used = self.decider.dangerous(request, move, obj, scene, ())
         usage["risk"] = usage["risk"] + used
