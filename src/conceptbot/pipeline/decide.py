@@ -9,7 +9,7 @@ hellebore" and "hellebore IsA poisonous plant" but never joins them.
 Calibration (Zhao et al. 2021, "Calibrate before use"): small models lean towards one answer
 whatever the object. The same question is asked once about a content-free object ("the object",
 no facts); a decision's score is its log-odds of Yes minus that prior's, so 0 means "no more
-likely than for an unknown object". ``threshold`` applies to this calibrated score.
+likely than for an unknown object". The goal planner's thresholds apply to this calibrated score.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ import math
 import re
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 from conceptbot.core.scene import Scene
@@ -94,7 +94,6 @@ class FactFinder:
     per_object: int = 4
     inherited: int = 2
     per_context: int = 3
-    _parents: dict[str, list[str]] = field(default_factory=dict)
 
     def context(self, what: str, request: str) -> tuple[str, ...]:
         """Facts about the description's words ("hollandaise means eggs and butter with lemon juice")."""
