@@ -18,7 +18,7 @@ import itertools
 import math
 import re
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -152,6 +152,23 @@ class Decider:
         p_yes, log_odds = _log_odds(scored.logprobs)
         return p_yes, log_odds, scored.usage
 
+    def _judge_each(
+        self,
+        objects: Sequence[str],
+        about: dict[str, tuple[str, ...]],
+        label: str,
+        question: Callable[[str | None, Sequence[str]], str],
+    ) -> tuple[list[Judgement], Usage]:
+        """Ask ``question`` about the content-free object (``None``, no facts), then about each object
+        with its facts; each score is the object's log-odds of Yes minus the content-free one's."""
+        _, prior, usage = self._ask(question(None, ()))
+        judgements = []
+        for obj in objects:
+            p_yes, log_odds, used = self._ask(question(obj, about[obj]))
+            usage = usage + used
+            judgements.append(Judgement(obj, label, p_yes, log_odds - prior, about[obj]))
+        return judgements, usage
+
     def moves(
         self, request: str, target: str, move: str, objects: Sequence[str], scene: Scene
     ) -> tuple[list[Judgement], tuple[str, ...], Usage]:
@@ -169,24 +186,20 @@ class Decider:
         about = self.facts.about(objects, [request, move.format(object="object")])
         context_text = ("Facts: " + "; ".join(context) + ".\n") if context else ""
 
-        def question(obj: str, facts: Sequence[str], state: str | None) -> str:
+        def question(obj: str | None, facts: Sequence[str]) -> str:
+            found = scene.get(obj) if obj is not None else None
+            name = obj if obj is not None else CONTENT_FREE
             return prompts.render(
                 "move_user",
                 request=request,
                 context=context_text,
-                object=obj,
-                state=f" ({state})" if state else "",
+                object=name,
+                state=f" ({found.state})" if found is not None and found.state else "",
                 facts=("Facts about it: " + "; ".join(facts) + ".\n") if facts else "",
-                move=move.format(object=obj),
+                move=move.format(object=name),
             )
 
-        _, prior, usage = self._ask(question(CONTENT_FREE, (), None))
-        judgements = []
-        for obj in objects:
-            found = scene.get(obj)
-            p_yes, log_odds, used = self._ask(question(obj, about[obj], found.state if found else None))
-            usage = usage + used
-            judgements.append(Judgement(obj, target, p_yes, log_odds - prior, about[obj]))
+        judgements, usage = self._judge_each(objects, about, target, question)
         return judgements, context, usage.with_latency(time.perf_counter() - started)
 
     def fits(
@@ -196,21 +209,16 @@ class Decider:
         started = time.perf_counter()
         about = self.facts.about(objects, [what])
 
-        def question(obj: str, facts: Sequence[str]) -> str:
+        def question(obj: str | None, facts: Sequence[str]) -> str:
             return prompts.render(
                 "decide_user",
                 request=request,
                 what=what,
-                object=obj,
+                object=obj if obj is not None else CONTENT_FREE,
                 facts=("Facts about it: " + "; ".join(facts) + ".\n") if facts else "",
             )
 
-        _, prior, usage = self._ask(question(CONTENT_FREE, ()))
-        judgements = []
-        for obj in objects:
-            p_yes, log_odds, used = self._ask(question(obj, about[obj]))
-            usage = usage + used
-            judgements.append(Judgement(obj, what, p_yes, log_odds - prior, about[obj]))
+        judgements, usage = self._judge_each(objects, about, what, question)
         return judgements, usage.with_latency(time.perf_counter() - started)
 
     def dangerous(
