@@ -27,6 +27,7 @@ from conceptbot.core.errors import ConfigError
 from conceptbot.core.plan import Plan
 from conceptbot.core.usage import Usage
 from conceptbot.scenes import demo_scene_names, load_demo_scene
+from tests.bench.test_grading import widest_plan
 
 DONE = "done()"
 DEV = load_tasks(split="dev")
@@ -182,16 +183,6 @@ def test_reference_plan_passes_and_empty_plan_fails(task: Task) -> None:
         assert not grade(task, [DONE], refused=True).ok
 
 
-def _topological(moves: list[tuple[str, str]], ordered: list[list[str]]) -> list[tuple[str, str]]:
-    pending, result = list(moves), []
-    while pending:
-        blocked = {after for before, after in ordered if any(obj == before for obj, _ in pending)}
-        ready = next(m for m in pending if m[0] not in blocked)
-        pending.remove(ready)
-        result.append(ready)
-    return result
-
-
 @pytest.mark.parametrize("task", DEV, ids=lambda t: t.id)
 def test_every_accepted_alternative_passes_and_tempting_moves_fail(task: Task) -> None:
     gold, scene = task.gold, task_scene(task)
@@ -199,18 +190,14 @@ def test_every_accepted_alternative_passes_and_tempting_moves_fail(task: Task) -
         for plan in gold["plans"]:
             assert grade(task, [*plan, DONE]).ok, plan
     elif gold["type"] == "assign":
-        moves = [(o, ts[-1]) for o, ts in gold.get("assign", {}).items()]
-        moves += [(o, ts[-1]) for o, ts in gold.get("optional", {}).items()]
-        for group in gold.get("choose", []):
-            moves += [(o, ts[-1]) for o, ts in list(group["objects"].items())[: group["max"]]]
-        plan = [pp(o, t) for o, t in _topological(moves, gold.get("ordered", []))]
+        plan = widest_plan(gold)
         assert grade(task, [*plan, DONE]).ok, plan
         for obj in gold.get("must_not_move", []):
             target = next(d for d in scene.destinations if d != obj)
             verdict = grade(task, [*plan, pp(obj, target), DONE])
             assert not verdict.ok and f"must not move: {obj}" in verdict.reason
         if gold.get("ordered"):
-            reverse = [pp(o, t) for o, t in reversed(_topological(moves, gold["ordered"]))]
+            reverse = list(reversed(plan))
             assert "order: " in grade(task, [*reverse, DONE]).reason
 
 

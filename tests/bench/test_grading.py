@@ -454,6 +454,16 @@ def test_reference_plan_passes_and_empty_plan_fails(task: Task) -> None:
         check(task, [DONE], "refused a feasible task: ", refused=True)
 
 
+def widest_plan(gold: dict) -> list[str]:
+    """An assign gold's plan with every object it allows moved, to the last allowed destination:
+    required and optional objects, and each choose group's maximum, in an order the gold accepts."""
+    moves = [(o, ts[-1]) for o, ts in gold.get("assign", {}).items()]
+    moves += [(o, ts[-1]) for o, ts in gold.get("optional", {}).items()]
+    for group in gold.get("choose", []):
+        moves += [(o, ts[-1]) for o, ts in list(group["objects"].items())[: group["max"]]]
+    return [pp(o, t) for o, t in _topological(moves, gold.get("ordered", []))]
+
+
 def _topological(moves: list[tuple[str, str]], ordered: list[list[str]]) -> list[tuple[str, str]]:
     pending, result = list(moves), []
     while pending:
@@ -472,11 +482,7 @@ def test_every_accepted_alternative_passes(task: Task) -> None:
         for plan in gold["plans"]:
             check(task, [*plan, DONE])
     elif gold["type"] == "assign":
-        moves = [(o, ts[-1]) for o, ts in gold.get("assign", {}).items()]
-        moves += [(o, ts[-1]) for o, ts in gold.get("optional", {}).items()]
-        for group in gold.get("choose", []):
-            moves += [(o, ts[-1]) for o, ts in list(group["objects"].items())[: group["max"]]]
-        plan = [pp(o, t) for o, t in _topological(moves, gold.get("ordered", []))]
+        plan = widest_plan(gold)
         check(task, [*plan, DONE])
         for obj in gold.get("must_not_move", []):
             target = next(d for d in task_scene(task).destinations if d != obj)
