@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import threading
 from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
@@ -21,6 +22,16 @@ from conceptbot.web.worker import make_worker
 from tests.pipeline.fakes import DictGraph, risk_reply, urp_reply
 
 REQUEST = "Give my son scissors to cut paper"
+
+
+def held_worker(release: threading.Event) -> Callable[..., None]:
+    """A worker whose run says it is thinking and then holds until ``release`` is set (at most 10 s)."""
+
+    def worker(spec: Any, emit: Callable[..., None], out_dir: Path) -> None:
+        emit("status", {"message": "thinking"})
+        release.wait(10)
+
+    return worker
 
 
 def scripted_bot() -> ConceptBot:

@@ -12,7 +12,7 @@ from conceptbot.core.config import load_settings
 from conceptbot.core.errors import BackendUnavailableError
 from conceptbot.core.plan import Plan
 from conceptbot.web.worker import available_backends, make_worker
-from tests.web.conftest import REQUEST, events_of
+from tests.web.conftest import REQUEST, events_of, held_worker
 
 RUN = {"request": REQUEST, "scene": "example-scissors", "config": "conceptbot"}
 
@@ -118,12 +118,7 @@ def test_bad_run_requests_are_refused_with_a_reason(make_client) -> None:
 
 def test_one_run_at_a_time_per_page_and_runs_are_private(make_client) -> None:
     release = threading.Event()
-
-    def worker(spec, emit, out_dir):
-        emit("status", {"message": "thinking"})
-        release.wait(10)
-
-    client = make_client(worker=worker)
+    client = make_client(worker=held_worker(release))
     first = client.post("/api/runs", json=RUN)
     assert first.status_code == 201
     busy = client.post("/api/runs", json=RUN)

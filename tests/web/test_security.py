@@ -20,7 +20,7 @@ from conceptbot.core.errors import ConfigError
 from conceptbot.core.scene import scene_from_dict
 from conceptbot.web.app import local_hosts
 from conceptbot.web.server import bind
-from tests.web.conftest import REQUEST, events_of
+from tests.web.conftest import REQUEST, events_of, held_worker
 
 RUN = {"request": REQUEST, "scene": "example-scissors", "config": "conceptbot"}
 PORT = 8765
@@ -152,12 +152,7 @@ def test_the_pages_need_nothing_the_policy_refuses(make_client: MakeClient, page
 
 def test_one_run_at_a_time_per_server_whatever_the_cookie(make_client: MakeClient) -> None:
     release = threading.Event()
-
-    def worker(spec, emit, out_dir):
-        emit("status", {"message": "thinking"})
-        release.wait(10)
-
-    client = make_client(worker=worker)
+    client = make_client(worker=held_worker(release))
     first = client.post("/api/runs", json=RUN)
     assert first.status_code == 201
     fresh = TestClient(client.app)  # another page, or the same client with a new cookie
