@@ -203,7 +203,7 @@ class GoalPlanner:
                 moves = [m for m in moves if m not in dropped]
         trace["risk"] = list(checks.values())
         emit("risk", {"checks": trace["risk"]})
-        steps = self._steps(moves, ranked, targets, scene, properties)
+        steps = self._steps(moves, ranked, scene, properties)
         for step in steps:
             emit("step", step.to_dict())
         refused = not moves and bool(blocked)
@@ -365,7 +365,6 @@ class GoalPlanner:
         self,
         moves: list[tuple[str, str]],
         ranked: dict[str, list[Judgement]],
-        targets: list[Target],
         scene: Scene,
         properties: dict[str, ObjectProperties],
     ) -> list[Step]:
