@@ -32,7 +32,8 @@ from conceptbot.scenes import resolve_scene
     type=click.Choice(SYSTEMS),
     default="conceptbot",
     show_default=True,
-    help="System: conceptbot (URP&OPE), urp, ope, nokg (no graph relations), saycan (baseline).",
+    help="System: conceptbot (goal planner), urp (without OPE), nokg (no graph facts), saycan "
+    "(baseline), paper / paper-nokg (the paper's step planner), ope (the paper's OPE-only ablation).",
 )
 @click.option("--risk", is_flag=True, help="Use the Risk Index (danger 1-5, DangerousWith) in OPE.")
 @click.option(
