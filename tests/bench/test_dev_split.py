@@ -92,16 +92,20 @@ def test_every_task_has_notes_and_the_gold_kinds_are_all_used() -> None:
 # Scenes --------------------------------------------------------------------------------------------
 
 
+KITCHEN_SIZED = {"dev-family-kitchen"}
+
+
 def test_dev_scenes_are_new_small_and_all_used() -> None:
     names = dev_scene_names()
-    assert 15 <= len(names) <= 25
+    assert 15 <= len(names) <= 30
     assert not set(names) & set(demo_scene_names())
     paper_objects = {o for n in demo_scene_names() for o in load_demo_scene(n).pickable}
     used = Counter(t.scene for t in DEV)
     for name in names:
         scene = load_dev_scene(name)
         assert name.startswith("dev-") and scene.name == name
-        assert 4 <= len(scene.objects) <= 12, name
+        # Small scenes, and one the test kitchen's size (ranking 22 objects is its own difficulty).
+        assert 4 <= len(scene.objects) <= (30 if name in KITCHEN_SIZED else 12), name
         assert scene.pickable and scene.destinations
         assert all(isinstance(s, str) and s for s in scene.entity_states.values())
         assert all(o.size_m is not None for o in scene.objects), name
