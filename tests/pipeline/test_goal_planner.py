@@ -60,7 +60,6 @@ def test_targets_counts_and_named_objects() -> None:
     assert child.name == "child" and child.count == 1
     [speaker] = _targets("I'm hungry")
     assert (speaker.name, speaker.how, speaker.count) == ("user", "speaker", 1)
-    assert _targets("I want to cook pancakes")[0].count == ALL
     assert _targets("Put all the food on the table")[0].count == ALL
     assert _targets("Put the sweets on the table")[0].count == ALL
 
@@ -70,6 +69,47 @@ def test_a_request_naming_no_destination_scores_them_against_a_content_free_requ
     scores = [[-2.0, -0.2], [-1.0, -1.0], [-0.1, -3.0], [-1.0, -1.0], [-1.0, -1.0], [-1.0, -1.0]]
     [target] = _targets("Tidy up", scores=scores)
     assert (target.name, target.how) == ("table", "scored") and target.score == pytest.approx(2.9)
+
+
+def test_a_request_to_prepare_food_sends_the_ingredients_where_food_is_made() -> None:
+    # "cook" is about preparing food: the destinations are scored (child, table, user) and only the
+    # best takes the ingredients, all that fit, judged as ingredients.
+    scores = [[-2.0, -0.2], [-1.0, -1.0], [-0.1, -3.0], [-1.0, -1.0], [-0.5, -1.0], [-1.0, -1.0]]
+    [target] = _targets("I want to cook pancakes", scores=scores)
+    assert (target.name, target.how, target.count) == ("table", "scored", ALL)
+    assert target.criterion == "an ingredient of the food the person asked for"
+    # With the graph, a dish named without a cooking word counts too, and the dish is named.
+    finder = TargetFinder(FakeLLM(scores=scores), is_person, dish=lambda request, names: "hollandaise")
+    [target] = finder.find("I would like a hollandaise sauce", SCENE)[0]
+    assert (target.name, target.dish, target.criterion) == (
+        "table",
+        "hollandaise",
+        "an ingredient of hollandaise",
+    )
+
+
+def test_the_graph_names_a_dish_by_its_isa_chain_and_leads_with_its_definition() -> None:
+    graph = DictGraph(
+        {
+            "hollandaise": [
+                ("hollandaise", "IsA", "sauce"),
+                ("hollandaise", "DefinedAs", "eggs and butter with lemon juice"),
+            ],
+            "omelette": [("omelette", "IsA", "egg dish")],
+            "egg dish": [("egg dish", "IsA", "dish")],
+            "knife": [("knife", "IsA", "tool")],
+        }
+    )
+    facts = FactFinder(RelationRetriever(graph, FakeEmbedder(), theta=-1.0))
+    assert facts.dish("I would like a hollandaise sauce", ["egg", "bowl"]) == "hollandaise"
+    assert facts.dish("I'd love an omelette", ["egg"]) == "omelette"  # two IsA steps
+    assert facts.dish("Give me a knife", ["knife"]) is None
+    assert facts.dish("Put the omelette on the plate", ["plate"]) is None  # not asked to be made
+    context = facts.context(
+        "I would like a hollandaise sauce", "I would like a hollandaise sauce", "hollandaise"
+    )
+    assert context[0] == "hollandaise means eggs and butter with lemon juice"
+    assert FactFinder(None).dish("I would like a hollandaise sauce", []) is None
 
 
 def test_stacking_words() -> None:

@@ -139,9 +139,10 @@ class ConceptBot:
         if planner == "goal" and not (self.switches.urp and llm.capabilities.scoring):
             planner = "steps"  # the goal planner needs the request compiled and options scored
         self.planner_kind = planner
+        facts = FactFinder(retriever)
         self.goal_planner = GoalPlanner(
-            TargetFinder(self._llm_for("goal"), is_person),
-            Decider(self._llm_for("decide"), FactFinder(retriever)),
+            TargetFinder(self._llm_for("goal"), is_person, dish=facts.dish),
+            Decider(self._llm_for("decide"), facts),
             self.ope if self.switches.ope else None,
             thresholds,
         )

@@ -27,8 +27,10 @@ from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, Message, ScoreRequest
 from conceptbot.pipeline import prompts
 from conceptbot.pipeline.retrieval import RelationRetriever, edge_text
+from conceptbot.pipeline.targets import tokens, words
 
 ANSWERS = ("Yes", "No")
+DEFINING = ("DefinedAs", "MadeOf")  # a word's own definition and ingredients
 CONTENT_FREE = "object"
 _STOP = {
     "a", "an", "the", "of", "to", "for", "and", "or", "with", "that", "is", "are", "be", "made", "only",
@@ -95,19 +97,80 @@ class FactFinder:
     inherited: int = 2
     per_context: int = 3
 
-    def context(self, what: str, request: str) -> tuple[str, ...]:
-        """Facts about the description's words ("hollandaise means eggs and butter with lemon juice")."""
+    def context(self, what: str, request: str, dish: str | None = None) -> tuple[str, ...]:
+        """Facts about the description's words ("hollandaise means eggs and butter with lemon juice").
+
+        The definition of the ``dish`` to prepare and what it is made of come first: they name the
+        ingredients (WordNet glosses), but the cosine filter ranks "hollandaise means eggs and butter
+        with lemon juice" below "hollandaise is a sauce"; then the kept facts, most similar first.
+        """
         if self.retriever is None:
             return ()
-        words = content_words(what)
-        if not words:
+        found_words = list(dict.fromkeys([*([dish] if dish else []), *content_words(what)]))
+        if not found_words:
             return ()
-        found = self.retriever.retrieve_many(words, [what, request])
+        found = self.retriever.retrieve_many(found_words, [what, request])
+        defining = [
+            s
+            for word, r in found.items()
+            if r.match == "exact" and word == dish
+            for s in r.edges
+            if s.edge.relation in DEFINING and s.edge.head.lower() == word
+        ]
         kept = sorted(
             (s for r in found.values() if r.matched for s in r.kept if s.edge.relation != "RelatedTo"),
             key=lambda s: -s.similarity,
         )
-        return tuple(dict.fromkeys(edge_text(s.edge) for s in kept))[: self.per_context]
+        return tuple(dict.fromkeys(edge_text(s.edge) for s in [*defining, *kept]))[: self.per_context]
+
+    def dish(self, request: str, scene_names: Sequence[str]) -> str | None:
+        """The dish the request asks for, when the graph places a word of it under a prepared food
+        ("hollandaise" IsA sauce, "guacamole" IsA dip, "omelette" IsA dish; ``dish_classes`` in
+        ``request_words.json``), up to three IsA steps; None without a graph or a dish.
+
+        Candidates are the words (and two-word phrases) after "a", "some", "make", "cook", ...
+        (``dish_after``) that are not words of the scene's objects ("a knife for my toast" asks for
+        a knife, not for toast).
+        """
+        if self.retriever is None:
+            return None
+        vocab = words()
+        classes = set(vocab["dish_classes"])
+        seq = tokens(request)
+        in_scene = {w for name in scene_names for w in tokens(name)}
+        candidates = []
+        for i, word in enumerate(seq):
+            if word in in_scene or len(word) < 3 or not word.isalpha() or word in _STOP:
+                continue
+            if i == 0 or seq[i - 1] not in vocab["dish_after"]:
+                continue
+            if i + 1 < len(seq) and seq[i + 1].isalpha():
+                candidates.append(f"{word} {seq[i + 1]}")
+            candidates.append(word)
+        for candidate in candidates:
+            if candidate in classes or self._is_a(candidate, classes):
+                return candidate
+        return None
+
+    def _is_a(self, concept: str, classes: set[str], depth: int = 3) -> bool:
+        """Whether an IsA chain of at most ``depth`` steps leads from ``concept`` to one of ``classes``."""
+        assert self.retriever is not None
+        level = {concept}
+        seen = set(level)
+        for _ in range(depth):
+            parents = set()
+            for node in level:
+                found = self.retriever.graph.edges(node, ["IsA"], 40)
+                if found.match != "exact":
+                    continue
+                parents |= {e.tail.lower() for e in found.edges if e.head.lower() == node}
+            if parents & classes:
+                return True
+            level = set(list(parents - seen)[:12])
+            seen |= level
+            if not level:
+                return False
+        return False
 
     def about(self, objects: Sequence[str], targets: Sequence[str]) -> dict[str, tuple[str, ...]]:
         """Per object: its kept facts, then kept facts of its IsA parents, most similar first."""
@@ -170,19 +233,20 @@ class Decider:
         return judgements, usage
 
     def moves(
-        self, request: str, target: str, move: str, objects: Sequence[str], scene: Scene
+        self, request: str, target: str, move: str, objects: Sequence[str], scene: Scene, dish: str = ""
     ) -> tuple[list[Judgement], tuple[str, ...], Usage]:
         """Whether the request wants each object moved to ``target``: "to do what the person asked,
         should the robot give the X to the user?", calibrated against a content-free object.
 
         Args:
             move: The move with ``{object}`` for the object ("give the {object} to the user").
+            dish: The dish the request asks to be made: its definition leads the facts.
 
         Returns:
             The judgements, the facts about the request's words, and usage.
         """
         started = time.perf_counter()
-        context = self.facts.context(request, request)
+        context = self.facts.context(request, request, dish or None)
         about = self.facts.about(objects, [request, move.format(object="object")])
         context_text = ("Facts: " + "; ".join(context) + ".\n") if context else ""
 
@@ -203,17 +267,27 @@ class Decider:
         return judgements, context, usage.with_latency(time.perf_counter() - started)
 
     def fits(
-        self, request: str, what: str, objects: Sequence[str], scene: Scene
+        self, request: str, what: str, objects: Sequence[str], scene: Scene, dish: str = ""
     ) -> tuple[list[Judgement], Usage]:
-        """Whether each object fits a description ("a sturdy base for a stack"), calibrated."""
+        """Whether each object fits a description ("a sturdy base for a stack"), calibrated.
+
+        Args:
+            dish: The dish whose ingredients are decided: the question becomes "is the lime an
+                ingredient of guacamole?" (it ranked ingredients better than the description form
+                on the dev split) with the dish's definition in it.
+        """
         started = time.perf_counter()
         about = self.facts.about(objects, [what])
+        context = self.facts.context(dish, request, dish) if dish else ()
+        context_text = ("Facts: " + "; ".join(context) + ".\n") if context else ""
 
         def question(obj: str | None, facts: Sequence[str]) -> str:
             return prompts.render(
-                "decide_user",
+                "ingredient_user" if dish else "decide_user",
                 request=request,
+                context=context_text,
                 what=what,
+                dish=dish,
                 object=obj if obj is not None else CONTENT_FREE,
                 facts=("Facts about it: " + "; ".join(facts) + ".\n") if facts else "",
             )

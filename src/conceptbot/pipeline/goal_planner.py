@@ -59,6 +59,9 @@ class Thresholds:
         partition: When the request sorts objects into two or more targets ("poisonous ones on the
             toxic tray, edible ones on the edible tray"), an object goes to its best target above
             this, instead of above ``fit``.
+        ingredients: A dish's ingredients are the objects within this of the best-scored one
+            ("is the kiwi an ingredient of fruit salad?": every answer leans towards No, so a
+            fixed threshold fails, but the ranking is good; 0.6-0.7 on the dev split).
     """
 
     fit: float = -0.5
@@ -68,6 +71,7 @@ class Thresholds:
     rated_danger: int = 4
     replacements: int = 2
     partition: float = -5.0
+    ingredients: float = 0.7
 
 
 @dataclass
@@ -235,11 +239,15 @@ class GoalPlanner:
             if target.criterion:
                 # Sorting by a property: "is the foxglove poisonous?" is a question the model answers
                 # far better than "should the robot put the foxglove on the toxic tray?".
-                judgements, used = self.decider.fits(request, target.criterion, others, scene)
+                judgements, used = self.decider.fits(
+                    request, target.criterion, others, scene, dish=target.dish
+                )
                 context: tuple[str, ...] = ()
             else:
                 move = move_text("{object}", target.name)
-                judgements, context, used = self.decider.moves(request, target.name, move, others, scene)
+                judgements, context, used = self.decider.moves(
+                    request, target.name, move, others, scene, dish=target.dish
+                )
             usage = usage + used
             ranked[target.name] = named + sorted(judgements, key=lambda j: -j.score)
             decisions.append(
@@ -270,6 +278,9 @@ class GoalPlanner:
                         break  # the request keeps asking for unsafe things: stop, do not hunt on
                     continue
                 limit = fit if target.count == ALL else self.thresholds.one_floor
+                if target.dish and target.count == ALL:
+                    best = ranked[target.name][0].score if ranked[target.name] else 0.0
+                    limit = best - self.thresholds.ingredients
                 if judgement.score <= limit or (target.count != ALL and taken >= target.count):
                     break
                 if obj in wanted and wanted[obj][1] >= judgement.score:

@@ -8,8 +8,11 @@ the request's (docs/planner-redesign.md); asked "how many objects?" as a scored 
 * **Targets** are the destinations the request names (longest names first, each word used once;
   "me" names the user, "my son" a child destination, from ``request_words.json``; a plural head
   noun, "the recycling bins", names every destination with that head). When it names none, the
-  speaker's words ("I", "my") make the user the target; with neither, the destinations whose
-  scored question "should the robot put things in the X?" beats a content-free request.
+  speaker's words ("I", "my") make the user the target, unless the request is about preparing
+  food (a dish the graph knows: "I would like a hollandaise sauce", "hollandaise" IsA "sauce"; or
+  "cook", "bake"): then, as with neither, the destinations are scored ("should the robot put
+  things in the X?" against a content-free request) and the best one (for food: the only one)
+  and those well above the content-free request are the targets.
 * **Named objects** go to the target named in their own clause (clauses split at "and", "then":
   "hand me the tape and put the gloves on the shelf"), else to the nearest target ("put the hammer
   and the screwdriver in the toolbox").
@@ -138,6 +141,7 @@ class Target:
         score: The calibrated log-odds when scored.
         criterion: What decides which objects go there, in the request's words ("poisonous",
             "made entirely of glass"), when the request sorts by a property; "" otherwise.
+        dish: The dish the request asks to be made ("hollandaise"), when the graph says it is one.
     """
 
     name: str
@@ -146,6 +150,7 @@ class Target:
     named: list[str] = field(default_factory=list)
     score: float = 0.0
     criterion: str = ""
+    dish: str = ""
 
     def to_dict(self) -> dict:
         """JSON form for the trace."""
@@ -156,6 +161,7 @@ class Target:
             "named": list(self.named),
             "score": round(self.score, 3),
             "criterion": self.criterion,
+            "dish": self.dish,
         }
 
 
@@ -166,12 +172,22 @@ class TargetFinder:
         llm: An LLM that can score options (labelled ``goal``), for requests naming no destination.
         is_person: Whether a destination is a person.
         threshold: A scored destination other than the best is a target above this.
+        dish: ``(request, scene names) -> dish or None``: the dish a request asks to be made, from
+            the graph (:meth:`conceptbot.pipeline.decide.FactFinder.dish`); None: only the
+            ``making`` words ("cook", "bake") say that a request is about preparing food.
     """
 
-    def __init__(self, llm: LLM, is_person: Callable[[str], bool], threshold: float = 1.0) -> None:
+    def __init__(
+        self,
+        llm: LLM,
+        is_person: Callable[[str], bool],
+        threshold: float = 1.0,
+        dish: Callable[[str, Sequence[str]], str | None] | None = None,
+    ) -> None:
         self.llm = llm
         self.is_person = is_person
         self.threshold = threshold
+        self.dish = dish
 
     def _log_odds(self, request: str, dest: str) -> tuple[float, Usage]:
         action = f"give things to the {dest}" if self.is_person(dest) else f"put things in or on the {dest}"
@@ -191,8 +207,10 @@ class TargetFinder:
         people = {d: vocab["people"].get(d.lower(), []) for d in scene.destinations if self.is_person(d)}
         found = mentions(request, scene.destinations, people)
         seq = tokens(request)
+        dish = (self.dish(request, scene.names) if self.dish else None) or ""
+        making = bool(dish) or any(w in vocab["making"] for w in seq)
         how = "named"
-        if not found:
+        if not found and not making:
             speaker = [i for i, w in enumerate(seq) if w in vocab["speaker"]]
             users = [d for d in scene.destinations if d.lower() == "user"]
             if speaker and users:
@@ -206,12 +224,22 @@ class TargetFinder:
                 usage = usage + used + used_prior
                 scores[dest] = odds - prior
             ranked = sorted(scores, key=lambda d: -scores[d])
-            found = [(0, d) for i, d in enumerate(ranked) if i == 0 or scores[d] > self.threshold]
-        targets = self._with_objects(request, scene, found, how, scores)
+            # Food is prepared in one place: the best-scored destination only.
+            found = [
+                (0, d) for i, d in enumerate(ranked) if i == 0 or (scores[d] > self.threshold and not making)
+            ]
+        targets = self._with_objects(request, scene, found, how, scores, making, dish)
         return targets, usage.with_latency(time.perf_counter() - started)
 
     def _with_objects(
-        self, request: str, scene: Scene, found: list[tuple[int, str]], how: str, scores: dict[str, float]
+        self,
+        request: str,
+        scene: Scene,
+        found: list[tuple[int, str]],
+        how: str,
+        scores: dict[str, float],
+        making: bool,
+        dish: str,
     ) -> list[Target]:
         vocab = words()
         seq = tokens(request)
@@ -251,8 +279,7 @@ class TargetFinder:
             part = [w for w, c in zip(seq, clause, strict=True) if c in mine]
             indefinite = sum(w in vocab["indefinite"] for w in part)
             free = [w for i, w in enumerate(seq) if clause[i] in mine and i not in named_at]
-            making = how == "speaker" and any(w in vocab["making"] for w in seq)
-            if says_all or making:
+            if says_all or (making and how != "named"):
                 count = ALL
             elif how == "speaker" and not named[name]:
                 count = max(1, indefinite)  # "I'm cold": one thing for the speaker unless they say more
@@ -271,5 +298,10 @@ class TargetFinder:
                     places = {i for at, other in found for i in range(at, at + len(tokens(other)))}
                     kept = [w for i, w in enumerate(seq) if clause[i] in mine and i not in places]
                     criterion = _criterion(kept, [*vocab["not_criteria"], *vocab["clause_breaks"]])
-            targets.append(Target(name, count, how, named[name], scores.get(name, 0.0), criterion))
+            if making and how != "named" and not named[name]:
+                # Which objects go is a question about each one: "is the lime an ingredient of
+                # guacamole?" ranked the ingredients above the rest better than "should the robot
+                # put the lime in the mixing bowl?" on the dev split.
+                criterion = f"an ingredient of {dish or 'the food the person asked for'}"
+            targets.append(Target(name, count, how, named[name], scores.get(name, 0.0), criterion, dish))
         return targets
