@@ -6,7 +6,8 @@ prompt (``prompts/saycan_context.txt``, then ``objects = [...]``, ``# <instructi
 so far). The affordance is binary, as ViLD's detections are: 1 when both the object and the
 destination are detected (confidence > 0), else 0; ``done()`` has a fixed affordance of 0.2. The
 combined score exp(log p) * affordance is normalised over the options and the best one is taken,
-greedily, until ``done()`` or the step limit. Same LLM as ConceptBot; no knowledge graph, no OPE/URP.
+greedily, until ``done()`` or the step limit (the loop the paper's Planner uses too:
+:mod:`conceptbot.pipeline.greedy`). Same LLM as ConceptBot; no knowledge graph, no OPE/URP.
 
 The scene's objects are listed in the prompt (as the notebook does): without that line ``done()``
 wins the first step most of the time.
@@ -14,18 +15,17 @@ wins the first step most of the time.
 
 from __future__ import annotations
 
-import math
 import time
 from importlib import resources
 
 from conceptbot.core.limits import check_request
-from conceptbot.core.plan import Action, CandidateScore, EventSink, Feedback, Plan, Step, valid_actions
+from conceptbot.core.plan import Action, EventSink, Feedback, Plan
 from conceptbot.core.scene import Scene
-from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, ScoreRequest
+from conceptbot.pipeline.greedy import LLMScores, greedy_plan
+from conceptbot.pipeline.planner import softmax
 
 DONE_AFFORDANCE = 0.2
-TOP_K = 8
 
 
 def _context() -> str:
@@ -78,47 +78,35 @@ class SayCan:
         """
         started = time.perf_counter()
         request = check_request(request)
-        candidates = valid_actions(scene)
-        limit = self.max_steps or min(len(scene.pickable) + 1, 12)
-        history: list[str] = list(feedback.executed) if feedback else []
-        failed = feedback.failed_actions if feedback else set()
-        steps: list[Step] = []
-        usage = Usage(calls=0)
-        for index in range(len(history), max(limit, len(history) + 1)):
-            if progress:
-                progress(f"SayCan: step {index + 1} ({len(candidates)} options)")
+
+        def llm_scores(candidates: list[Action], history: list[str], index: int) -> LLMScores:
             scored = self.llm.score(
                 ScoreRequest(
                     options=tuple(option_text(a) for a in candidates),
                     prompt=self.prompt(request, scene, history),
                 )
             )
-            usage = usage + scored.usage
-            top = max(scored.logprobs)
-            raw = []
-            for action, logprob in zip(candidates, scored.logprobs, strict=True):
-                affordance = DONE_AFFORDANCE if action.is_done else _detected(scene, action)
-                if str(action) in failed:
-                    affordance = 0.0
-                raw.append((action, math.exp(logprob - top), affordance))
-            llm_total = sum(p for _, p, _ in raw)
-            combined_total = sum(p * a for _, p, a in raw) or 1.0
-            cands = [
-                CandidateScore(str(a), p / llm_total, aff, p * aff / combined_total, {"detected": aff})
-                for a, p, aff in raw
-            ]
-            best = max(cands, key=lambda c: c.combined)
-            ranked = sorted(cands, key=lambda c: -c.combined)
-            shown = ranked[:TOP_K] + [c for c in ranked[TOP_K:] if c.action == "done()"]
-            steps.append(Step(index + 1, best.action, tuple(shown), (), "saycan"))
-            if events:
-                events("step", steps[-1].to_dict())
-            if best.action == "done()":
-                break
-            history.append(best.action)
+            return LLMScores(softmax(list(scored.logprobs)), [], scored.usage)
+
+        def affordances(candidates: list[Action], history: list[str]) -> list[tuple[float, dict[str, float]]]:
+            found = [DONE_AFFORDANCE if a.is_done else _detected(scene, a) for a in candidates]
+            return [(a, {"detected": a}) for a in found]
+
+        steps, actions, usage = greedy_plan(
+            scene,
+            llm_scores,
+            affordances,
+            "saycan",
+            max_steps=self.max_steps,
+            feedback=feedback,
+            normalise=True,
+            label="SayCan",
+            progress=progress,
+            events=events,
+        )
         total = usage.with_latency(time.perf_counter() - started)
         trace = {"config": self.config, "request": request, "scene": scene.name}
-        return Plan([*history, "done()"], steps, False, None, trace, {"planner": total, "total": total})
+        return Plan(actions, steps, False, None, trace, {"planner": total, "total": total})
 
 
 def _detected(scene: Scene, action: Action) -> float:

@@ -17,28 +17,18 @@ object plus one, at most 12).
 from __future__ import annotations
 
 import math
-import time
 from collections import Counter
 
-from conceptbot.core.plan import (
-    Action,
-    CandidateScore,
-    EventSink,
-    Feedback,
-    InvalidActionError,
-    Step,
-    parse_action,
-    valid_actions,
-)
+from conceptbot.core.plan import Action, EventSink, Feedback, InvalidActionError, Step, parse_action
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, ChatRequest, Message, ScoreRequest
 from conceptbot.pipeline import prompts
 from conceptbot.pipeline.affordance import Gripper, affordance, relative_property_scores
+from conceptbot.pipeline.greedy import LLMScores, greedy_plan
 from conceptbot.pipeline.ope import ObjectProperties, Progress
 
 METHODS = ("auto", "logprob", "vote")
-TOP_K = 8  # candidates kept in the trace per step
 
 
 def softmax(logprobs: list[float]) -> list[float]:
@@ -194,52 +184,34 @@ class Planner:
         feedback: Feedback | None = None,
         events: EventSink | None = None,
     ) -> tuple[list[Step], list[str], Usage]:
-        """Plan greedily; returns the steps, the action texts (ending with ``done()``) and usage.
+        """Plan greedily (:func:`conceptbot.pipeline.greedy.greedy_plan`); returns the steps, the
+        action texts (ending with ``done()``) and usage.
 
         With ``feedback`` (from executing an earlier plan) the plan starts with the executed steps, the
         failures are shown to the LLM and failed actions get affordance 0. ``events`` gets a
         ``step`` event as each step is chosen.
         """
-        started = time.perf_counter()
-        usage = Usage(calls=0)
-        candidates = valid_actions(scene)
-        limit = self.max_steps or min(len(scene.pickable) + 1, 12)
-        history: list[str] = list(feedback.executed) if feedback else []
-        failed = feedback.failed_actions if feedback else set()
         if feedback and feedback.failed:
             guidance = "\n".join([guidance, *feedback.script_lines()]).strip()
-        steps: list[Step] = []
-        for index in range(len(history), max(limit, len(history) + 1)):
-            if progress:
-                progress(f"Planner: step {index + 1} ({len(candidates)} candidates, {self.method})")
+
+        def llm_scores(candidates: list[Action], history: list[str], index: int) -> LLMScores:
             messages = self.messages(request, scene, properties, guidance, history)
             prompt = self.completion_prompt(request, scene, properties, commands or [], history, feedback)
-            llm_scores, rejected, used = self._llm_scores(candidates, messages, scene, index, prompt)
-            usage = usage + used
-            affordances = []
-            for action in candidates:
-                s_aff, factors = affordance(action, scene, properties, history, self.gripper)
-                if str(action) in failed:
-                    s_aff, factors = 0.0, {**factors, "failed": 0.0}
-                affordances.append((s_aff, factors))
-            if self.relative_properties:
-                affordances = relative_property_scores(affordances)
-            scored = [
-                CandidateScore(str(action), s_llm, s_aff, s_llm * s_aff, factors)
-                for action, s_llm, (s_aff, factors) in zip(candidates, llm_scores, affordances, strict=True)
-            ]
-            best = max(scored, key=lambda c: c.combined)  # first of equals: deterministic
-            if best.combined <= 0.0:
-                # Nothing the LLM wants is feasible (e.g. a one-hot vote for a repeat): stop.
-                best = next(c for c in scored if c.action == "done()")
-            ranked = sorted(scored, key=lambda c: -c.combined)
-            shown = ranked[:TOP_K] + [c for c in ranked[TOP_K:] if c.action == "done()"]
-            steps.append(Step(index + 1, best.action, tuple(shown), tuple(rejected), self.method))
-            if events:
-                events("step", steps[-1].to_dict())
-            if best.action == "done()":
-                break
-            history.append(best.action)
-        actions = [*history, "done()"]
-        usage = usage.with_latency(time.perf_counter() - started)
-        return steps, actions, usage
+            scores, rejected, usage = self._llm_scores(candidates, messages, scene, index, prompt)
+            return LLMScores(scores, rejected, usage)
+
+        def affordances(candidates: list[Action], history: list[str]) -> list[tuple[float, dict[str, float]]]:
+            found = [affordance(a, scene, properties, history, self.gripper) for a in candidates]
+            return relative_property_scores(found) if self.relative_properties else found
+
+        return greedy_plan(
+            scene,
+            llm_scores,
+            affordances,
+            self.method,
+            max_steps=self.max_steps,
+            feedback=feedback,
+            label="Planner",
+            progress=progress,
+            events=events,
+        )

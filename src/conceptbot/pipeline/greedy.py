@@ -1,0 +1,114 @@
+"""One greedy loop for the step-by-step planners: the paper's Planner and the SayCan baseline.
+
+Per step every candidate (each valid ``pick_and_place(object, destination)`` and ``done()``) gets
+an LLM score and an affordance from pluggable scorers; the step is the argmax of their product,
+until ``done()`` or the step limit. What differs between the planners is only the scorers: SayCan
+scores a few-shot robot script and has a binary detection affordance; the paper's Planner scores
+(or votes on) a prompt with OPE's properties and URP's plan, and its affordance has the gripper,
+box and property factors.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from conceptbot.core.plan import DONE, Action, CandidateScore, EventSink, Feedback, Step, valid_actions
+from conceptbot.core.scene import Scene
+from conceptbot.core.usage import Usage
+from conceptbot.pipeline.ope import Progress
+
+TOP_K = 8  # candidates kept in the trace per step, besides done()
+
+
+@dataclass(frozen=True)
+class LLMScores:
+    """The LLM's scores of one step's candidates.
+
+    Attributes:
+        scores: S_LLM per candidate (a distribution: softmax of log-probabilities, or vote shares).
+        rejected: Completions that were not valid actions (voting), for the trace.
+        usage: Tokens and time of the step's LLM calls.
+    """
+
+    scores: list[float]
+    rejected: list[str]
+    usage: Usage
+
+
+LLMScorer = Callable[[list[Action], list[str], int], LLMScores]
+"""``(candidates, history, step index) -> LLMScores``."""
+AffordanceScorer = Callable[[list[Action], list[str]], list[tuple[float, dict[str, float]]]]
+"""``(candidates, history) -> [(S_aff, factors)]`` per candidate."""
+
+
+def step_limit(scene: Scene, max_steps: int | None) -> int:
+    """The default step limit: one move per pickable object plus ``done()``, at most 12."""
+    return max_steps or min(len(scene.pickable) + 1, 12)
+
+
+def greedy_plan(
+    scene: Scene,
+    llm_scores: LLMScorer,
+    affordances: AffordanceScorer,
+    method: str,
+    *,
+    max_steps: int | None = None,
+    feedback: Feedback | None = None,
+    normalise: bool = False,
+    label: str = "Planner",
+    progress: Progress | None = None,
+    events: EventSink | None = None,
+) -> tuple[list[Step], list[str], Usage]:
+    """Plan greedily; returns the steps, the action texts (ending with ``done()``) and usage.
+
+    Args:
+        scene: Where the candidates come from.
+        llm_scores, affordances: The scorers.
+        method: Recorded in each step ("logprob", "vote", "saycan").
+        max_steps: Step limit (None: :func:`step_limit`).
+        feedback: From executing an earlier plan: the plan continues after its executed steps and
+            its failed actions get affordance 0.
+        normalise: Show the combined scores normalised over the step's candidates (SayCan's
+            notebook does); the choice is the same either way.
+        label: Names the planner in progress messages.
+        progress, events: Called with a message before each step / a ``step`` event after it.
+    """
+    started = time.perf_counter()
+    usage = Usage(calls=0)
+    candidates = valid_actions(scene)
+    limit = step_limit(scene, max_steps)
+    history: list[str] = list(feedback.executed) if feedback else []
+    failed = feedback.failed_actions if feedback else set()
+    steps: list[Step] = []
+    for index in range(len(history), max(limit, len(history) + 1)):
+        if progress:
+            progress(f"{label}: step {index + 1} ({len(candidates)} candidates, {method})")
+        found = llm_scores(candidates, history, index)
+        usage = usage + found.usage
+        affs = [
+            (0.0, {**factors, "failed": 0.0}) if str(action) in failed else (s_aff, factors)
+            for action, (s_aff, factors) in zip(candidates, affordances(candidates, history), strict=True)
+        ]
+        products = [s_llm * s_aff for s_llm, (s_aff, _) in zip(found.scores, affs, strict=True)]
+        total = (sum(products) or 1.0) if normalise else 1.0
+        scored = [
+            CandidateScore(str(action), s_llm, s_aff, product / total, factors)
+            for action, s_llm, (s_aff, factors), product in zip(
+                candidates, found.scores, affs, products, strict=True
+            )
+        ]
+        best = max(scored, key=lambda c: c.combined)  # first of equals: deterministic
+        if best.combined <= 0.0:
+            # Nothing the LLM wants is feasible (e.g. a one-hot vote for a repeat): stop.
+            best = next(c for c in scored if c.action == DONE)
+        ranked = sorted(scored, key=lambda c: -c.combined)
+        shown = ranked[:TOP_K] + [c for c in ranked[TOP_K:] if c.action == DONE]
+        steps.append(Step(index + 1, best.action, tuple(shown), tuple(found.rejected), method))
+        if events:
+            events("step", steps[-1].to_dict())
+        if best.action == DONE:
+            break
+        history.append(best.action)
+    return steps, [*history, DONE], usage.with_latency(time.perf_counter() - started)
