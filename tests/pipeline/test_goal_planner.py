@@ -32,6 +32,8 @@ BINS = scene_from_dict(
 PRIOR = [-1.0, -1.0]  # the content-free object: no lean either way
 SAFE = [-0.05, -3.0]  # "is it safe to ...?" Yes
 UNSAFE = [-3.0, -0.05]  # No
+NAMES = [-1.0, -2.0, -4.0, -4.0]  # the name ranking of SCENE's objects, for the request
+NEUTRAL = [-2.0, -2.0, -2.0, -2.0]  # and for the neutral request
 
 
 def _targets(request: str, scene=SCENE, scores=()) -> list:
@@ -154,6 +156,8 @@ def test_an_unsafe_move_is_dropped_and_the_target_takes_its_next_best_object() -
         [-0.2, -2.5],  # safety scissors: next
         [-3.0, -0.1],  # glue
         [-3.0, -0.1],  # chips
+        NAMES,  # "which object should the robot give to the child?": the request, then neutral
+        NEUTRAL,
         PRIOR,  # risk: giving "the object" to the child
         UNSAFE,  # scissors to the child
         PRIOR,
@@ -164,6 +168,25 @@ def test_an_unsafe_move_is_dropped_and_the_target_takes_its_next_best_object() -
     dropped = [r for r in result.trace["risk"] if r["dropped"]]
     assert [(r["object"], r["why"]) for r in dropped] == [("scissors", "judged dangerous")]
     assert result.steps[0].chosen == "pick_and_place(safety scissors, child)" and not result.refused
+
+
+def test_a_target_taking_one_object_ranks_by_the_decision_and_the_name_ranking_together() -> None:
+    scores = [
+        [-1.0, -1.0],  # content-free object
+        [-3.0, -0.1],  # scissors: no
+        [-1.0, -1.2],  # safety scissors: barely yes
+        [-0.5, -1.5],  # glue: the decision's best
+        [-3.0, -0.1],  # chips: no
+        [-6.0, -0.5, -4.0, -6.0],  # names for the request: safety scissors far above the rest
+        NEUTRAL,
+        PRIOR,
+        SAFE,
+    ]
+    result = _planner(scores).plan("Give my son something to cut paper", SCENE)
+    assert result.actions == ["pick_and_place(safety scissors, child)", "done()"]
+    objects = {o["object"]: o for o in result.trace["decisions"][0]["objects"]}
+    assert objects["safety scissors"]["name_score"] == pytest.approx(1.5)
+    assert objects["glue"]["score"] > objects["safety scissors"]["score"]  # the decision alone: glue
 
 
 def test_named_objects_skip_the_decisions_and_an_only_move_judged_unsafe_is_a_refusal() -> None:

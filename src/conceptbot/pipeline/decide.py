@@ -30,6 +30,7 @@ from conceptbot.pipeline.retrieval import RelationRetriever, edge_text
 from conceptbot.pipeline.targets import tokens, words
 
 ANSWERS = ("Yes", "No")
+NEUTRAL_REQUEST = "Please help me."  # the request the name ranking is calibrated against
 DEFINING = ("DefinedAs", "MadeOf")  # a word's own definition and ingredients
 CONTENT_FREE = "object"
 _STOP = {
@@ -294,6 +295,30 @@ class Decider:
 
         judgements, usage = self._judge_each(objects, about, what, question)
         return judgements, usage.with_latency(time.perf_counter() - started)
+
+    def name_scores(self, request: str, move: str, objects: Sequence[str]) -> tuple[dict[str, float], Usage]:
+        """How much the request raises the probability of naming each object: "which object should
+        the robot give to the user?" with every object listed, each name scored as the answer, minus
+        the same for a neutral request (domain-conditional PMI, Holtzman et al. 2021, "Surface form
+        competition"). Ranks the objects a request needs in a different way than the per-object
+        yes/no question: the objects compete in one question.
+
+        Args:
+            move: What the robot would do with the object, without it ("give to the user").
+        """
+        started = time.perf_counter()
+        usage = Usage(calls=0)
+        found = []
+        for said in (request, NEUTRAL_REQUEST):
+            user = prompts.render("pick_user", request=said, objects=", ".join(objects), move=move)
+            messages = (Message("system", prompts.render("pick_system")), Message("user", user))
+            scored = self.llm.score(
+                ScoreRequest(options=tuple(objects), messages=messages, assistant_prefix="The ")
+            )
+            usage = usage + scored.usage
+            found.append(scored.logprobs)
+        scores = {o: lp - neutral for o, lp, neutral in zip(objects, found[0], found[1], strict=True)}
+        return scores, usage.with_latency(time.perf_counter() - started)
 
     def dangerous(
         self, request: str, move: str, obj: str, scene: Scene, evidence: Sequence[str]

@@ -62,6 +62,8 @@ class Thresholds:
         ingredients: A dish's ingredients are the objects within this of the best-scored one
             ("is the kiwi an ingredient of fruit salad?": every answer leans towards No, so a
             fixed threshold fails, but the ranking is good; 0.6-0.7 on the dev split).
+        name_weight: Weight of the name ranking (:meth:`Decider.name_scores`) against the yes/no
+            decision when a target takes N objects (0: the decision alone).
     """
 
     fit: float = -0.5
@@ -72,6 +74,7 @@ class Thresholds:
     replacements: int = 2
     partition: float = -5.0
     ingredients: float = 0.7
+    name_weight: float = 1.0
 
 
 @dataclass
@@ -106,6 +109,19 @@ def move_text(obj: str, target: str) -> str:
     if is_person(target):
         return f"give the {obj} to the {target}"
     return f"put the {obj} in or on the {target}"
+
+
+def pick_text(target: str) -> str:
+    """The move without its object, for the name ranking ("give to the user")."""
+    return f"give to the {target}" if is_person(target) else f"put in or on the {target}"
+
+
+def _standardised(scores: dict[str, float]) -> dict[str, float]:
+    """Scores as z-scores (0 mean, unit spread) so that two rankings can be added."""
+    values = list(scores.values())
+    mean = sum(values) / len(values)
+    spread = (sum((v - mean) ** 2 for v in values) / len(values)) ** 0.5 or 1.0
+    return {k: (v - mean) / spread for k, v in scores.items()}
 
 
 def _danger(props: ObjectProperties | None) -> int:
@@ -249,13 +265,26 @@ class GoalPlanner:
                     request, target.name, move, others, scene, dish=target.dish
                 )
             usage = usage + used
-            ranked[target.name] = named + sorted(judgements, key=lambda j: -j.score)
+            order = {j.subject: j.score for j in judgements}
+            names: dict[str, float] = {}
+            if target.count != ALL and not target.criterion and len(others) > 1:
+                # Which N objects: rank by the yes/no decision and the name ranking together (each
+                # standardised; the name ranking weighted by ``name_weight``); the floor still
+                # applies to the decision's own score.
+                names, used = self.decider.name_scores(request, pick_text(target.name), others)
+                usage = usage + used
+                yes_no, named_z = _standardised(order), _standardised(names)
+                order = {o: yes_no[o] + self.thresholds.name_weight * named_z[o] for o in order}
+            ranked[target.name] = named + sorted(judgements, key=lambda j: -order[j.subject])
             decisions.append(
                 {
                     **target.to_dict(),
                     "decided": True,
                     "context": list(context),
-                    "objects": [j.to_dict() for j in judgements],
+                    "objects": [
+                        {**j.to_dict(), **({"name_score": round(names[j.subject], 3)} if names else {})}
+                        for j in judgements
+                    ],
                 }
             )
         return ranked, decisions, usage
@@ -278,7 +307,7 @@ class GoalPlanner:
                         break  # the request keeps asking for unsafe things: stop, do not hunt on
                     continue
                 limit = fit if target.count == ALL else self.thresholds.one_floor
-                if target.dish and target.count == ALL:
+                if target.ingredients and target.count == ALL:
                     best = ranked[target.name][0].score if ranked[target.name] else 0.0
                     limit = best - self.thresholds.ingredients
                 if judgement.score <= limit or (target.count != ALL and taken >= target.count):

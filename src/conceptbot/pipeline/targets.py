@@ -142,6 +142,7 @@ class Target:
         criterion: What decides which objects go there, in the request's words ("poisonous",
             "made entirely of glass"), when the request sorts by a property; "" otherwise.
         dish: The dish the request asks to be made ("hollandaise"), when the graph says it is one.
+        ingredients: The objects that go are the ingredients of food to prepare.
     """
 
     name: str
@@ -151,6 +152,7 @@ class Target:
     score: float = 0.0
     criterion: str = ""
     dish: str = ""
+    ingredients: bool = False
 
     def to_dict(self) -> dict:
         """JSON form for the trace."""
@@ -162,6 +164,7 @@ class Target:
             "score": round(self.score, 3),
             "criterion": self.criterion,
             "dish": self.dish,
+            "ingredients": self.ingredients,
         }
 
 
@@ -298,10 +301,13 @@ class TargetFinder:
                     places = {i for at, other in found for i in range(at, at + len(tokens(other)))}
                     kept = [w for i, w in enumerate(seq) if clause[i] in mine and i not in places]
                     criterion = _criterion(kept, [*vocab["not_criteria"], *vocab["clause_breaks"]])
-            if making and how != "named" and not named[name]:
+            ingredients = making and how != "named" and not named[name]
+            if ingredients:
                 # Which objects go is a question about each one: "is the lime an ingredient of
                 # guacamole?" ranked the ingredients above the rest better than "should the robot
                 # put the lime in the mixing bowl?" on the dev split.
                 criterion = f"an ingredient of {dish or 'the food the person asked for'}"
-            targets.append(Target(name, count, how, named[name], scores.get(name, 0.0), criterion, dish))
+            targets.append(
+                Target(name, count, how, named[name], scores.get(name, 0.0), criterion, dish, ingredients)
+            )
         return targets
