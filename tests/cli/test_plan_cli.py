@@ -149,10 +149,12 @@ def test_readable_output_of_the_goal_planner_shows_targets_decisions_and_risk() 
 
     scene = scene_from_dict(SCENE)
     prior, yes, no = [-1.0, -1.0], [-0.1, -3.0], [-3.0, -0.1]
-    llm = FakeLLM(scores=[prior, yes, no, prior, yes])  # decisions (apple, sponge), then one risk check
+    names, neutral = [-1.0, -3.0], [-2.0, -2.0]  # the name ranking (apple, sponge), then neutral
+    llm = FakeLLM(scores=[prior, yes, no, names, neutral, prior, yes])  # decisions, names, one risk check
     plan = ConceptBot(llm, None, "urp", planner="goal").plan("Bring me something to eat", scene)
     console = Console(record=True, width=160)
     show(plan, console)
     text = console.export_text()
     assert "-> user (named in the request): 1" in text and "Decisions for the user" in text
+    assert "name" in text and "+1.00" in text  # the apple's name score: -1 against the neutral -2
     assert "risk: give the apple to the user" in text and "pick_and_place(apple, user)" in text

@@ -81,13 +81,30 @@ def test_a_request_to_prepare_food_sends_the_ingredients_where_food_is_made() ->
     assert (target.name, target.how, target.count) == ("table", "scored", ALL)
     assert target.criterion == "an ingredient of the food the person asked for"
     # With the graph, a dish named without a cooking word counts too, and the dish is named.
-    finder = TargetFinder(FakeLLM(scores=scores), is_person, dish=lambda request, names: "hollandaise")
+    finder = TargetFinder(FakeLLM(scores=scores), is_person, food=Food())
     [target] = finder.find("I would like a hollandaise sauce", SCENE)[0]
     assert (target.name, target.dish, target.criterion) == (
         "table",
         "hollandaise",
         "an ingredient of hollandaise",
     )
+    # Only cookware is scored where the scene has some: one destination, one pair of questions.
+    finder = TargetFinder(FakeLLM(scores=[[-0.5, -1.0], [-1.0, -1.0]]), is_person, food=Food(["child"]))
+    [target] = finder.find("I would like a hollandaise sauce", SCENE)[0]
+    assert target.name == "child"
+
+
+class Food:
+    """FoodKnowledge for the tests: every request is hollandaise; ``places`` are the cookware."""
+
+    def __init__(self, places: list[str] | None = None) -> None:
+        self.places = places or []
+
+    def dish(self, request: str, scene_names) -> str | None:
+        return "hollandaise"
+
+    def prep_places(self, destinations) -> list[str]:
+        return [d for d in destinations if d in self.places]
 
 
 def test_the_graph_names_a_dish_by_its_isa_chain_and_leads_with_its_definition() -> None:
@@ -112,6 +129,13 @@ def test_the_graph_names_a_dish_by_its_isa_chain_and_leads_with_its_definition()
     )
     assert context[0] == "hollandaise means eggs and butter with lemon juice"
     assert FactFinder(None).dish("I would like a hollandaise sauce", []) is None
+    graph.data.update(
+        {"pan": [("pan", "IsA", "cooking utensil")], "frying pan": [("frying pan", "IsA", "pan")]}
+    )
+    assert facts.prep_places(["frying pan", "ceramic bowl", "fridge", "user"]) == [
+        "frying pan",
+        "ceramic bowl",
+    ]
 
 
 def test_stacking_words() -> None:

@@ -153,15 +153,22 @@ def _goal(console: Console, trace: dict) -> None:
         how = {"named": "named in the request", "speaker": "the speaker", "scored": "scored"}[target["how"]]
         named = f"; objects named: {', '.join(target['named'])}" if target["named"] else ""
         criterion = f"; objects that fit {target['criterion']!r}" if target["criterion"] else ""
+        criterion += f"; a dish the graph knows: {target['dish']}" if target.get("dish") else ""
         console.print(f"  -> {target['to']} ({how}): {target['count']}{named}{criterion}")
     for decision in trace.get("decisions", []):
         if not decision["decided"]:
             continue
         title = f"Decisions for the {decision['to']} (calibrated log-odds of yes)"
-        table = Table("object", "P(yes)", "score", "graph facts in the question", title=title)
+        # The name ranking (which object, all listed in one question) exists for targets taking N.
+        names = any("name_score" in row for row in decision["objects"])
+        columns = ["object", "P(yes)", "score", *(["name"] if names else []), "graph facts in the question"]
+        table = Table(*columns, title=title)
         for row in sorted(decision["objects"], key=lambda r: -r["score"]):
             facts = "; ".join(row["facts"])[:80]
-            table.add_row(row["object"], f"{row['p_yes']:.2f}", f"{row['score']:+.2f}", facts)
+            name = [f"{row['name_score']:+.2f}"] if names else []
+            table.add_row(row["object"], f"{row['p_yes']:.2f}", f"{row['score']:+.2f}", *name, facts)
+        if decision.get("context"):
+            console.print("  facts about the request: " + "; ".join(decision["context"]))
         console.print(table)
     stack = trace.get("stack")
     if stack:

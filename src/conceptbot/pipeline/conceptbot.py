@@ -141,7 +141,7 @@ class ConceptBot:
         self.planner_kind = planner
         facts = FactFinder(retriever)
         self.goal_planner = GoalPlanner(
-            TargetFinder(self._llm_for("goal"), is_person, dish=facts.dish),
+            TargetFinder(self._llm_for("goal"), is_person, food=facts),
             Decider(self._llm_for("decide"), facts),
             self.ope if self.switches.ope else None,
             thresholds,

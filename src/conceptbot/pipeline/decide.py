@@ -14,6 +14,7 @@ likely than for an unknown object". The goal planner's thresholds apply to this 
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 import re
@@ -49,7 +50,8 @@ class Judgement:
         question: What was decided ("a fruit", or the move).
         p_yes: P(Yes) normalised over Yes/No.
         score: Calibrated log-odds of Yes (0: no more likely than for a content-free object).
-        facts: The graph facts put in the question.
+        facts: The graph facts about the object put in the question.
+        context: The facts about the request put in the question (a dish's definition).
     """
 
     subject: str
@@ -57,6 +59,7 @@ class Judgement:
     p_yes: float
     score: float
     facts: tuple[str, ...] = ()
+    context: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form for the trace."""
@@ -124,34 +127,51 @@ class FactFinder:
         )
         return tuple(dict.fromkeys(edge_text(s.edge) for s in [*defining, *kept]))[: self.per_context]
 
-    def dish(self, request: str, scene_names: Sequence[str]) -> str | None:
+    def dish(self, request: str, pickable: Sequence[str]) -> str | None:
         """The dish the request asks for, when the graph places a word of it under a prepared food
         ("hollandaise" IsA sauce, "guacamole" IsA dip, "omelette" IsA dish; ``dish_classes`` in
         ``request_words.json``), up to three IsA steps; None without a graph or a dish.
 
-        Candidates are the words (and two-word phrases) after "a", "some", "make", "cook", ...
-        (``dish_after``) that are not words of the scene's objects ("a knife for my toast" asks for
-        a knife, not for toast).
+        Candidates are the words of the phrase after "a", "some", "make", "cook", ...
+        (``dish_after``) or at the start of the request, up to a word such as "for" or "to" ("a
+        tomato and cucumber salad", "Pancakes would be ..."), two-word phrases first, without the
+        words of the objects the robot can pick ("a knife for my toast" asks for a knife, not for
+        toast; "a tomato and cucumber salad" is a salad).
         """
         if self.retriever is None:
             return None
         vocab = words()
         classes = set(vocab["dish_classes"])
         seq = tokens(request)
-        in_scene = {w for name in scene_names for w in tokens(name)}
-        candidates = []
-        for i, word in enumerate(seq):
-            if word in in_scene or len(word) < 3 or not word.isalpha() or word in _STOP:
-                continue
-            if i == 0 or seq[i - 1] not in vocab["dish_after"]:
-                continue
-            if i + 1 < len(seq) and seq[i + 1].isalpha():
-                candidates.append(f"{word} {seq[i + 1]}")
-            candidates.append(word)
-        for candidate in candidates:
+        in_scene = {w for name in pickable for w in tokens(name)}
+        ignored = {"and", *vocab["not_criteria"], *vocab["speaker"]}  # "Hand me ...", "Give ..."
+        starts = [0] + [i + 1 for i, w in enumerate(seq) if w in vocab["dish_after"]]
+        candidates: list[str] = []
+        for start in starts:
+            phrase = list(
+                itertools.takewhile(lambda w: w.isalpha() and w not in _STOP - {"and"}, seq[start:])
+            )
+            kept = [w for w in phrase if w not in in_scene and w not in ignored and len(w) > 2]
+            candidates += [f"{a} {b}" for a, b in itertools.pairwise(kept)] + kept
+        for candidate in dict.fromkeys(candidates):
             if candidate in classes or self._is_a(candidate, classes):
                 return candidate
         return None
+
+    def prep_places(self, destinations: Sequence[str]) -> list[str]:
+        """The destinations food can be prepared in or on: those the graph places under cookware
+        (``cookware_classes``: "frying pan" IsA pan, "mixing bowl" IsA bowl), by their name or its
+        last word ("ceramic bowl" -> bowl), within two IsA steps. Empty without a graph."""
+        if self.retriever is None:
+            return []
+        classes = set(words()["cookware_classes"])
+        found = []
+        for name in destinations:
+            words_ = tokens(name)
+            heads = dict.fromkeys([name.lower(), words_[-1] if words_ else name.lower()])
+            if any(h in classes or self._is_a(h, classes, depth=2) for h in heads):
+                found.append(name)
+        return found
 
     def _is_a(self, concept: str, classes: set[str], depth: int = 3) -> bool:
         """Whether an IsA chain of at most ``depth`` steps leads from ``concept`` to one of ``classes``."""
@@ -162,9 +182,10 @@ class FactFinder:
             parents = set()
             for node in level:
                 found = self.retriever.graph.edges(node, ["IsA"], 40)
-                if found.match != "exact":
+                if found.match not in ("exact", "lemma"):
                     continue
-                parents |= {e.tail.lower() for e in found.edges if e.head.lower() == node}
+                head = (found.matched or node).lower()
+                parents |= {e.tail.lower() for e in found.edges if e.head.lower() in (node, head)}
             if parents & classes:
                 return True
             level = set(list(parents - seen)[:12])
@@ -294,6 +315,7 @@ class Decider:
             )
 
         judgements, usage = self._judge_each(objects, about, what, question)
+        judgements = [dataclasses.replace(j, context=context) for j in judgements]
         return judgements, usage.with_latency(time.perf_counter() - started)
 
     def name_scores(self, request: str, move: str, objects: Sequence[str]) -> tuple[dict[str, float], Usage]:

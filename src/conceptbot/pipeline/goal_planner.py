@@ -258,7 +258,8 @@ class GoalPlanner:
                 judgements, used = self.decider.fits(
                     request, target.criterion, others, scene, dish=target.dish
                 )
-                context: tuple[str, ...] = ()
+                # The facts every question carried: the dish's definition (none for other criteria).
+                context: tuple[str, ...] = judgements[0].context if judgements else ()
             else:
                 move = move_text("{object}", target.name)
                 judgements, context, used = self.decider.moves(

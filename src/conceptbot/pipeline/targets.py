@@ -32,6 +32,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cache
 from importlib import resources
+from typing import Protocol
 
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
@@ -129,6 +130,18 @@ def is_stacking(request: str) -> bool:
     return any(re.search(rf"\b{re.escape(w)}\b", text) for w in words()["stack"])
 
 
+class FoodKnowledge(Protocol):
+    """What the planner asks the graph about food (implemented by ``FactFinder``)."""
+
+    def dish(self, request: str, pickable: Sequence[str]) -> str | None:
+        """The dish the request asks to be made, or None."""
+        ...
+
+    def prep_places(self, destinations: Sequence[str]) -> list[str]:
+        """The destinations food can be prepared in or on."""
+        ...
+
+
 @dataclass
 class Target:
     """A destination the request sends things to.
@@ -175,9 +188,10 @@ class TargetFinder:
         llm: An LLM that can score options (labelled ``goal``), for requests naming no destination.
         is_person: Whether a destination is a person.
         threshold: A scored destination other than the best is a target above this.
-        dish: ``(request, scene names) -> dish or None``: the dish a request asks to be made, from
-            the graph (:meth:`conceptbot.pipeline.decide.FactFinder.dish`); None: only the
-            ``making`` words ("cook", "bake") say that a request is about preparing food.
+        food: What the graph knows about food (:class:`conceptbot.pipeline.decide.FactFinder`):
+            which dish a request asks to be made, and which destinations food is made in; None:
+            only the ``making`` words ("cook", "bake") say that a request is about preparing food,
+            and every destination is a candidate for it.
     """
 
     def __init__(
@@ -185,12 +199,12 @@ class TargetFinder:
         llm: LLM,
         is_person: Callable[[str], bool],
         threshold: float = 1.0,
-        dish: Callable[[str, Sequence[str]], str | None] | None = None,
+        food: FoodKnowledge | None = None,
     ) -> None:
         self.llm = llm
         self.is_person = is_person
         self.threshold = threshold
-        self.dish = dish
+        self.food = food
 
     def _log_odds(self, request: str, dest: str) -> tuple[float, Usage]:
         action = f"give things to the {dest}" if self.is_person(dest) else f"put things in or on the {dest}"
@@ -210,7 +224,7 @@ class TargetFinder:
         people = {d: vocab["people"].get(d.lower(), []) for d in scene.destinations if self.is_person(d)}
         found = mentions(request, scene.destinations, people)
         seq = tokens(request)
-        dish = (self.dish(request, scene.names) if self.dish else None) or ""
+        dish = (self.food.dish(request, scene.pickable) if self.food else None) or ""
         making = bool(dish) or any(w in vocab["making"] for w in seq)
         how = "named"
         if not found and not making:
@@ -221,7 +235,12 @@ class TargetFinder:
         scores: dict[str, float] = {}
         if not found:
             how = "scored"
-            for dest in scene.destinations:
+            candidates = list(scene.destinations)
+            if making and self.food is not None:
+                # Food is made in cookware where the scene has some: asked "should the robot put
+                # things in the X?", the model preferred the fridge or the counter to the bowl.
+                candidates = self.food.prep_places(candidates) or candidates
+            for dest in candidates:
                 odds, used = self._log_odds(request, dest)
                 prior, used_prior = self._log_odds(CONTENT_FREE_REQUEST, dest)
                 usage = usage + used + used_prior
@@ -308,6 +327,15 @@ class TargetFinder:
                 # put the lime in the mixing bowl?" on the dev split.
                 criterion = f"an ingredient of {dish or 'the food the person asked for'}"
             targets.append(
-                Target(name, count, how, named[name], scores.get(name, 0.0), criterion, dish, ingredients)
+                Target(
+                    name,
+                    count,
+                    how,
+                    named[name],
+                    scores.get(name, 0.0),
+                    criterion,
+                    dish if ingredients else "",  # "a cake with flowers on the cake plate": no dish
+                    ingredients,
+                )
             )
         return targets

@@ -176,18 +176,23 @@ function showGoal(goal) {
   $("goal-box").hidden = false;
   $("targets").replaceChildren(...goal.targets.map((t) => el("li", {},
     `→ ${t.to}: ${t.count} (${t.how}${t.named.length ? ", named: " + t.named.join(", ") : ""}` +
-    `${t.criterion ? ", objects that fit “" + t.criterion + "”" : ""})`)));
+    `${t.criterion ? ", objects that fit “" + t.criterion + "”" : ""}` +
+    `${t.dish ? ", a dish the graph knows: " + t.dish : ""})`)));
   if (goal.stack) $("targets").append(el("li", {}, "stack the objects"));
 }
 
 function showDecisions(decisions) {
   for (const d of decisions.filter((x) => x.decided)) {
+    // The name ranking (all objects in one question) exists only for targets taking N objects.
+    const names = d.objects.some((o) => "name_score" in o);
     const table = el("table", {}, el("tr", {}, el("th", {}, `for the ${d.to}`), el("th", {}, "P(yes)"),
-      el("th", {}, "score"), el("th", {}, "graph facts in the question")));
+      el("th", {}, "score"), ...(names ? [el("th", {}, "name")] : []), el("th", {}, "graph facts in the question")));
     for (const o of d.objects.slice().sort((a, b) => b.score - a.score)) {
       table.append(el("tr", { class: o.score > 0 ? "kept" : "dropped" }, el("td", {}, o.object),
-        el("td", {}, o.p_yes.toFixed(2)), el("td", {}, o.score.toFixed(2)), el("td", {}, o.facts.join("; "))));
+        el("td", {}, o.p_yes.toFixed(2)), el("td", {}, o.score.toFixed(2)),
+        ...(names ? [el("td", {}, o.name_score.toFixed(2))] : []), el("td", {}, o.facts.join("; "))));
     }
+    if (d.context && d.context.length) $("decisions").append(el("p", {}, "facts about the request: " + d.context.join("; ")));
     $("decisions").append(table);
   }
 }
