@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import socket
 import subprocess
 import sys
@@ -14,9 +15,11 @@ import pytest
 
 from conceptbot.models.cache import CacheStore
 from conceptbot.models.cached import CachedLLM
-from conceptbot.models.llm import ChatRequest
+from conceptbot.models.http_scoring import echo_is_sound
+from conceptbot.models.llm import ChatRequest, ScoreRequest
 from conceptbot.models.openai_backend import OpenAILLM
 from conceptbot.models.structured import chat_json
+from tests.cli.test_cli import run
 
 pytestmark = pytest.mark.slow
 
@@ -46,7 +49,9 @@ def server_url(smollm2_path: Path, tmp_path_factory: pytest.TempPathFactory) -> 
                 "--port",
                 str(port),
                 "--n_ctx",
-                "1024",
+                "2048",
+                "--logits_all",  # echo + logprobs on the completions endpoint needs every position's logits
+                "true",
                 "--verbose",
                 "false",
             ],
@@ -94,3 +99,40 @@ def test_cache_in_front_of_a_real_server(server_url: str, tmp_path: Path) -> Non
     first = llm.chat(ChatRequest.of("Say yes.", max_tokens=4))
     second = llm.chat(ChatRequest.of("Say yes.", max_tokens=4))
     assert not first.cached and second.cached and first.text == second.text
+
+
+def test_scoring_through_a_real_server_finds_the_method_the_server_supports(server_url: str) -> None:
+    llm = OpenAILLM("smollm2", backend="openai-compatible", base_url=server_url, timeout_s=60, max_retries=1)
+    # llama-cpp-python 0.3.36 echoes each prompt token's log-probability after itself, not before
+    # (abetlen/llama-cpp-python#1983): the probe must refuse it, so chat log-probabilities are used.
+    assert echo_is_sound(llm) is False
+    question = ChatRequest.of("Is an apple a fruit? Answer Yes or No.").messages
+    yes_no = llm.score(ScoreRequest(options=("Yes", "No"), messages=question))
+    assert yes_no.method == "chat-logprobs" and all(lp <= 0.0 for lp in yes_no.logprobs)
+    options = ("pick_and_place(apple, user)", "pick_and_place(sponge, user)", "done()")
+    script = "objects = [apple, sponge, user]\n# Bring me a fruit.\n"
+    lettered = llm.score(ScoreRequest(options=options, prompt=script))
+    assert lettered.method == "chat-logprobs" and len(lettered.logprobs) == 3
+    assert len(set(lettered.logprobs)) > 1  # the letters got different log-probabilities
+
+
+def test_bench_run_through_a_real_server(
+    server_url: str, isolated_home: Path, omcs_file: Path, wordnet_dir: Path, tmp_path: Path
+) -> None:
+    run("kg", "install", "--file", str(omcs_file), "--wordnet-dir", str(wordnet_dir), home=isolated_home)
+    out = tmp_path / "http.jsonl"
+    args = [
+        "--llm",
+        f"openai-compatible:{server_url}#smollm2",
+        "bench",
+        "run",
+        "-c",
+        "saycan",
+        "-c",
+        "conceptbot",
+    ]
+    result = run(*args, "--category", "unambiguous", "--limit", "1", "--out", str(out), home=isolated_home)
+    assert "2 plans (1 tasks x 2 configs x 1 trials); 0 already" in result.stdout
+    records = [json.loads(line) for line in out.read_text().splitlines()]
+    assert {r["config"] for r in records} == {"saycan", "conceptbot"}
+    assert all(r["backend"] == "openai-compatible" and r["plan"][-1] == "done()" for r in records), records

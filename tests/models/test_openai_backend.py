@@ -2,7 +2,7 @@ import socket
 
 import pytest
 
-from conceptbot.core.errors import BackendRequestError, BackendUnavailableError, NotSupportedError
+from conceptbot.core.errors import BackendRequestError, BackendUnavailableError, ConfigError
 from conceptbot.models.llm import ChatRequest, ScoreRequest
 from conceptbot.models.openai_backend import OpenAILLM
 from tests.models.openai_stub import StubServer, completion
@@ -87,8 +87,101 @@ def test_server_down_is_backend_unavailable() -> None:
         _llm(f"http://127.0.0.1:{port}/v1").chat(ChatRequest.of("q"))
 
 
-def test_scoring_is_reported_as_not_supported() -> None:
-    llm = _llm("http://127.0.0.1:1/v1")
-    assert llm.capabilities.scoring is False
-    with pytest.raises(NotSupportedError, match="cannot score"):
-        llm.score(ScoreRequest(options=("a",), prompt="p"))
+def _echo(prompt: str, logprobs: list[float | None], offsets: list[int]) -> dict:
+    """A text_completion body echoing ``prompt`` as tokens at ``offsets`` (one token generated)."""
+    return {
+        "id": "cmpl-1",
+        "object": "text_completion",
+        "created": 0,
+        "model": "stub",
+        "choices": [
+            {
+                "index": 0,
+                "text": prompt + "!",
+                "finish_reason": "length",
+                "logprobs": {
+                    "tokens": ["t"] * (len(offsets) + 1),
+                    "text_offset": [*offsets, len(prompt)],
+                    "token_logprobs": [*logprobs, -0.5],
+                    "top_logprobs": None,
+                },
+            }
+        ],
+        "usage": {"prompt_tokens": len(offsets), "completion_tokens": 1, "total_tokens": len(offsets) + 1},
+    }
+
+
+def _top(tokens: dict[str, float]) -> dict:
+    """A chat.completion body whose first token has ``tokens`` as its top log-probabilities."""
+    body = completion([max(tokens, key=tokens.get)])
+    entries = [{"token": t, "logprob": lp, "bytes": None, "top_logprobs": []} for t, lp in tokens.items()]
+    body["choices"][0]["logprobs"] = {"content": [{**entries[0], "top_logprobs": entries}]}
+    return body
+
+
+SOUND = "1, 2, 3, 4, 5, 6"
+
+
+def test_scoring_uses_echo_where_the_server_echoes_sound_log_probabilities() -> None:
+    prompt = "objects = [apple]\n# bring me a fruit\n"
+    handlers = [
+        lambda body: (200, _echo(SOUND, [None, -0.1, -0.1], [0, 13, 14])),  # the probe: " 6" likely
+        lambda body: (200, _echo(body["prompt"], [None, -1.0, -0.25], [0, len(prompt), len(prompt) + 3])),
+        lambda body: (200, _echo(body["prompt"], [None, -1.0, -3.0], [0, len(prompt), len(prompt) + 3])),
+    ]
+    with StubServer(handlers) as server:
+        scored = _llm(server.url).score(ScoreRequest(options=("robot.pick(apple)", "done()"), prompt=prompt))
+    assert scored.method == "echo" and scored.logprobs == pytest.approx((-1.25, -4.0))
+    assert server.bodies[1]["echo"] is True and server.bodies[1]["prompt"] == prompt + "robot.pick(apple)"
+
+
+def test_a_server_with_shifted_echo_numbers_is_scored_through_chat_log_probabilities() -> None:
+    handlers = [
+        lambda body: (200, _echo(SOUND, [None, -10.9], [0, 14])),  # " 6" unlikely: shifted numbers
+        lambda body: (200, _top({"Yes": -0.1})),  # the chat probe
+        lambda body: (200, _top({"Yes": -0.2, " No": -1.8, "yes": -4.0})),
+    ]
+    with StubServer(handlers) as server:
+        llm = _llm(server.url)
+        messages = ChatRequest.of("Is an apple a fruit?").messages
+        scored = llm.score(ScoreRequest(options=("Yes", "No"), messages=messages))
+    assert scored.method == "chat-logprobs"
+    assert scored.logprobs == pytest.approx((-0.2, -1.8))  # "yes" is not "Yes"; " No" is "No"
+    assert server.bodies[2]["logprobs"] is True and server.bodies[2]["max_tokens"] == 1
+
+
+def test_long_options_are_asked_as_a_lettered_choice_and_missing_letters_get_a_floor() -> None:
+    handlers = [lambda body: (200, _top({"B": -0.3, "A": -1.5}))]
+    with StubServer(handlers) as server:
+        llm = _llm(server.url, scoring="chat-logprobs")
+        messages = ChatRequest.of("Which one?").messages
+        scored = llm.score(
+            ScoreRequest(options=("the red apple", "the green pear", "a car"), messages=messages)
+        )
+    assert scored.logprobs == pytest.approx((-1.5, -0.3, -2.5))
+    asked = server.bodies[0]["messages"][-1]["content"]
+    assert "A) the red apple" in asked and "C) a car" in asked
+
+
+def test_vote_scores_shares_of_sampled_letters() -> None:
+    replies = [completion(["A"]), completion(["A"]), completion(["B"]), completion(["A"]), completion(["A"])]
+    with StubServer([lambda body, r=r: (200, r) for r in replies]) as server:
+        scored = _llm(server.url, scoring="vote").score(
+            ScoreRequest(options=("apple", "pear"), messages=ChatRequest.of("Which?").messages)
+        )
+    assert scored.method == "vote" and scored.logprobs[0] > scored.logprobs[1]
+
+
+def test_a_server_without_log_probabilities_is_a_clear_error_for_a_fixed_method() -> None:
+    with (
+        StubServer([lambda body: (200, completion(["Yes"]))]) as server,
+        pytest.raises(BackendRequestError, match="no log-probabilities"),
+    ):
+        _llm(server.url, scoring="chat-logprobs").score(
+            ScoreRequest(options=("Yes", "No"), messages=ChatRequest.of("q").messages)
+        )
+
+
+def test_an_unknown_scoring_method_is_a_config_error() -> None:
+    with pytest.raises(ConfigError, match="unknown scoring method"):
+        _llm("http://127.0.0.1:1/v1", scoring="telepathy")

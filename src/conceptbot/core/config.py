@@ -17,6 +17,8 @@ Environment variables:
     OPENAI_BASE_URL        base URL for the ``openai`` backends (default: the official API)
     CONCEPTBOT_TIMEOUT     HTTP time-out in seconds (default 60)
     CONCEPTBOT_MAX_RETRIES bounded retries for HTTP backends (default 3, exponential backoff)
+    CONCEPTBOT_SCORING     how HTTP backends score options: ``auto`` (default: the best the server
+                           supports, found once), ``echo``, ``chat-logprobs`` or ``vote``
     CONCEPTBOT_THREADS     CPU threads for the embedded LLM (default: all cores)
     CONCEPTBOT_N_CTX       context window of the embedded LLM (default 4096)
     CONCEPTBOT_KG          knowledge graph: ``sqlite`` (default, offline), ``conceptnet-api[:URL]``,
@@ -56,6 +58,7 @@ class Settings:
         compatible_api_key: Key for ``openai-compatible`` servers.
         timeout_s: HTTP time-out per request.
         max_retries: Retries after a failed HTTP request (exponential backoff).
+        scoring: How HTTP backends score options (``conceptbot.models.http_scoring.METHODS``).
         n_threads: CPU threads for the embedded LLM (None: all cores).
         n_ctx: Context window of the embedded LLM in tokens.
         kg: Knowledge graph backend spec.
@@ -72,6 +75,7 @@ class Settings:
     compatible_api_key: str | None = field(default=None, repr=False)
     timeout_s: float = 60.0
     max_retries: int = 3
+    scoring: str = "auto"
     n_threads: int | None = None
     n_ctx: int = 4096
     kg: str = "sqlite"
@@ -111,6 +115,7 @@ _ENV: dict[str, str] = {
     "OPENAI_BASE_URL": "openai_base_url",
     "CONCEPTBOT_TIMEOUT": "timeout_s",
     "CONCEPTBOT_MAX_RETRIES": "max_retries",
+    "CONCEPTBOT_SCORING": "scoring",
     "CONCEPTBOT_THREADS": "n_threads",
     "CONCEPTBOT_N_CTX": "n_ctx",
     "CONCEPTBOT_KG": "kg",
@@ -139,6 +144,7 @@ _TYPES: dict[str, type] = {
     "compatible_api_key": str,
     "timeout_s": float,
     "max_retries": int,
+    "scoring": str,
     "n_threads": int,
     "n_ctx": int,
     "kg": str,

@@ -142,6 +142,7 @@ class CachedLLM:
                 backend=self.backend,
                 model=self.model,
                 cached=True,
+                method=hit.get("method", "logprob"),
             )
         try:
             response = self.inner.score(request)
@@ -156,6 +157,7 @@ class CachedLLM:
                 "logprobs": list(response.logprobs),
                 "token_counts": list(response.token_counts),
                 "usage": _usage_dict(response.usage),
+                "method": response.method,
             },
         )
         self._log("score", response.usage, cached=False)

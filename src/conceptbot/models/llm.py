@@ -166,6 +166,8 @@ class ScoreResponse:
         backend: Backend name.
         model: Model identifier.
         cached: True when the result came from the cache.
+        method: How the options were scored: ``logprob`` (exact, embedded), or over HTTP ``echo``,
+            ``chat-logprobs`` or ``vote`` (:mod:`conceptbot.models.http_scoring`).
     """
 
     logprobs: tuple[float, ...]
@@ -174,6 +176,7 @@ class ScoreResponse:
     backend: str
     model: str
     cached: bool = False
+    method: str = "logprob"
 
     def mean_logprobs(self) -> tuple[float, ...]:
         """Per-token average log-probability (length-normalised)."""

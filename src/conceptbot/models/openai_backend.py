@@ -18,8 +18,9 @@ JSON-schema output: OpenAI and vLLM take ``response_format={"type": "json_schema
 llama.cpp's server only takes ``{"type": "json_object", "schema": ...}``. For ``openai-compatible``
 the first form is tried and, if the server rejects it, the second is used from then on.
 
-Scoring: the chat API returns log-probabilities of generated tokens only, not of arbitrary
-continuations, so :meth:`OpenAILLM.score` raises :class:`NotSupportedError`.
+Scoring (:meth:`OpenAILLM.score`): by the best method the server supports, found once
+(:mod:`conceptbot.models.http_scoring`: ``echo`` on completions, ``chat-logprobs``, ``vote``), or the
+one configured (``CONCEPTBOT_SCORING``). The method used is on every :class:`ScoreResponse`.
 """
 
 from __future__ import annotations
@@ -28,15 +29,18 @@ import json
 import time
 from typing import Any
 
-from conceptbot.core.errors import (
-    BackendRequestError,
-    BackendUnavailableError,
-    ConfigError,
-    NotSupportedError,
-)
+from conceptbot.core.errors import BackendRequestError, BackendUnavailableError, ConfigError
 from conceptbot.core.urls import check_http_url, redact_secrets, redact_url
 from conceptbot.core.usage import Usage
-from conceptbot.models.llm import Capabilities, ChatRequest, ChatResponse, ScoreRequest, ScoreResponse
+from conceptbot.models.http_scoring import EchoTokens, HTTPScorer
+from conceptbot.models.llm import (
+    Capabilities,
+    ChatRequest,
+    ChatResponse,
+    Message,
+    ScoreRequest,
+    ScoreResponse,
+)
 
 
 def validate_base_url(url: str) -> str:
@@ -107,6 +111,7 @@ class OpenAILLM:
         timeout_s: Per-request time-out.
         max_retries: Retries with exponential backoff on connection errors, 408/409/429/5xx.
         client: A pre-built ``openai.OpenAI`` client (tests).
+        scoring: How options are scored (:data:`conceptbot.models.http_scoring.METHODS`).
     """
 
     def __init__(
@@ -119,6 +124,7 @@ class OpenAILLM:
         timeout_s: float = 60.0,
         max_retries: int = 3,
         client: Any = None,
+        scoring: str = "auto",
     ) -> None:
         if backend not in ("openai", "openai-compatible"):
             raise ConfigError(f"OpenAILLM backend must be openai or openai-compatible, not {backend!r}")
@@ -136,7 +142,8 @@ class OpenAILLM:
         self.backend = backend
         self.model = model
         self.base_url = validate_base_url(base_url) if base_url else None
-        self.capabilities = Capabilities(scoring=False, json_schema=True, native_n=backend == "openai")
+        self.capabilities = Capabilities(scoring=True, json_schema=True, native_n=backend == "openai")
+        self.scorer = HTTPScorer(self, scoring)
         self._json_mode = "json_schema"
         self._headers = request_headers(backend, api_key) if client is None else {}
         if client is None:
@@ -277,11 +284,75 @@ class OpenAILLM:
         return got, used
 
     def score(self, request: ScoreRequest) -> ScoreResponse:
-        """Not supported: chat APIs do not return log-probabilities of given continuations."""
-        raise NotSupportedError(
-            f"the {self.backend} backend cannot score options by log-probability",
-            hint="use the llamacpp backend for log-probability scoring, or the vote-based planner",
+        """Log-probability of each option (see :mod:`conceptbot.models.http_scoring`); the
+        response's ``method`` says which way."""
+        logprobs, counts, usage, method = self.scorer.score(request)
+        return ScoreResponse(tuple(logprobs), tuple(counts), usage, self.backend, self.model, method=method)
+
+    def _call(self, make: Any) -> Any:
+        """One SDK call with this backend's error mapping."""
+        import openai
+
+        try:
+            return make()
+        except openai.APIStatusError as exc:
+            raise self._status_error(exc) from None
+        except (openai.APIResponseValidationError, json.JSONDecodeError):
+            raise not_openai_reply(self._where(), "a body the SDK could not read") from None
+        except openai.APITimeoutError:
+            raise BackendUnavailableError(
+                f"{self._where()} did not answer in time", hint="raise CONCEPTBOT_TIMEOUT or check the server"
+            ) from None
+        except openai.APIConnectionError:
+            raise BackendUnavailableError(
+                f"cannot connect to {self._where()}", hint="is the server running and the URL right?"
+            ) from None
+
+    def echo(self, prompt: str) -> EchoTokens:
+        """Completions with ``echo`` and ``logprobs`` (the ``echo`` scoring method)."""
+        extra = {"extra_headers": self._headers} if self._headers else {}
+        out = self._call(
+            lambda: self._client.completions.create(
+                model=self.model, prompt=prompt, max_tokens=1, echo=True, logprobs=1, temperature=0, **extra
+            )
         )
+        try:
+            found = out.choices[0].logprobs
+            offsets = tuple(int(o) for o in found.text_offset)
+            logprobs = tuple(None if lp is None else float(lp) for lp in found.token_logprobs)
+            # The generated token comes last; only the prompt's are wanted.
+            echoed = [i for i, off in enumerate(offsets) if off < len(prompt)]
+            keep = (echoed[-1] + 1) if echoed else 0
+            used = int(out.usage.prompt_tokens) if out.usage is not None else keep
+        except (AttributeError, TypeError, ValueError, IndexError):
+            raise BackendRequestError(f"{self._where()} returned no prompt log-probabilities") from None
+        return EchoTokens(offsets[:keep], logprobs[:keep], used)
+
+    def _chat_kwargs(self, messages: Any, **more: Any) -> dict[str, Any]:
+        kwargs = {"model": self.model, "messages": [{"role": m.role, "content": m.content} for m in messages]}
+        if self._headers:
+            kwargs["extra_headers"] = self._headers
+        return {**kwargs, **more}
+
+    def first_token(self, messages: Any, top: int) -> tuple[dict[str, float], int]:
+        """The top log-probabilities of the reply's first token (``chat-logprobs``)."""
+        kwargs = self._chat_kwargs(messages, max_tokens=1, temperature=0, logprobs=True, top_logprobs=top)
+        out = self._call(lambda: self._client.chat.completions.create(**kwargs))
+        try:
+            entry = out.choices[0].logprobs.content[0]
+            found = {str(t.token): float(t.logprob) for t in entry.top_logprobs}
+            used = int(out.usage.prompt_tokens) if out.usage is not None else 0
+        except (AttributeError, TypeError, ValueError, IndexError):
+            raise BackendRequestError(f"{self._where()} returned no log-probabilities for chat") from None
+        return found, used
+
+    def sample(self, messages: Any, n: int) -> tuple[list[str], int]:
+        """``n`` one-token answers at temperature 1 (``vote``)."""
+        request = ChatRequest(
+            messages=tuple(Message(m.role, m.content) for m in messages), n=n, temperature=1.0, max_tokens=2
+        )
+        reply = self.chat(request)
+        return list(reply.choices), reply.usage.prompt_tokens
 
 
 def _rejects_json_schema(exc: Any) -> bool:

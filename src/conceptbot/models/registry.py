@@ -137,6 +137,7 @@ def _openai(argument: str, settings: Settings) -> LLM:
         api_key=settings.openai_api_key,
         timeout_s=settings.timeout_s,
         max_retries=settings.max_retries,
+        scoring=settings.scoring,
     )
 
 
@@ -157,6 +158,7 @@ def _openai_compatible(argument: str, settings: Settings) -> LLM:
         api_key=settings.compatible_api_key,
         timeout_s=settings.timeout_s,
         max_retries=settings.max_retries,
+        scoring=settings.scoring,
     )
 
 

@@ -1,0 +1,200 @@
+"""Option scoring over HTTP: the best method an OpenAI-compatible server supports.
+
+SayCan and the goal planner score options by log-probability. Over HTTP three ways exist:
+
+* ``echo``: a completions request with ``echo`` and ``logprobs`` returns the log-probability of each
+  prompt token, so ``prompt + option`` scores the option exactly as the embedded backend does.
+  Prompt-form requests only (a chat prompt's template is the server's). Some servers return these
+  numbers shifted by one token (llama-cpp-python 0.3.x, abetlen/llama-cpp-python#1983) or not at
+  all (llama.cpp's own server): :func:`echo_is_sound` checks a continuation whose next token is
+  certain ("1, 2, 3, 4, 5, 6") before the method is used.
+* ``chat-logprobs``: a chat request for one token with ``logprobs`` and ``top_logprobs`` (OpenAI,
+  vLLM, llama.cpp servers). One-token options ("Yes", "No") are read directly; other options are
+  asked as a labelled multiple choice ("A) ..., B) ...") and scored by their label's log-probability,
+  in groups of at most :data:`MAX_LABELS` (``top_logprobs`` allows 20). An option whose token is not
+  among the top ones gets the lowest returned log-probability minus one.
+* ``vote``: where neither exists, ``n`` sampled answers to the labelled question; an option's score
+  is the log of its share (what the paper did with gpt-4o-mini).
+
+:class:`HTTPScorer` finds the method once per server (``auto``) or uses the configured one.
+"""
+
+from __future__ import annotations
+
+import math
+import string
+import time
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+from conceptbot.core.errors import BackendRequestError, ConfigError
+from conceptbot.core.usage import Usage
+from conceptbot.models.llm import Message, ScoreRequest
+
+METHODS = ("auto", "echo", "chat-logprobs", "vote")
+MAX_LABELS = 20  # the most top_logprobs OpenAI-style chat APIs return
+LABELS = string.ascii_uppercase[:MAX_LABELS]
+VOTES = 5
+SOUND_PROMPT = "1, 2, 3, 4, 5,"
+SOUND_OPTION = " 6"
+
+
+@dataclass(frozen=True)
+class EchoTokens:
+    """Prompt tokens echoed by a completions endpoint: text offsets and log-probabilities."""
+
+    offsets: tuple[int, ...]
+    logprobs: tuple[float | None, ...]
+    prompt_tokens: int
+
+
+class Transport(Protocol):
+    """The two HTTP calls the scorers need (implemented by ``OpenAILLM``)."""
+
+    def echo(self, prompt: str) -> EchoTokens:
+        """Completions with ``echo`` and ``logprobs`` for ``prompt`` (one token generated)."""
+        ...
+
+    def first_token(self, messages: Sequence[Message], top: int) -> tuple[dict[str, float], int]:
+        """The ``top`` log-probabilities of the reply's first token, and the prompt's tokens."""
+        ...
+
+    def sample(self, messages: Sequence[Message], n: int) -> tuple[list[str], int]:
+        """``n`` sampled one-token answers, and the prompt's tokens."""
+        ...
+
+
+def echo_is_sound(transport: Transport) -> bool:
+    """Whether the server's echoed log-probabilities are those of each token given the ones before:
+    " 6" after "1, 2, 3, 4, 5," must be likely (above log 0.1); a server reporting each token's
+    probability after itself (the shifted numbers) gives it about -10."""
+    try:
+        found = transport.echo(SOUND_PROMPT + SOUND_OPTION)
+    except BackendRequestError:
+        return False
+    tail = [lp for off, lp in zip(found.offsets, found.logprobs, strict=False) if off >= len(SOUND_PROMPT)]
+    return bool(tail) and all(lp is not None for lp in tail) and sum(tail) > math.log(0.1)  # type: ignore[arg-type]
+
+
+def _echo_scores(
+    transport: Transport, prompt: str, options: Sequence[str]
+) -> tuple[list[float], list[int], int]:
+    scores, counts, tokens = [], [], 0
+    for option in options:
+        found = transport.echo(prompt + option)
+        tokens += found.prompt_tokens
+        tail = [
+            lp or 0.0 for off, lp in zip(found.offsets, found.logprobs, strict=False) if off >= len(prompt)
+        ]
+        scores.append(sum(tail))
+        counts.append(len(tail))
+    return scores, counts, tokens
+
+
+def _read(top: dict[str, float], wanted: Sequence[str]) -> list[float]:
+    """Each wanted token's log-probability among ``top`` (leading spaces ignored, variants summed);
+    the lowest returned minus one where it is missing."""
+    floor = (min(top.values()) if top else 0.0) - 1.0
+    out = []
+    for token in wanted:
+        hits = [lp for text, lp in top.items() if text.strip() == token]
+        out.append(math.log(sum(math.exp(lp) for lp in hits)) if hits else floor)
+    return out
+
+
+def labelled_question(messages: Sequence[Message], options: Sequence[str]) -> tuple[Message, ...]:
+    """The request's messages with its options as a lettered choice appended to the last one."""
+    listing = "\n".join(f"{label}) {option}" for label, option in zip(LABELS, options, strict=False))
+    last = messages[-1]
+    content = (
+        f"{last.content.rstrip()}\n\nOptions:\n{listing}\nAnswer with the letter of the best option only."
+    )
+    return (*messages[:-1], Message(last.role, content))
+
+
+def as_messages(request: ScoreRequest) -> tuple[Message, ...]:
+    """Chat messages for a request: its own, or a prompt-form request as one user message."""
+    if request.messages is not None:
+        messages = request.messages
+        if request.assistant_prefix:
+            last = messages[-1]
+            hint = f"\n(The answer starts with: {request.assistant_prefix.strip()})"
+            messages = (*messages[:-1], Message(last.role, last.content.rstrip() + hint))
+        return messages
+    text = f"{request.prompt}\n\nWhich line comes next?"
+    return (Message("user", text),)
+
+
+def _one_token(options: Sequence[str]) -> bool:
+    """Options short enough to be read as one token each ("Yes", "No")."""
+    return all(o.strip() and len(o.strip()) <= 4 and o.strip().isalpha() for o in options)
+
+
+class HTTPScorer:
+    """Scores options through a :class:`Transport` with one of :data:`METHODS`.
+
+    Args:
+        transport: The HTTP calls.
+        method: ``auto`` (probe once: echo if sound, else chat-logprobs, else vote) or a fixed one.
+    """
+
+    def __init__(self, transport: Transport, method: str = "auto") -> None:
+        if method not in METHODS:
+            raise ConfigError(f"unknown scoring method {method!r}", hint=f"use one of {', '.join(METHODS)}")
+        self.transport = transport
+        self.method = method
+        self._found: str | None = None if method == "auto" else method
+
+    def resolved(self, prompt_form: bool) -> str:
+        """The method used for a prompt-form (``True``) or chat-form request, probing once."""
+        if self._found is None:
+            self._found = self._probe()
+        if self._found == "echo" and not prompt_form:
+            return "chat-logprobs"  # a chat prompt's template is the server's: echo cannot score it
+        return self._found
+
+    def _probe(self) -> str:
+        if echo_is_sound(self.transport):
+            return "echo"
+        try:
+            top, _ = self.transport.first_token((Message("user", "Answer Yes or No: is 2 > 1?"),), 5)
+        except BackendRequestError:
+            return "vote"
+        return "chat-logprobs" if top else "vote"
+
+    def score(self, request: ScoreRequest) -> tuple[list[float], list[int], Usage, str]:
+        """Scores (log-probabilities, or log shares for votes), token counts, usage and the method."""
+        started = time.perf_counter()
+        method = self.resolved(request.prompt is not None)
+        options = list(request.options)
+        if method == "echo":
+            assert request.prompt is not None
+            scores, counts, tokens = _echo_scores(self.transport, request.prompt, options)
+            return scores, counts, Usage(tokens, 0, time.perf_counter() - started, 0.0, len(options)), method
+        messages = as_messages(request)
+        scores: list[float] = []
+        tokens = calls = 0
+        if method == "chat-logprobs" and _one_token(options):
+            top, tokens = self.transport.first_token(messages, MAX_LABELS)
+            scores, calls = _read(top, [o.strip() for o in options]), 1
+        else:
+            for start in range(0, len(options), MAX_LABELS):
+                group = options[start : start + MAX_LABELS]
+                asked = labelled_question(messages, group)
+                labels = list(LABELS[: len(group)])
+                if method == "chat-logprobs":
+                    top, used = self.transport.first_token(asked, MAX_LABELS)
+                    scores += _read(top, labels)
+                else:
+                    answers, used = self.transport.sample(asked, VOTES)
+                    votes = Counter(a.strip()[:1] for a in answers)
+                    scores += [
+                        math.log((votes[label] + 0.1) / (len(answers) + 0.1 * len(labels)))
+                        for label in labels
+                    ]
+                tokens += used
+                calls += 1
+        usage = Usage(tokens, calls, time.perf_counter() - started, 0.0, calls)
+        return scores, [1] * len(options), usage, method
