@@ -18,7 +18,7 @@ from click.testing import CliRunner
 from conceptbot.cli.main import cli
 from conceptbot.core.config import Settings, load_settings
 from conceptbot.knowledge.sqlite_store import GraphBuilder
-from tests.models.openai_stub import StubServer, completion
+from tests.models.openai_stub import StubServer, completion, echo_reply, top_reply
 
 # After cli.main: importing a command module first is a circular import (main registers them all).
 doctor = importlib.import_module("conceptbot.cli.doctor")
@@ -62,7 +62,12 @@ def _free_port() -> int:
 
 # -- 4. HTTP backends are contacted --------------------------------------------------------------
 def test_doctor_reaches_the_openai_backend_and_times_it(home_with_graph: Path) -> None:
-    with StubServer([lambda body: (200, completion(["OK"]))]) as server:
+    replies = [
+        completion(["OK"]),
+        echo_reply("1, 2, 3, 4, 5, 6", [None, -10.9], [0, 14]),  # the scoring probe: echo unsound
+        top_reply({"Yes": -0.1}),  # chat log-probabilities work
+    ]
+    with StubServer([lambda body, r=r: (200, r) for r in replies]) as server:
         result = run(
             "--llm",
             "openai:gpt-x",
@@ -73,8 +78,9 @@ def test_doctor_reaches_the_openai_backend_and_times_it(home_with_graph: Path) -
             extra_env={"OPENAI_API_KEY": "sk-test-key-for-doctor", "OPENAI_BASE_URL": server.url},
         )
     assert "[ok  ] LLM server (openai): model 'gpt-x' answered in" in result.stdout, result.stdout
+    assert "options scored by chat-logprobs" in result.stdout, result.stdout
     assert _fail_lines(result.stdout) == [] and result.returncode == 0, result.stdout + result.stderr
-    assert len(server.bodies) == 1 and server.bodies[0]["max_tokens"] == 1
+    assert len(server.bodies) == 3 and server.bodies[0]["max_tokens"] == 1
 
 
 def test_doctor_fails_when_the_server_is_down(home_with_graph: Path) -> None:

@@ -30,6 +30,38 @@ def completion(texts: list[str], prompt_tokens: int = 7, completion_tokens: int 
     }
 
 
+def echo_reply(prompt: str, logprobs: list[float | None], offsets: list[int]) -> dict:
+    """A text_completion body echoing ``prompt`` as tokens at ``offsets`` (one token generated)."""
+    return {
+        "id": "cmpl-1",
+        "object": "text_completion",
+        "created": 0,
+        "model": "stub",
+        "choices": [
+            {
+                "index": 0,
+                "text": prompt + "!",
+                "finish_reason": "length",
+                "logprobs": {
+                    "tokens": ["t"] * (len(offsets) + 1),
+                    "text_offset": [*offsets, len(prompt)],
+                    "token_logprobs": [*logprobs, -0.5],
+                    "top_logprobs": None,
+                },
+            }
+        ],
+        "usage": {"prompt_tokens": len(offsets), "completion_tokens": 1, "total_tokens": len(offsets) + 1},
+    }
+
+
+def top_reply(tokens: dict[str, float]) -> dict:
+    """A chat.completion body whose first token has ``tokens`` as its top log-probabilities."""
+    body = completion([max(tokens, key=tokens.get)])
+    entries = [{"token": t, "logprob": lp, "bytes": None, "top_logprobs": []} for t, lp in tokens.items()]
+    body["choices"][0]["logprobs"] = {"content": [{**entries[0], "top_logprobs": entries}]}
+    return body
+
+
 class StubServer(LoopbackServer):
     """Serves POST /v1/chat/completions from a queue of handlers; records request bodies and headers."""
 

@@ -133,6 +133,8 @@ def test_bench_run_through_a_real_server(
     ]
     result = run(*args, "--category", "unambiguous", "--limit", "1", "--out", str(out), home=isolated_home)
     assert "2 plans (1 tasks x 2 configs x 1 trials); 0 already" in result.stdout
+    assert "options scored by chat-logprobs (openai-compatible)" in result.stdout
     records = [json.loads(line) for line in out.read_text().splitlines()]
     assert {r["config"] for r in records} == {"saycan", "conceptbot"}
     assert all(r["backend"] == "openai-compatible" and r["plan"][-1] == "done()" for r in records), records
+    assert {r["scoring"] for r in records} == {"chat-logprobs"}

@@ -5,7 +5,7 @@ import pytest
 from conceptbot.core.errors import BackendRequestError, BackendUnavailableError, ConfigError
 from conceptbot.models.llm import ChatRequest, ScoreRequest
 from conceptbot.models.openai_backend import OpenAILLM
-from tests.models.openai_stub import StubServer, completion
+from tests.models.openai_stub import StubServer, completion, echo_reply, top_reply
 
 
 def _llm(url: str, **kwargs) -> OpenAILLM:
@@ -87,47 +87,18 @@ def test_server_down_is_backend_unavailable() -> None:
         _llm(f"http://127.0.0.1:{port}/v1").chat(ChatRequest.of("q"))
 
 
-def _echo(prompt: str, logprobs: list[float | None], offsets: list[int]) -> dict:
-    """A text_completion body echoing ``prompt`` as tokens at ``offsets`` (one token generated)."""
-    return {
-        "id": "cmpl-1",
-        "object": "text_completion",
-        "created": 0,
-        "model": "stub",
-        "choices": [
-            {
-                "index": 0,
-                "text": prompt + "!",
-                "finish_reason": "length",
-                "logprobs": {
-                    "tokens": ["t"] * (len(offsets) + 1),
-                    "text_offset": [*offsets, len(prompt)],
-                    "token_logprobs": [*logprobs, -0.5],
-                    "top_logprobs": None,
-                },
-            }
-        ],
-        "usage": {"prompt_tokens": len(offsets), "completion_tokens": 1, "total_tokens": len(offsets) + 1},
-    }
-
-
-def _top(tokens: dict[str, float]) -> dict:
-    """A chat.completion body whose first token has ``tokens`` as its top log-probabilities."""
-    body = completion([max(tokens, key=tokens.get)])
-    entries = [{"token": t, "logprob": lp, "bytes": None, "top_logprobs": []} for t, lp in tokens.items()]
-    body["choices"][0]["logprobs"] = {"content": [{**entries[0], "top_logprobs": entries}]}
-    return body
-
-
 SOUND = "1, 2, 3, 4, 5, 6"
 
 
 def test_scoring_uses_echo_where_the_server_echoes_sound_log_probabilities() -> None:
     prompt = "objects = [apple]\n# bring me a fruit\n"
     handlers = [
-        lambda body: (200, _echo(SOUND, [None, -0.1, -0.1], [0, 13, 14])),  # the probe: " 6" likely
-        lambda body: (200, _echo(body["prompt"], [None, -1.0, -0.25], [0, len(prompt), len(prompt) + 3])),
-        lambda body: (200, _echo(body["prompt"], [None, -1.0, -3.0], [0, len(prompt), len(prompt) + 3])),
+        lambda body: (200, echo_reply(SOUND, [None, -0.1, -0.1], [0, 13, 14])),  # the probe: " 6" likely
+        lambda body: (
+            200,
+            echo_reply(body["prompt"], [None, -1.0, -0.25], [0, len(prompt), len(prompt) + 3]),
+        ),
+        lambda body: (200, echo_reply(body["prompt"], [None, -1.0, -3.0], [0, len(prompt), len(prompt) + 3])),
     ]
     with StubServer(handlers) as server:
         scored = _llm(server.url).score(ScoreRequest(options=("robot.pick(apple)", "done()"), prompt=prompt))
@@ -137,9 +108,9 @@ def test_scoring_uses_echo_where_the_server_echoes_sound_log_probabilities() -> 
 
 def test_a_server_with_shifted_echo_numbers_is_scored_through_chat_log_probabilities() -> None:
     handlers = [
-        lambda body: (200, _echo(SOUND, [None, -10.9], [0, 14])),  # " 6" unlikely: shifted numbers
-        lambda body: (200, _top({"Yes": -0.1})),  # the chat probe
-        lambda body: (200, _top({"Yes": -0.2, " No": -1.8, "yes": -4.0})),
+        lambda body: (200, echo_reply(SOUND, [None, -10.9], [0, 14])),  # " 6" unlikely: shifted numbers
+        lambda body: (200, top_reply({"Yes": -0.1})),  # the chat probe
+        lambda body: (200, top_reply({"Yes": -0.2, " No": -1.8, "yes": -4.0})),
     ]
     with StubServer(handlers) as server:
         llm = _llm(server.url)
@@ -151,7 +122,7 @@ def test_a_server_with_shifted_echo_numbers_is_scored_through_chat_log_probabili
 
 
 def test_long_options_are_asked_as_a_lettered_choice_and_missing_letters_get_a_floor() -> None:
-    handlers = [lambda body: (200, _top({"B": -0.3, "A": -1.5}))]
+    handlers = [lambda body: (200, top_reply({"B": -0.3, "A": -1.5}))]
     with StubServer(handlers) as server:
         llm = _llm(server.url, scoring="chat-logprobs")
         messages = ChatRequest.of("Which one?").messages

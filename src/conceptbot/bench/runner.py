@@ -143,8 +143,9 @@ def timed_record(
     return record
 
 
-def run_job(job: Job, system: PlannerSystem, backend: str, model: str) -> dict[str, Any]:
-    """Plan one task with one system, grade it, and return the record."""
+def run_job(job: Job, system: PlannerSystem, backend: str, model: str, scoring: str = "") -> dict[str, Any]:
+    """Plan one task with one system, grade it, and return the record (``scoring``: how the backend
+    scores options, recorded as is)."""
     scene = task_scene(job.task)
 
     def attempt() -> dict[str, Any]:
@@ -167,6 +168,7 @@ def run_job(job: Job, system: PlannerSystem, backend: str, model: str) -> dict[s
         "trial": job.trial,
         "backend": backend,
         "model": model,
+        "scoring": scoring,
         "request": job.task.request,
     }
     return timed_record(head, attempt, {"plan": None, "refused": False, "ok": False})
@@ -180,6 +182,7 @@ def run(
     model: str,
     workers: int = 1,
     on_record: Callable[[dict[str, Any]], None] | None = None,
+    scoring: str = "",
 ) -> list[dict[str, Any]]:
     """Run the jobs not yet in ``out`` and append their records to it.
 
@@ -190,10 +193,11 @@ def run(
         backend, model: Recorded with each result and part of the resume key.
         workers: Plans at once (1 for in-process backends).
         on_record: Called after each record is written (progress bars).
+        scoring: How the backend scores options (:func:`conceptbot.models.registry.scoring_method`).
     """
     return append_results(
         pending(jobs, out, backend, model),
-        lambda job: run_job(job, systems(job.config), backend, model),
+        lambda job: run_job(job, systems(job.config), backend, model, scoring),
         out,
         workers,
         on_record,

@@ -19,7 +19,7 @@ from conceptbot.cli.bench_options import (
 from conceptbot.cli.main import AppContext, pass_app
 from conceptbot.cli.progress import count_progress
 from conceptbot.core.urls import redact_secrets
-from conceptbot.models.registry import split_spec
+from conceptbot.models.registry import scoring_method, split_spec
 
 DEFAULT_RESULTS = {"test": Path("results/bench.jsonl"), "dev": Path("results/bench-dev.jsonl")}
 """Results file of each task split when --out is not given."""
@@ -102,6 +102,9 @@ def run_cmd(
         return systems[config]
 
     todo = len(pending(jobs, out, backend, model or ""))
+    scoring = scoring_method(settings) if todo else ""
+    if scoring and scoring != "logprob":
+        click.echo(f"options scored by {scoring} ({backend})")
     if split != "test":
         click.echo(f"split: {split} (our own tasks for tuning, not the paper's 47)")
     click.echo(
@@ -117,7 +120,7 @@ def run_cmd(
             verdict = "ok" if record["ok"] else "fail"
             step(f"{record['config']} {record['task']}: {verdict} ({ok} ok)")
 
-        run(jobs, system, out, backend, model or "", workers, advance)
+        run(jobs, system, out, backend, model or "", workers, advance, scoring)
     click.echo(markdown(summarise(load_records(out))))
 
 

@@ -30,7 +30,7 @@ from conceptbot.knowledge.registry import create_graph
 from conceptbot.knowledge.sqlite_store import SQLiteGraph
 from conceptbot.models import store
 from conceptbot.models.llm import ChatRequest
-from conceptbot.models.registry import create_embedder, create_llm, open_store, split_spec
+from conceptbot.models.registry import create_embedder, create_llm, open_store, scoring_method, split_spec
 
 HTTP_BACKENDS = ("openai", "openai-compatible")
 # A health check should answer within seconds; the user's time-out is for long generations.
@@ -95,7 +95,15 @@ def check_llm_server(settings: Settings) -> Check:
     except ConceptBotError as exc:
         return Check(f"LLM server ({name})", False, _one_line(exc))
     elapsed = time.perf_counter() - started
-    return Check(f"LLM server ({name})", True, f"model {llm.model!r} answered in {elapsed:.2f} s")
+    try:
+        scoring = scoring_method(probe)
+    except ConceptBotError as exc:
+        scoring = f"not available ({_one_line(exc)})"
+    return Check(
+        f"LLM server ({name})",
+        True,
+        f"model {llm.model!r} answered in {elapsed:.2f} s; options scored by {scoring}",
+    )
 
 
 def _one_line(exc: ConceptBotError) -> str:

@@ -95,6 +95,21 @@ def create_embedder(spec: str, settings: Settings) -> Embedder:
     return _EMBEDDERS[name](argument, settings)
 
 
+def scoring_method(settings: Settings) -> str:
+    """How the configured LLM scores options: ``logprob`` for in-process backends (exact), or for
+    an HTTP backend the method its server supports (probed now, two small requests; see
+    :mod:`conceptbot.models.http_scoring`), e.g. ``chat-logprobs``."""
+    name, _ = split_spec(settings.llm)
+    if name not in ("openai", "openai-compatible"):
+        return "logprob"
+    from conceptbot.models.openai_backend import OpenAILLM
+
+    llm = create_llm(settings.llm, settings)
+    assert isinstance(llm, OpenAILLM)
+    prompts, chats = llm.scorer.resolved(prompt_form=True), llm.scorer.resolved(prompt_form=False)
+    return prompts if prompts == chats else f"{prompts} (prompts), {chats} (chat)"
+
+
 def open_store(settings: Settings) -> CacheStore:
     """The cache database under the home directory."""
     return CacheStore(settings.cache_db)
