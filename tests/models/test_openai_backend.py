@@ -156,3 +156,15 @@ def test_a_server_without_log_probabilities_is_a_clear_error_for_a_fixed_method(
 def test_an_unknown_scoring_method_is_a_config_error() -> None:
     with pytest.raises(ConfigError, match="unknown scoring method"):
         _llm("http://127.0.0.1:1/v1", scoring="telepathy")
+
+
+def test_scoring_without_a_server_fails_with_the_same_message_as_chat() -> None:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]
+    llm = _llm(f"http://127.0.0.1:{port}/v1")
+    with pytest.raises(BackendUnavailableError, match="cannot connect") as scoring:
+        llm.score(ScoreRequest(options=("Yes", "No"), messages=ChatRequest.of("q").messages))
+    with pytest.raises(BackendUnavailableError, match="cannot connect") as chatting:
+        llm.chat(ChatRequest.of("q"))
+    assert str(scoring.value) == str(chatting.value)
