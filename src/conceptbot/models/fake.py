@@ -39,7 +39,10 @@ class FakeLLM:
         self.model = model
         self._replies: deque[str | Exception] = deque(replies)
         self._scores: deque[Sequence[float]] | None = None if scores is None else deque(scores)
-        self.capabilities = Capabilities(scoring=scores is not None, json_schema=True, native_n=True)
+        scoring = scores is not None
+        self.capabilities = Capabilities(
+            scoring=scoring, exact_scoring=scoring, json_schema=True, native_n=True
+        )
         self.requests: list[ChatRequest] = []
         self.score_requests: list[ScoreRequest] = []
 

@@ -47,7 +47,7 @@ class LlamaCppLLM:
     """
 
     backend = "llamacpp"
-    capabilities = Capabilities(scoring=True, json_schema=True, native_n=False)
+    capabilities = Capabilities(scoring=True, exact_scoring=True, json_schema=True, native_n=False)
 
     def __init__(
         self,

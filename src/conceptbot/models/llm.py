@@ -185,9 +185,21 @@ class ScoreResponse:
 
 @dataclass(frozen=True)
 class Capabilities:
-    """What a backend can do."""
+    """What a backend can do.
+
+    Attributes:
+        scoring: It scores options (:meth:`LLM.score`).
+        exact_scoring: Every option's own token log-probabilities, as in the embedded backend; an
+            HTTP backend may score many options only as a lettered choice (see
+            :mod:`conceptbot.models.http_scoring`), which the paper's Planner should not prefer to
+            its votes.
+        json_schema: It constrains output to a JSON schema.
+        native_n: It returns ``n`` completions in one call.
+        extra: Anything backend-specific.
+    """
 
     scoring: bool = False
+    exact_scoring: bool = False
     json_schema: bool = False
     native_n: bool = False
     extra: Mapping[str, Any] = field(default_factory=dict)

@@ -9,9 +9,9 @@ S_LLM comes from one of two methods:
   Completions that are not valid actions in the scene are rejected, kept in the trace, and the
   step is asked again once with a reminder; if none is valid then, the planner stops (``done()``).
 
-``auto`` uses ``logprob`` when the backend can score and ``vote`` otherwise. Executed actions go
-into the prompt; the loop ends at ``done()`` or after ``max_steps`` (default: one move per pickable
-object plus one, at most 12).
+``auto`` uses ``logprob`` when the backend scores every option exactly (embedded) and ``vote``
+otherwise. Executed actions go into the prompt; the loop ends at ``done()`` or after ``max_steps``
+(default: one move per pickable object plus one, at most 12).
 """
 
 from __future__ import annotations
@@ -66,7 +66,10 @@ class Planner:
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}")
         self.llm = llm
-        self.method = ("logprob" if llm.capabilities.scoring else "vote") if method == "auto" else method
+        # auto: one-pass scoring where every option is scored exactly (embedded); the paper's vote
+        # over HTTP, where 127 options would be a lettered choice (docs/http-scoring.md).
+        exact = llm.capabilities.exact_scoring
+        self.method = ("logprob" if exact else "vote") if method == "auto" else method
         self.n = n
         self.temperature = temperature
         self.max_steps = max_steps
