@@ -168,8 +168,6 @@ class OpenAILLM:
         return {"type": "json_schema", "json_schema": {"name": "reply", "schema": request.schema()}}
 
     def _create(self, request: ChatRequest, n: int, seed: int) -> Any:
-        import openai
-
         kwargs: dict[str, Any] = {
             "model": self.model,
             "messages": [{"role": m.role, "content": m.content} for m in request.messages],
@@ -186,9 +184,8 @@ class OpenAILLM:
             kwargs["response_format"] = fmt
         if self._headers:
             kwargs["extra_headers"] = self._headers
-        try:
-            return self._client.chat.completions.create(**kwargs)
-        except openai.APIStatusError as exc:
+
+        def on_status(exc: Any) -> Any:
             if (
                 fmt is not None
                 and self.backend == "openai-compatible"
@@ -198,18 +195,8 @@ class OpenAILLM:
                 self._json_mode = "json_object"  # llama.cpp-server style; remember for later calls
                 return self._create(request, n, seed)
             raise self._status_error(exc) from None
-        except openai.APIResponseValidationError:
-            raise not_openai_reply(self._where(), "a body the SDK could not read") from None
-        except json.JSONDecodeError:  # a 200 with a JSON Content-Type whose body is not JSON
-            raise not_openai_reply(self._where(), "invalid JSON") from None
-        except openai.APITimeoutError:
-            raise BackendUnavailableError(
-                f"{self._where()} did not answer in time", hint="raise CONCEPTBOT_TIMEOUT or check the server"
-            ) from None
-        except openai.APIConnectionError:
-            raise BackendUnavailableError(
-                f"cannot connect to {self._where()}", hint="is the server running and the URL right?"
-            ) from None
+
+        return self._call(lambda: self._client.chat.completions.create(**kwargs), on_status)
 
     def _status_error(self, exc: Any) -> BackendRequestError:
         import openai
@@ -289,16 +276,21 @@ class OpenAILLM:
         logprobs, counts, usage, method = self.scorer.score(request)
         return ScoreResponse(tuple(logprobs), tuple(counts), usage, self.backend, self.model, method=method)
 
-    def _call(self, make: Any) -> Any:
-        """One SDK call with this backend's error mapping."""
+    def _call(self, make: Any, on_status: Any = None) -> Any:
+        """One SDK call with this backend's error mapping (``on_status`` may answer an HTTP error
+        status itself, e.g. by retrying in another form)."""
         import openai
 
         try:
             return make()
         except openai.APIStatusError as exc:
+            if on_status is not None:
+                return on_status(exc)
             raise self._status_error(exc) from None
-        except (openai.APIResponseValidationError, json.JSONDecodeError):
+        except openai.APIResponseValidationError:
             raise not_openai_reply(self._where(), "a body the SDK could not read") from None
+        except json.JSONDecodeError:  # a 200 with a JSON Content-Type whose body is not JSON
+            raise not_openai_reply(self._where(), "invalid JSON") from None
         except openai.APITimeoutError:
             raise BackendUnavailableError(
                 f"{self._where()} did not answer in time", hint="raise CONCEPTBOT_TIMEOUT or check the server"
