@@ -14,7 +14,6 @@ likely than for an unknown object". The goal planner's thresholds apply to this 
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 import math
 import re
@@ -51,7 +50,6 @@ class Judgement:
         p_yes: P(Yes) normalised over Yes/No.
         score: Calibrated log-odds of Yes (0: no more likely than for a content-free object).
         facts: The graph facts about the object put in the question.
-        context: The facts about the request put in the question (a dish's definition).
     """
 
     subject: str
@@ -59,7 +57,6 @@ class Judgement:
     p_yes: float
     score: float
     facts: tuple[str, ...] = ()
-    context: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form for the trace."""
@@ -255,20 +252,19 @@ class Decider:
         return judgements, usage
 
     def moves(
-        self, request: str, target: str, move: str, objects: Sequence[str], scene: Scene, dish: str = ""
+        self, request: str, target: str, move: str, objects: Sequence[str], scene: Scene
     ) -> tuple[list[Judgement], tuple[str, ...], Usage]:
         """Whether the request wants each object moved to ``target``: "to do what the person asked,
         should the robot give the X to the user?", calibrated against a content-free object.
 
         Args:
             move: The move with ``{object}`` for the object ("give the {object} to the user").
-            dish: The dish the request asks to be made: its definition leads the facts.
 
         Returns:
             The judgements, the facts about the request's words, and usage.
         """
         started = time.perf_counter()
-        context = self.facts.context(request, request, dish or None)
+        context = self.facts.context(request, request)
         about = self.facts.about(objects, [request, move.format(object="object")])
         context_text = ("Facts: " + "; ".join(context) + ".\n") if context else ""
 
@@ -290,13 +286,16 @@ class Decider:
 
     def fits(
         self, request: str, what: str, objects: Sequence[str], scene: Scene, dish: str = ""
-    ) -> tuple[list[Judgement], Usage]:
+    ) -> tuple[list[Judgement], tuple[str, ...], Usage]:
         """Whether each object fits a description ("a sturdy base for a stack"), calibrated.
 
         Args:
             dish: The dish whose ingredients are decided: the question becomes "is the lime an
                 ingredient of guacamole?" (it ranked ingredients better than the description form
                 on the dev split) with the dish's definition in it.
+
+        Returns:
+            The judgements, the facts every question carried (the dish's definition), and usage.
         """
         started = time.perf_counter()
         # An ingredient question carries the dish's definition, not the object's facts: with them,
@@ -317,8 +316,7 @@ class Decider:
             )
 
         judgements, usage = self._judge_each(objects, about, what, question)
-        judgements = [dataclasses.replace(j, context=context) for j in judgements]
-        return judgements, usage.with_latency(time.perf_counter() - started)
+        return judgements, context, usage.with_latency(time.perf_counter() - started)
 
     def name_scores(self, request: str, move: str, objects: Sequence[str]) -> tuple[dict[str, float], Usage]:
         """How much the request raises the probability of naming each object: "which object should

@@ -255,16 +255,12 @@ class GoalPlanner:
             if target.criterion:
                 # Sorting by a property: "is the foxglove poisonous?" is a question the model answers
                 # far better than "should the robot put the foxglove on the toxic tray?".
-                judgements, used = self.decider.fits(
+                judgements, context, used = self.decider.fits(
                     request, target.criterion, others, scene, dish=target.dish
                 )
-                # The facts every question carried: the dish's definition (none for other criteria).
-                context: tuple[str, ...] = judgements[0].context if judgements else ()
             else:
                 move = move_text("{object}", target.name)
-                judgements, context, used = self.decider.moves(
-                    request, target.name, move, others, scene, dish=target.dish
-                )
+                judgements, context, used = self.decider.moves(request, target.name, move, others, scene)
             usage = usage + used
             order = {j.subject: j.score for j in judgements}
             names: dict[str, float] = {}
@@ -390,7 +386,7 @@ class GoalPlanner:
         items = items if len(items) >= 2 else stackable
         if len(items) < 2:
             return []
-        judgements, used = self.decider.fits(request, BASE, items, scene)
+        judgements, _, used = self.decider.fits(request, BASE, items, scene)
         usage["decide"] = usage["decide"] + used
 
         def volume(name: str) -> float:

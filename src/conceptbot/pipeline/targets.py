@@ -224,7 +224,8 @@ class TargetFinder:
         people = {d: vocab["people"].get(d.lower(), []) for d in scene.destinations if self.is_person(d)}
         found = mentions(request, scene.destinations, people)
         seq = tokens(request)
-        dish = (self.food.dish(request, scene.pickable) if self.food else None) or ""
+        # Whether the request is about preparing food matters only where it names no destination.
+        dish = (self.food.dish(request, scene.pickable) if self.food and not found else None) or ""
         making = bool(dish) or any(w in vocab["making"] for w in seq)
         how = "named"
         if not found and not making:
