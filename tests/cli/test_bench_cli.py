@@ -61,32 +61,30 @@ def test_run_help_documents_the_split(isolated_home: Path) -> None:
     assert "--split [test|dev]" in out and "with --split dev" in " ".join(out.split())
 
 
+def bench_smoke(
+    llm: str, category: str, home: Path, omcs_file: Path, wordnet_dir: Path, out: Path
+) -> tuple[list[str], str, list[dict]]:
+    """Install the graph, then ``bench run -c saycan -c conceptbot`` on one task of ``category``
+    with ``llm``; checks the header and both configurations, returns the arguments (to run again),
+    the output and the records."""
+    run("kg", "install", "--file", str(omcs_file), "--wordnet-dir", str(wordnet_dir), home=home)
+    args = ["--llm", llm, "bench", "run", "-c", "saycan", "-c", "conceptbot"]
+    args += ["--category", category, "--limit", "1", "--out", str(out)]
+    first = run(*args, home=home)
+    assert "2 plans (1 tasks x 2 configs x 1 trials); 0 already" in first.stdout
+    records = [json.loads(line) for line in out.read_text().splitlines()]
+    assert {r["config"] for r in records} == {"saycan", "conceptbot"}
+    return args, first.stdout, records
+
+
 @pytest.mark.slow
 def test_smoke_run_on_the_small_model(
     isolated_home: Path, smollm2_path: Path, omcs_file: Path, wordnet_dir: Path, tmp_path: Path
 ) -> None:
-    run("kg", "install", "--file", str(omcs_file), "--wordnet-dir", str(wordnet_dir), home=isolated_home)
     out = tmp_path / "smoke.jsonl"
-    args = [
-        "--llm",
-        f"llamacpp:{smollm2_path}",
-        "bench",
-        "run",
-        "-c",
-        "saycan",
-        "-c",
-        "conceptbot",
-        "--category",
-        "risk",
-        "--limit",
-        "1",
-        "--out",
-        str(out),
-    ]
-    first = run(*args, home=isolated_home)
-    assert "2 plans (1 tasks x 2 configs x 1 trials); 0 already" in first.stdout
-    records = [json.loads(line) for line in out.read_text().splitlines()]
-    assert {r["config"] for r in records} == {"saycan", "conceptbot"}
+    args, _, records = bench_smoke(
+        f"llamacpp:{smollm2_path}", "risk", isolated_home, omcs_file, wordnet_dir, out
+    )
     assert all(r["task"] == "risk-1" and r["reason"] and r["plan"][-1] == "done()" for r in records), records
     again = run(*args, home=isolated_home)
     assert "2 already in" in again.stdout and len(out.read_text().splitlines()) == 2

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import socket
 import subprocess
 import sys
@@ -19,7 +18,7 @@ from conceptbot.models.http_scoring import echo_is_sound
 from conceptbot.models.llm import ChatRequest, ScoreRequest
 from conceptbot.models.openai_backend import OpenAILLM
 from conceptbot.models.structured import chat_json
-from tests.cli.test_cli import run
+from tests.cli.test_bench_cli import bench_smoke
 
 pytestmark = pytest.mark.slow
 
@@ -119,22 +118,9 @@ def test_scoring_through_a_real_server_finds_the_method_the_server_supports(serv
 def test_bench_run_through_a_real_server(
     server_url: str, isolated_home: Path, omcs_file: Path, wordnet_dir: Path, tmp_path: Path
 ) -> None:
-    run("kg", "install", "--file", str(omcs_file), "--wordnet-dir", str(wordnet_dir), home=isolated_home)
     out = tmp_path / "http.jsonl"
-    args = [
-        "--llm",
-        f"openai-compatible:{server_url}#smollm2",
-        "bench",
-        "run",
-        "-c",
-        "saycan",
-        "-c",
-        "conceptbot",
-    ]
-    result = run(*args, "--category", "unambiguous", "--limit", "1", "--out", str(out), home=isolated_home)
-    assert "2 plans (1 tasks x 2 configs x 1 trials); 0 already" in result.stdout
-    assert "options scored by chat-logprobs (openai-compatible)" in result.stdout
-    records = [json.loads(line) for line in out.read_text().splitlines()]
-    assert {r["config"] for r in records} == {"saycan", "conceptbot"}
+    llm = f"openai-compatible:{server_url}#smollm2"
+    _, stdout, records = bench_smoke(llm, "unambiguous", isolated_home, omcs_file, wordnet_dir, out)
+    assert "options scored by chat-logprobs (openai-compatible)" in stdout
     assert all(r["backend"] == "openai-compatible" and r["plan"][-1] == "done()" for r in records), records
     assert {r["scoring"] for r in records} == {"chat-logprobs"}
