@@ -2,7 +2,10 @@
 
 ``--part saycan``: for the first step of each task (SayCan's prompt and every option: each valid
 pick_and_place and done()), both backends score the options; the figures are how often they pick the
-same best option, the rank correlation of their scores (Spearman), and seconds per step.
+same best option, where the HTTP best sits in the embedded ranking (1 = the same), the embedded
+log-probability given up by taking it, the rank correlation of all scores (Spearman: the ``search``
+method scores only the best exactly and bounds the rest, so expect it low there), and seconds per
+step.
 ``--part yes-no``: the goal planner's kind of question ("to do what the person asked, should the
 robot give the X to the user?", Yes/No) for every pickable object of each task; the figures are the
 rank correlation of the log-odds per task, how often the two agree on the best object, and seconds
@@ -145,13 +148,15 @@ def main() -> None:
             over_http = served.score(request)
             http_s = time.perf_counter() - started
             got = list(over_http.logprobs)
-            same = max(range(len(exact)), key=exact.__getitem__) == max(range(len(got)), key=got.__getitem__)
+            chosen = max(range(len(got)), key=got.__getitem__)
+            rank = 1 + sum(e > exact[chosen] for e in exact)
             rows.append(
-                {"task": task.id, "options": len(exact), "same_best": same, "spearman": spearman(exact, got),
+                {"task": task.id, "options": len(exact), "same_best": rank == 1, "rank": rank,
+                 "regret": max(exact) - exact[chosen], "spearman": spearman(exact, got),
                  "embedded_s": embedded_s, "http_s": http_s, "method": over_http.method}
             )  # fmt: skip
-            line = f"{task.id:16} {len(exact):4} options  same best: {same!s:5}  "
-            line += f"spearman {rows[-1]['spearman']:+.2f}  embedded {embedded_s:5.1f} s  "
+            line = f"{task.id:16} {len(exact):4} options  same best: {rank == 1!s:5}  rank {rank:3}  "
+            line += f"regret {rows[-1]['regret']:5.2f}  embedded {embedded_s:5.1f} s  "
             print(line + f"http {http_s:5.1f} s ({over_http.method})", flush=True)
     finally:
         if proc is not None:
@@ -162,6 +167,7 @@ def main() -> None:
         "tasks": len(rows),
         "same_best": sum(r["same_best"] for r in rows),
         "median_spearman": statistics.median(r["spearman"] for r in rows),
+        "median_rank": statistics.median(r.get("rank", 1) for r in rows),
         "median_embedded_s": statistics.median(r["embedded_s"] for r in rows),
         "median_http_s": statistics.median(r["http_s"] for r in rows),
         "method": rows[0]["method"] if rows else "",

@@ -65,9 +65,14 @@ def test_doctor_reaches_the_openai_backend_and_times_it(home_with_graph: Path) -
     replies = [
         completion(["OK"]),
         echo_reply("1, 2, 3, 4, 5, 6", [None, -10.9], [0, 14]),  # the scoring probe: echo unsound
+        {"error": {"message": "This is a chat model"}},  # no completions: no search (top 20 ...)
+        {"error": {"message": "This is a chat model"}},  # (... nor top 5)
         top_reply({"Yes": -0.1}),  # chat log-probabilities work
     ]
-    with StubServer([lambda body, r=r: (200, r) for r in replies]) as server:
+    statuses = [200, 200, 404, 404, 200]
+    with StubServer(
+        [lambda body, r=r, s=s: (s, r) for r, s in zip(replies, statuses, strict=True)]
+    ) as server:
         result = run(
             "--llm",
             "openai:gpt-x",
@@ -80,7 +85,7 @@ def test_doctor_reaches_the_openai_backend_and_times_it(home_with_graph: Path) -
     assert "[ok  ] LLM server (openai): model 'gpt-x' answered in" in result.stdout, result.stdout
     assert "options scored by chat-logprobs" in result.stdout, result.stdout
     assert _fail_lines(result.stdout) == [] and result.returncode == 0, result.stdout + result.stderr
-    assert len(server.bodies) == 3 and server.bodies[0]["max_tokens"] == 1
+    assert len(server.bodies) == 5 and server.bodies[0]["max_tokens"] == 1
 
 
 def test_doctor_fails_when_the_server_is_down(home_with_graph: Path) -> None:

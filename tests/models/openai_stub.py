@@ -62,6 +62,32 @@ def top_reply(tokens: dict[str, float]) -> dict:
     return body
 
 
+def next_reply(tokens: dict[str, float]) -> dict:
+    """A text_completion body (no echo) whose one generated token has ``tokens`` as its top
+    log-probabilities, as llama.cpp and vLLM servers answer ``logprobs: N``."""
+    best = max(tokens, key=tokens.get) if tokens else ""
+    return {
+        "id": "cmpl-1",
+        "object": "text_completion",
+        "created": 0,
+        "model": "stub",
+        "choices": [
+            {
+                "index": 0,
+                "text": best,
+                "finish_reason": "length",
+                "logprobs": {
+                    "tokens": [best],
+                    "text_offset": [0],
+                    "token_logprobs": [tokens.get(best)],
+                    "top_logprobs": [tokens],
+                },
+            }
+        ],
+        "usage": {"prompt_tokens": 9, "completion_tokens": 1, "total_tokens": 10},
+    }
+
+
 class StubServer(LoopbackServer):
     """Serves POST /v1/chat/completions from a queue of handlers; records request bodies and headers."""
 

@@ -103,16 +103,19 @@ def test_cache_in_front_of_a_real_server(server_url: str, tmp_path: Path) -> Non
 def test_scoring_through_a_real_server_finds_the_method_the_server_supports(server_url: str) -> None:
     llm = OpenAILLM("smollm2", backend="openai-compatible", base_url=server_url, timeout_s=60, max_retries=1)
     # llama-cpp-python 0.3.36 echoes each prompt token's log-probability after itself, not before
-    # (abetlen/llama-cpp-python#1983): the probe must refuse it, so chat log-probabilities are used.
+    # (abetlen/llama-cpp-python#1983): the probe must refuse it; its completions' top log-probabilities
+    # of a generated token are sound, so prompts are scored by search, chat questions by chat ones.
     assert echo_is_sound(llm) is False
     question = ChatRequest.of("Is an apple a fruit? Answer Yes or No.").messages
     yes_no = llm.score(ScoreRequest(options=("Yes", "No"), messages=question))
     assert yes_no.method == "chat-logprobs" and all(lp <= 0.0 for lp in yes_no.logprobs)
     options = ("pick_and_place(apple, user)", "pick_and_place(sponge, user)", "done()")
     script = "objects = [apple, sponge, user]\n# Bring me a fruit.\n"
-    lettered = llm.score(ScoreRequest(options=options, prompt=script))
-    assert lettered.method == "chat-logprobs" and len(lettered.logprobs) == 3
-    assert len(set(lettered.logprobs)) > 1  # the letters got different log-probabilities
+    searched = llm.score(ScoreRequest(options=options, prompt=script))
+    assert searched.method == "search" and len(searched.logprobs) == 3
+    best = max(range(3), key=searched.logprobs.__getitem__)
+    alone = llm.score(ScoreRequest(options=options[best : best + 1], prompt=script))  # read to its end
+    assert alone.logprobs[0] == pytest.approx(searched.logprobs[best], abs=0.05)  # the best is exact
 
 
 def test_bench_run_through_a_real_server(
@@ -121,6 +124,6 @@ def test_bench_run_through_a_real_server(
     out = tmp_path / "http.jsonl"
     llm = f"openai-compatible:{server_url}#smollm2"
     _, stdout, records = bench_smoke(llm, "unambiguous", isolated_home, omcs_file, wordnet_dir, out)
-    assert "options scored by chat-logprobs (openai-compatible)" in stdout
+    assert "options scored by search (prompts), chat-logprobs (chat) (openai-compatible)" in stdout
     assert all(r["backend"] == "openai-compatible" and r["plan"][-1] == "done()" for r in records), records
-    assert {r["scoring"] for r in records} == {"chat-logprobs"}
+    assert {r["scoring"] for r in records} == {"search (prompts), chat-logprobs (chat)"}

@@ -5,7 +5,7 @@ import pytest
 from conceptbot.core.errors import BackendRequestError, BackendUnavailableError, ConfigError
 from conceptbot.models.llm import ChatRequest, ScoreRequest
 from conceptbot.models.openai_backend import OpenAILLM
-from tests.models.openai_stub import StubServer, completion, echo_reply, top_reply
+from tests.models.openai_stub import StubServer, completion, echo_reply, next_reply, top_reply
 
 
 def _llm(url: str, **kwargs) -> OpenAILLM:
@@ -106,9 +106,14 @@ def test_scoring_uses_echo_where_the_server_echoes_sound_log_probabilities() -> 
     assert server.bodies[1]["echo"] is True and server.bodies[1]["prompt"] == prompt + "robot.pick(apple)"
 
 
+CHAT_MODEL = (404, {"error": {"message": "This is a chat model and not supported in v1/completions"}})
+
+
 def test_a_server_with_shifted_echo_numbers_is_scored_through_chat_log_probabilities() -> None:
     handlers = [
         lambda body: (200, echo_reply(SOUND, [None, -10.9], [0, 14])),  # " 6" unlikely: shifted numbers
+        lambda body: CHAT_MODEL,  # the search probe, top 20
+        lambda body: CHAT_MODEL,  # and top 5
         lambda body: (200, top_reply({"Yes": -0.1})),  # the chat probe
         lambda body: (200, top_reply({"Yes": -0.2, " No": -1.8, "yes": -4.0})),
     ]
@@ -118,7 +123,73 @@ def test_a_server_with_shifted_echo_numbers_is_scored_through_chat_log_probabili
         scored = llm.score(ScoreRequest(options=("Yes", "No"), messages=messages))
     assert scored.method == "chat-logprobs"
     assert scored.logprobs == pytest.approx((-0.2, -1.8))  # "yes" is not "Yes"; " No" is "No"
-    assert server.bodies[2]["logprobs"] is True and server.bodies[2]["max_tokens"] == 1
+    assert server.bodies[4]["logprobs"] is True and server.bodies[4]["max_tokens"] == 1
+
+
+PROMPT = "objects = [apple, pear, kiwi]\n# I want something sweet.\n"
+# A toy language model: the top next tokens after PROMPT plus what is read so far.
+NEXT = {
+    "": {"robot": -0.1, "done": -2.5, "#": -3.0},
+    "robot": {".pick(": -0.01, ".put(": -5.0},
+    "robot.pick(": {"apple": -0.9, "ap": -3.0, "pe": -1.0},  # "kiwi" is not among them
+    "robot.pick(apple": {")\n": -0.05, ")": -3.0},
+    "robot.pick(pe": {"ar": -0.1, "a": -4.0},
+    "robot.pick(pear": {")": -0.2, ")\n": -1.8},
+    "done": {"()": -0.01},
+}
+COUNTING = {
+    "1, 2, 3, 4, 5, 6, 7, 8,": {" ": -0.03, "...": -4.0},
+    "1, 2, 3, 4, 5, 6, 7, 8, ": {"9": -0.01, "3": -9.0},
+}
+
+
+def toy_server(body: dict) -> tuple[int, dict]:
+    """A server whose echo is shifted, whose completions give sound top log-probabilities (at most 5
+    of them, as OpenAI's instruct models) and whose chat gives them too."""
+    if "messages" in body:
+        return 200, top_reply({"Yes": -0.2, "No": -1.7})
+    if body.get("echo"):
+        return 200, echo_reply(SOUND, [None, -10.9], [0, 14])
+    if body["logprobs"] > 5:
+        return 400, {"error": {"message": "logprobs must be at most 5"}}
+    prompt = body["prompt"]
+    found = COUNTING.get(prompt) or NEXT.get(prompt.removeprefix(PROMPT), {"zz": -0.1})
+    return 200, next_reply(found)
+
+
+def test_search_scores_the_best_option_exactly_and_bounds_the_rest() -> None:
+    options = ("robot.pick(apple)", "robot.pick(pear)", "robot.pick(kiwi)", "done()")
+    with StubServer([toy_server] * 40) as server:
+        scored = _llm(server.url).score(ScoreRequest(options=options, prompt=PROMPT))
+    assert scored.method == "search"
+    apple, pear, kiwi, done = scored.logprobs
+    assert pear == pytest.approx(-0.1 - 0.01 - 1.0 - 0.1 - 0.2)  # the best, read token by token
+    assert apple == pytest.approx(-0.1 - 0.01 - 0.9 - 3.0)  # ")" itself, not ")\n"
+    assert kiwi == pytest.approx(-0.1 - 0.01 - 3.0)  # not listed: at most the lowest listed token
+    assert done == pytest.approx(-2.5)  # not read on once the best was found: its prefix bounds it
+    searched = [b for b in server.bodies if "prompt" in b and b["prompt"].startswith(PROMPT)]
+    assert [b["prompt"].removeprefix(PROMPT) for b in searched] == [
+        "", "robot", "robot.pick(", "robot.pick(apple", "robot.pick(pe", "robot.pick(pear"
+    ]  # fmt: skip
+    assert all(b["logprobs"] == 5 and b["max_tokens"] == 1 and not b.get("echo") for b in searched)
+    assert scored.usage.calls == 6
+
+
+def test_search_scores_prompts_and_chat_questions_go_through_chat_log_probabilities() -> None:
+    with StubServer([toy_server] * 40) as server:
+        llm = _llm(server.url)
+        prompt_form = llm.score(ScoreRequest(options=("robot.pick(pear)", "done()"), prompt=PROMPT))
+        chat_form = llm.score(ScoreRequest(options=("Yes", "No"), messages=ChatRequest.of("q").messages))
+    assert (prompt_form.method, chat_form.method) == ("search", "chat-logprobs")
+    assert chat_form.logprobs == pytest.approx((-0.2, -1.7))
+
+
+def test_a_search_answer_without_log_probabilities_is_a_clear_error() -> None:
+    with (
+        StubServer([lambda body: (200, echo_reply("x", [None], [0]))] * 3) as server,
+        pytest.raises(BackendRequestError, match="no completion log-probabilities"),
+    ):
+        _llm(server.url, scoring="search").score(ScoreRequest(options=("a", "b"), prompt="x"))
 
 
 def test_long_options_are_asked_as_a_lettered_choice_and_missing_letters_get_a_floor() -> None:

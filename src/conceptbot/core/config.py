@@ -18,7 +18,7 @@ Environment variables:
     CONCEPTBOT_TIMEOUT     HTTP time-out in seconds (default 60)
     CONCEPTBOT_MAX_RETRIES bounded retries for HTTP backends (default 3, exponential backoff)
     CONCEPTBOT_SCORING     how HTTP backends score options: ``auto`` (default: the best the server
-                           supports, found once), ``echo``, ``chat-logprobs`` or ``vote``
+                           supports, found once), ``echo``, ``search``, ``chat-logprobs`` or ``vote``
     CONCEPTBOT_THREADS     CPU threads for the embedded LLM (default: all cores)
     CONCEPTBOT_N_CTX       context window of the embedded LLM (default 4096)
     CONCEPTBOT_KG          knowledge graph: ``sqlite`` (default, offline), ``conceptnet-api[:URL]``,

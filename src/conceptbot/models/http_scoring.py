@@ -8,6 +8,15 @@ SayCan and the goal planner score options by log-probability. Over HTTP three wa
   numbers shifted by one token (llama-cpp-python 0.3.x, abetlen/llama-cpp-python#1983) or not at
   all (llama.cpp's own server): :func:`echo_is_sound` checks a continuation whose next token is
   certain ("1, 2, 3, 4, 5, 6") before the method is used.
+* ``search``: where echo is not sound but completions return the ``top_logprobs`` of the token they
+  generate (llama-cpp-python's server, vLLM, OpenAI's instruct models), a best-first search over the
+  options' text: each call asks for the next token's top log-probabilities after ``prompt`` plus an
+  option's already-read prefix, and follows the likeliest top token each option continues with. The
+  options reached are scored exactly as by echo, in the order of their score; an option whose next
+  token is not among the top ones gets its prefix's log-probability plus a bound on its own (the
+  lowest returned, or the probability the returned ones leave, whichever is lower). The search stops once :data:`SEARCH_EXACT` options are scored (the best: what a
+  greedy planner takes) or after :data:`SEARCH_CALLS` calls; the options left keep their prefix's
+  log-probability (an upper bound, below every option scored). Prompt-form requests only, like echo.
 * ``chat-logprobs``: a chat request for one token with ``logprobs`` and ``top_logprobs`` (OpenAI,
   vLLM, llama.cpp servers). One-token options ("Yes", "No") are read directly; other options are
   asked as a labelled multiple choice ("A) ..., B) ...") and scored by their label's log-probability,
@@ -21,6 +30,8 @@ SayCan and the goal planner score options by log-probability. Over HTTP three wa
 
 from __future__ import annotations
 
+import heapq
+import itertools
 import math
 import string
 import time
@@ -33,10 +44,13 @@ from conceptbot.core.errors import BackendRequestError, ConfigError
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import Message, ScoreRequest
 
-METHODS = ("auto", "echo", "chat-logprobs", "vote")
+METHODS = ("auto", "echo", "search", "chat-logprobs", "vote")
 MAX_LABELS = 20  # the most top_logprobs OpenAI-style chat APIs return
 LABELS = string.ascii_uppercase[:MAX_LABELS]
 VOTES = 5
+SEARCH_EXACT = 1  # options scored exactly before the search stops: the best, what a greedy step takes
+SEARCH_CALLS = 64  # at most this many calls per scored step
+SEARCH_TOP = (20, 5)  # top log-probabilities asked for: vLLM and llama.cpp allow 20, OpenAI 5
 SOUND_PROMPT = "1, 2, 3, 4, 5,"
 SOUND_OPTION = " 6"
 
@@ -55,6 +69,11 @@ class Transport(Protocol):
 
     def echo(self, prompt: str) -> EchoTokens:
         """Completions with ``echo`` and ``logprobs`` for ``prompt`` (one token generated)."""
+        ...
+
+    def next_tokens(self, prompt: str, top: int) -> tuple[dict[str, float], int]:
+        """Completions for ``prompt`` (one token, no echo): the ``top`` log-probabilities of the token
+        generated, and the prompt's tokens."""
         ...
 
     def first_token(self, messages: Sequence[Message], top: int) -> tuple[dict[str, float], int]:
@@ -76,6 +95,78 @@ def echo_is_sound(transport: Transport) -> bool:
         return False
     tail = [lp for off, lp in zip(found.offsets, found.logprobs, strict=False) if off >= len(SOUND_PROMPT)]
     return bool(tail) and all(lp is not None for lp in tail) and sum(tail) > math.log(0.1)  # type: ignore[arg-type]
+
+
+def search_top(transport: Transport) -> int | None:
+    """How many top log-probabilities the server's completions return, or ``None`` where they are
+    missing or wrong: searching " 9" and " 3" after "1, 2, 3, 4, 5, 6, 7, 8," must find " 9" likely
+    (above log 0.1) and ahead."""
+    for top in SEARCH_TOP:
+        try:
+            scores, _, _, _ = search_scores(transport, SOUND_PROMPT + " 6, 7, 8,", [" 9", " 3"], top)
+        except BackendRequestError:
+            continue
+        return top if scores[0] > max(math.log(0.1), scores[1]) else None
+    return None
+
+
+def _unlisted(found: dict[str, float]) -> float:
+    """An upper bound on the log-probability of a token not among ``found``: below the lowest listed
+    one and below the probability left over by all of them."""
+    floor = min(found.values(), default=0.0)
+    left = 1.0 - sum(math.exp(lp) for lp in found.values())
+    return min(floor, math.log(max(left, 1e-12)))
+
+
+def search_scores(
+    transport: Transport, prompt: str, options: Sequence[str], top: int
+) -> tuple[list[float], list[int], int, int]:
+    """The ``search`` method (module docstring): scores, tokens read per option, prompt tokens
+    sent and calls made.
+
+    Each heap entry is a text prefix with the options that continue it and its log-probability
+    (an upper bound for theirs); the likeliest is read next. An option follows the likeliest top token
+    its text continues with ("(" then "energy", not the rarer "(en"), so each option has one path, the
+    model's usual tokenization of it.
+    """
+    scores = [0.0] * len(options)
+    counts = [0] * len(options)
+    exact = calls = tokens = 0
+    lowest = 0.0  # the lowest exact score so far
+    order = itertools.count(1)  # breaks ties between equal log-probabilities: first pushed first
+    # Entries: (-log-probability, order, prefix read, tokens read, options, whether it can be read on).
+    heap: list[tuple[float, int, str, int, tuple[int, ...], bool]] = [
+        (0.0, 0, "", 0, tuple(range(len(options))), True)
+    ]
+    while heap:
+        negative, _, read, depth, members, readable = heapq.heappop(heap)
+        finished = [i for i in members if options[i] == read] if readable else []
+        for i in finished:
+            scores[i], counts[i] = -negative, depth
+            exact, lowest = exact + 1, -negative
+        rest = [i for i in members if i not in finished]
+        if not rest:
+            continue
+        if not readable or exact >= SEARCH_EXACT or calls >= SEARCH_CALLS:
+            # Not read further: the prefix's log-probability bounds theirs (after the search
+            # stopped, a hair below the options scored, so that a tie never puts one of them first).
+            bound = -negative if exact == 0 or not readable else min(-negative, lowest - 1e-6)
+            for i in rest:
+                scores[i], counts[i] = bound, depth
+            continue
+        found, used = transport.next_tokens(prompt + read, top)
+        calls, tokens = calls + 1, tokens + used
+        children: dict[str, list[int]] = {}
+        for i in rest:
+            tail = options[i][len(read) :]
+            hits = [t for t in found if t and tail.startswith(t)]
+            children.setdefault(max(hits, key=found.__getitem__) if hits else "", []).append(i)
+        for token, group in children.items():
+            logprob = found[token] if token else _unlisted(found)
+            heapq.heappush(
+                heap, (negative - logprob, next(order), read + token, depth + 1, tuple(group), bool(token))
+            )
+    return scores, counts, tokens, calls
 
 
 def _echo_scores(
@@ -137,7 +228,8 @@ class HTTPScorer:
 
     Args:
         transport: The HTTP calls.
-        method: ``auto`` (probe once: echo if sound, else chat-logprobs, else vote) or a fixed one.
+        method: ``auto`` (probe once: echo if sound, else search if sound, else chat-logprobs, else
+            vote) or a fixed one.
     """
 
     def __init__(self, transport: Transport, method: str = "auto") -> None:
@@ -146,18 +238,23 @@ class HTTPScorer:
         self.transport = transport
         self.method = method
         self._found: str | None = None if method == "auto" else method
+        self._top = SEARCH_TOP[0]
 
     def resolved(self, prompt_form: bool) -> str:
         """The method used for a prompt-form (``True``) or chat-form request, probing once."""
         if self._found is None:
             self._found = self._probe()
-        if self._found == "echo" and not prompt_form:
-            return "chat-logprobs"  # a chat prompt's template is the server's: echo cannot score it
+        if self._found in ("echo", "search") and not prompt_form:
+            return "chat-logprobs"  # a chat prompt's template is the server's: only text prompts are read
         return self._found
 
     def _probe(self) -> str:
         if echo_is_sound(self.transport):
             return "echo"
+        top = search_top(self.transport)
+        if top is not None:
+            self._top = top
+            return "search"
         try:
             top, _ = self.transport.first_token((Message("user", "Answer Yes or No: is 2 > 1?"),), 5)
         except BackendRequestError:
@@ -173,6 +270,10 @@ class HTTPScorer:
             assert request.prompt is not None
             scores, counts, tokens = _echo_scores(self.transport, request.prompt, options)
             return scores, counts, Usage(tokens, 0, time.perf_counter() - started, 0.0, len(options)), method
+        if method == "search":
+            assert request.prompt is not None
+            scores, counts, tokens, calls = search_scores(self.transport, request.prompt, options, self._top)
+            return scores, counts, Usage(tokens, calls, time.perf_counter() - started, 0.0, calls), method
         messages = as_messages(request)
         scores: list[float] = []
         tokens = calls = 0

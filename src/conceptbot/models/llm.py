@@ -167,7 +167,7 @@ class ScoreResponse:
         model: Model identifier.
         cached: True when the result came from the cache.
         method: How the options were scored: ``logprob`` (exact, embedded), or over HTTP ``echo``,
-            ``chat-logprobs`` or ``vote`` (:mod:`conceptbot.models.http_scoring`).
+            ``search``, ``chat-logprobs`` or ``vote`` (:mod:`conceptbot.models.http_scoring`).
     """
 
     logprobs: tuple[float, ...]

@@ -19,8 +19,8 @@ llama.cpp's server only takes ``{"type": "json_object", "schema": ...}``. For ``
 the first form is tried and, if the server rejects it, the second is used from then on.
 
 Scoring (:meth:`OpenAILLM.score`): by the best method the server supports, found once
-(:mod:`conceptbot.models.http_scoring`: ``echo`` on completions, ``chat-logprobs``, ``vote``), or the
-one configured (``CONCEPTBOT_SCORING``). The method used is on every :class:`ScoreResponse`.
+(:mod:`conceptbot.models.http_scoring`: ``echo`` or ``search`` on completions, ``chat-logprobs``,
+``vote``), or the one configured (``CONCEPTBOT_SCORING``). The method used is on every :class:`ScoreResponse`.
 """
 
 from __future__ import annotations
@@ -319,6 +319,23 @@ class OpenAILLM:
         except (AttributeError, TypeError, ValueError, IndexError):
             raise BackendRequestError(f"{self._where()} returned no prompt log-probabilities") from None
         return EchoTokens(offsets[:keep], logprobs[:keep], used)
+
+    def next_tokens(self, prompt: str, top: int) -> tuple[dict[str, float], int]:
+        """Completions for one token with ``logprobs=top`` (the ``search`` scoring method): the
+        generated token's top log-probabilities."""
+        extra = {"extra_headers": self._headers} if self._headers else {}
+        out = self._call(
+            lambda: self._client.completions.create(
+                model=self.model, prompt=prompt, max_tokens=1, logprobs=top, temperature=0, **extra
+            )
+        )
+        try:
+            entry = out.choices[0].logprobs.top_logprobs[0]
+            found = {str(t): float(lp) for t, lp in entry.items()}
+            used = int(out.usage.prompt_tokens) if out.usage is not None else 0
+        except (AttributeError, TypeError, ValueError, IndexError):
+            raise BackendRequestError(f"{self._where()} returned no completion log-probabilities") from None
+        return found, used
 
     def _chat_kwargs(self, messages: Any, **more: Any) -> dict[str, Any]:
         kwargs = {"model": self.model, "messages": [{"role": m.role, "content": m.content} for m in messages]}
