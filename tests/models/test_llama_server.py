@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from conceptbot.baselines.saycan import SayCan
 from conceptbot.models.cache import CacheStore
 from conceptbot.models.cached import CachedLLM
 from conceptbot.models.http_scoring import echo_is_sound
@@ -19,6 +20,7 @@ from conceptbot.models.llm import ChatRequest, ScoreRequest
 from conceptbot.models.openai_backend import OpenAILLM
 from conceptbot.models.structured import chat_json
 from tests.cli.test_bench_cli import bench_smoke
+from tests.pipeline.fakes import spill_scene
 
 pytestmark = pytest.mark.slow
 
@@ -116,6 +118,8 @@ def test_scoring_through_a_real_server_finds_the_method_the_server_supports(serv
     best = max(range(3), key=searched.logprobs.__getitem__)
     alone = llm.score(ScoreRequest(options=options[best : best + 1], prompt=script))  # read to its end
     assert alone.logprobs[0] == pytest.approx(searched.logprobs[best], abs=0.05)  # the best is exact
+    plan = SayCan(llm, max_steps=2).plan("Bring me the chips", spill_scene())
+    assert [step.to_dict()["scoring"] for step in plan.steps] == ["search"] * len(plan.steps)
 
 
 def test_bench_run_through_a_real_server(

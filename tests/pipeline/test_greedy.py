@@ -16,7 +16,8 @@ def _llm(prefer: list[str]):
     def score(candidates, history, index):
         wanted = prefer[min(index, len(prefer) - 1)]
         rest = 0.3 / (len(candidates) - 1)
-        return LLMScores([0.7 if str(a) == wanted else rest for a in candidates], [], Usage(calls=1))
+        scores = [0.7 if str(a) == wanted else rest for a in candidates]
+        return LLMScores(scores, [], Usage(calls=1), "search")
 
     return score
 
@@ -30,6 +31,7 @@ def test_steps_follow_the_product_until_done() -> None:
     steps, actions, usage = greedy_plan(SCENE, _llm(prefer), _affordance(), "logprob")
     assert actions == ["pick_and_place(pear, user)", "pick_and_place(apple, user)", "done()"]
     assert [s.method for s in steps] == ["logprob"] * 3 and usage.calls == 3
+    assert [s.to_dict()["scoring"] for s in steps] == ["search"] * 3  # the backend's method, per step
 
 
 def test_an_infeasible_favourite_loses_and_nothing_feasible_means_done() -> None:

@@ -86,7 +86,7 @@ class SayCan:
                     prompt=self.prompt(request, scene, history),
                 )
             )
-            return LLMScores(softmax(list(scored.logprobs)), [], scored.usage)
+            return LLMScores(softmax(list(scored.logprobs)), [], scored.usage, scored.method)
 
         def affordances(candidates: list[Action], history: list[str]) -> list[tuple[float, dict[str, float]]]:
             found = [DONE_AFFORDANCE if a.is_done else _detected(scene, a) for a in candidates]

@@ -99,13 +99,19 @@ class CandidateScore:
 
 @dataclass(frozen=True)
 class Step:
-    """One planner step: the chosen action, the best candidates, and rejected LLM outputs."""
+    """One planner step: the chosen action, the best candidates, and rejected LLM outputs.
+
+    ``method`` is the planner's way of choosing (``saycan``, ``logprob``, ``vote``, ``decide``);
+    ``scoring`` how the backend scored the options (``logprob`` embedded; over HTTP ``echo``,
+    ``search``, ``chat-logprobs`` or ``vote``; empty where nothing was scored).
+    """
 
     index: int
     chosen: str
     candidates: tuple[CandidateScore, ...]
     rejected: tuple[str, ...] = ()
     method: str = "logprob"
+    scoring: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (as in ``conceptbot plan --json``)."""
@@ -113,6 +119,7 @@ class Step:
             "index": self.index,
             "chosen": self.chosen,
             "method": self.method,
+            "scoring": self.scoring,
             "rejected": list(self.rejected),
             "candidates": [
                 {

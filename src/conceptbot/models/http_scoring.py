@@ -14,9 +14,10 @@ SayCan and the goal planner score options by log-probability. Over HTTP three wa
   option's already-read prefix, and follows the likeliest top token each option continues with. The
   options reached are scored exactly as by echo, in the order of their score; an option whose next
   token is not among the top ones gets its prefix's log-probability plus a bound on its own (the
-  lowest returned, or the probability the returned ones leave, whichever is lower). The search stops once :data:`SEARCH_EXACT` options are scored (the best: what a
-  greedy planner takes) or after :data:`SEARCH_CALLS` calls; the options left keep their prefix's
-  log-probability (an upper bound, below every option scored). Prompt-form requests only, like echo.
+  lowest returned, or the probability the returned ones leave, whichever is lower). The search
+  stops once :data:`SEARCH_EXACT` options are scored (the best: what a greedy planner takes) or
+  after :data:`SEARCH_CALLS` calls; the options left keep their prefix's log-probability (an upper
+  bound, below every option scored). Prompt-form requests only, like echo.
 * ``chat-logprobs``: a chat request for one token with ``logprobs`` and ``top_logprobs`` (OpenAI,
   vLLM, llama.cpp servers). One-token options ("Yes", "No") are read directly; other options are
   asked as a labelled multiple choice ("A) ..., B) ...") and scored by their label's log-probability,

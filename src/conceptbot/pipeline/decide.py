@@ -227,10 +227,12 @@ class Decider:
     def __init__(self, llm: LLM, facts: FactFinder) -> None:
         self.llm = llm
         self.facts = facts
+        self.scoring = ""  # how the backend scored the last question (for the trace)
 
     def _ask(self, user: str) -> tuple[float, float, Usage]:
         messages = (Message("system", prompts.render("decide_system")), Message("user", user))
         scored = self.llm.score(ScoreRequest(options=ANSWERS, messages=messages))
+        self.scoring = scored.method
         p_yes, log_odds = _log_odds(scored.logprobs)
         return p_yes, log_odds, scored.usage
 

@@ -417,5 +417,5 @@ class GoalPlanner:
                 candidates.append(CandidateScore(str(action), p, s_aff, p * s_aff, factors))
             if not any(c.action == chosen for c in candidates):
                 candidates.insert(0, CandidateScore(chosen, 1.0, 1.0, 1.0, {}))
-            steps.append(Step(number, chosen, tuple(candidates), (), METHOD))
+            steps.append(Step(number, chosen, tuple(candidates), (), METHOD, self.decider.scoring))
         return steps

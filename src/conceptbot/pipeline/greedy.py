@@ -30,11 +30,14 @@ class LLMScores:
         scores: S_LLM per candidate (a distribution: softmax of log-probabilities, or vote shares).
         rejected: Completions that were not valid actions (voting), for the trace.
         usage: Tokens and time of the step's LLM calls.
+        scoring: How the backend scored them (``logprob``, ``search``, ... or ``vote``: the
+            :class:`conceptbot.models.llm.ScoreResponse` method).
     """
 
     scores: list[float]
     rejected: list[str]
     usage: Usage
+    scoring: str = ""
 
 
 LLMScorer = Callable[[list[Action], list[str], int], LLMScores]
@@ -105,7 +108,7 @@ def greedy_plan(
             best = next(c for c in scored if c.action == DONE)
         ranked = sorted(scored, key=lambda c: -c.combined)
         shown = ranked[:TOP_K] + [c for c in ranked[TOP_K:] if c.action == DONE]
-        steps.append(Step(index + 1, best.action, tuple(shown), tuple(found.rejected), method))
+        steps.append(Step(index + 1, best.action, tuple(shown), tuple(found.rejected), method, found.scoring))
         if events:
             events("step", steps[-1].to_dict())
         if best.action == DONE:

@@ -135,11 +135,11 @@ class Planner:
         scene: Scene,
         step: int,
         prompt: str = "",
-    ) -> tuple[list[float], list[str], Usage]:
+    ) -> LLMScores:
         if self.method == "logprob":
             options = tuple("done()" if a.is_done else f"robot.{a}" for a in candidates)
             scored = self.llm.score(ScoreRequest(options=options, prompt=prompt))
-            return softmax(list(scored.logprobs)), [], scored.usage
+            return LLMScores(softmax(list(scored.logprobs)), [], scored.usage, scored.method)
         usage = Usage(calls=0)
         rejected: list[str] = []
         votes: Counter[str] = Counter()
@@ -172,9 +172,9 @@ class Planner:
             )
         if not votes:
             rejected.append("no valid action in any completion: stopping")
-            return [1.0 if a.is_done else 0.0 for a in candidates], rejected, usage
+            return LLMScores([1.0 if a.is_done else 0.0 for a in candidates], rejected, usage, "vote")
         total = sum(votes.values())
-        return [votes.get(str(a), 0) / total for a in candidates], rejected, usage
+        return LLMScores([votes.get(str(a), 0) / total for a in candidates], rejected, usage, "vote")
 
     def plan(
         self,
@@ -200,8 +200,7 @@ class Planner:
         def llm_scores(candidates: list[Action], history: list[str], index: int) -> LLMScores:
             messages = self.messages(request, scene, properties, guidance, history)
             prompt = self.completion_prompt(request, scene, properties, commands or [], history, feedback)
-            scores, rejected, usage = self._llm_scores(candidates, messages, scene, index, prompt)
-            return LLMScores(scores, rejected, usage)
+            return self._llm_scores(candidates, messages, scene, index, prompt)
 
         def affordances(candidates: list[Action], history: list[str]) -> list[tuple[float, dict[str, float]]]:
             found = [affordance(a, scene, properties, history, self.gripper) for a in candidates]
