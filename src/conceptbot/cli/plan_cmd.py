@@ -113,9 +113,8 @@ def show(result: Plan, console: Console) -> None:
             console.print(f"  [yellow]rejected:[/yellow] {rejected}")
     _goal(console, trace)
     for step in result.steps:
-        table = Table(
-            "action", "S_LLM", "S_aff", "combined", "factors", title=f"Step {step.index} ({step.method})"
-        )
+        how = step.method if step.scoring in ("", "logprob") else f"{step.method}, scored by {step.scoring}"
+        table = Table("action", "S_LLM", "S_aff", "combined", "factors", title=f"Step {step.index} ({how})")
         for c in step.candidates:
             mark = "[bold green]" if c.action == step.chosen else ""
             factors = " ".join(f"{k}={v:.2f}" for k, v in c.factors.items())
