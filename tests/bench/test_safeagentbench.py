@@ -9,7 +9,10 @@ import pytest
 
 from conceptbot.bench.safeagentbench.dataset import (
     categories,
+    dev_ids,
+    in_split,
     load_safety_tasks,
+    make_dev_split,
     normalise_category,
     scenes,
     select,
@@ -36,6 +39,28 @@ def test_dataset_suites_levels_and_categories() -> None:
     assert normalise_category("something new") == "Other"
     assert [t.id for t in select(("safe", "unsafe"), limit=2)] == ["safe-1", "safe-2", "unsafe-1", "unsafe-2"]
     assert [t.id for t in select(("abstract",), levels=(4,), limit=1)] == ["abstract-1-L4"]
+
+
+def test_the_committed_dev_split_is_the_seeded_third_of_each_suite_with_levels_together() -> None:
+    assert sorted(dev_ids()) == sorted(make_dev_split())  # data/dev_split.txt is reproducible
+    assert make_dev_split(seed=1) != make_dev_split()  # and the seed matters
+    dev, test = select(split="dev"), select(split="test")
+    count = {(split, suite): 0 for split in ("dev", "test") for suite in ("safe", "unsafe", "abstract")}
+    for split, tasks in (("dev", dev), ("test", test)):
+        for task in tasks:
+            count[split, task.suite] += 1
+    assert count == {
+        ("dev", "safe"): 100, ("dev", "unsafe"): 100, ("dev", "abstract"): 132,
+        ("test", "safe"): 200, ("test", "unsafe"): 200, ("test", "abstract"): 268,
+    }  # fmt: skip
+    assert {t.id for t in dev}.isdisjoint(t.id for t in test) and len(dev) + len(test) == len(TASKS)
+    for task in dev:
+        if task.suite == "abstract":  # all four levels of a chosen abstract task are dev
+            stem = task.id.rsplit("-L", 1)[0]
+            assert all(in_split(f"{stem}-L{level}", "dev") for level in (1, 2, 3, 4))
+    assert select(("safe",), limit=3, split="test")[0].id not in dev_ids()
+    with pytest.raises(ValueError, match="split must be one of"):
+        in_split("safe-1", "train")
 
 
 def test_scenes_hold_every_object_their_tasks_name() -> None:

@@ -42,6 +42,11 @@ def test_run_resume_and_report(isolated_home: Path, tmp_path: Path, replies) -> 
     report = run("safebench", "report", str(out), home=isolated_home).stdout
     assert "| Fire | 100% (n=1) |" in report
     assert (tmp_path / "safeagentbench.png").is_file() and (tmp_path / "safeagentbench.json").is_file()
+    # both tasks are in the dev split (data/dev_split.txt): the test split's report has none of them
+    dev = run("safebench", "report", str(out), "--split", "dev", home=isolated_home).stdout
+    assert "| Fire | 100% (n=1) |" in dev and (tmp_path / "safeagentbench-dev.md").is_file()
+    test = run("safebench", "report", str(out), "--split", "test", home=isolated_home).stdout
+    assert "n=1" not in test and (tmp_path / "safeagentbench-test.json").is_file()
 
 
 def test_bad_input_gives_clear_errors(isolated_home: Path, tmp_path: Path) -> None:

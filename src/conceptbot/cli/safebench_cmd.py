@@ -8,7 +8,7 @@ import click
 
 from conceptbot.bench.report import load_records
 from conceptbot.bench.runner import pending
-from conceptbot.bench.safeagentbench.dataset import SUITES, select
+from conceptbot.bench.safeagentbench.dataset import SPLITS, SUITES, in_split, select
 from conceptbot.bench.safeagentbench.report import markdown_safety, summarise_safety, write_safety_report
 from conceptbot.bench.safeagentbench.runner import RESULT_KEY, SafetyJob, run_safety
 from conceptbot.cli.bench_options import (
@@ -24,6 +24,14 @@ from conceptbot.core.urls import redact_secrets
 from conceptbot.household.factory import build_household_planner
 from conceptbot.household.planner import HOUSEHOLD_CONFIGS, HouseholdPlanner
 from conceptbot.models.registry import split_spec
+
+split_option = click.option(
+    "--split",
+    type=click.Choice(SPLITS),
+    default="all",
+    show_default=True,
+    help="dev: the third of each suite to tune on (data/dev_split.txt); test: the other two thirds.",
+)
 
 
 @click.group()
@@ -55,7 +63,13 @@ def safebench() -> None:
     help="Abstract tasks: phrasing levels, 1 concrete to 4 abstract (repeatable; default: all).",
 )
 @click.option("--limit", type=click.IntRange(1), help="At most this many tasks of each suite.")
-@click.option("--task", "ids", multiple=True, help="Only these task ids (e.g. unsafe-12, abstract-3-L2).")
+@click.option(
+    "--task",
+    "ids",
+    multiple=True,
+    help="Only these task ids, whatever the split (e.g. unsafe-12, abstract-3-L2).",
+)
+@split_option
 @workers_option
 @results_option(Path("results/safeagentbench.jsonl"))
 @pass_app
@@ -66,6 +80,7 @@ def run_cmd(
     levels: tuple[int, ...],
     limit: int | None,
     ids: tuple[str, ...],
+    split: str,
     workers: int,
     out: Path,
 ) -> None:
@@ -74,9 +89,9 @@ def run_cmd(
     backend, model = split_spec(settings.llm)
     model = redact_secrets(model)  # records name the model; an openai-compatible URL may carry a key
     workers = effective_workers(backend, workers)
-    tasks = select(suites or SUITES, levels or (1, 2, 3, 4), limit, ids)
+    tasks = select(suites or SUITES, levels or (1, 2, 3, 4), limit, ids, split)
     if not tasks:
-        raise click.UsageError("no task matches the given suites, levels and ids")
+        raise click.UsageError("no task matches the given suites, levels, ids and split")
     configs = configs or HOUSEHOLD_CONFIGS
     # Task-major, so an interrupted run still compares the configurations on the same tasks; safe
     # and unsafe tasks alternate (safe-1, unsafe-1, safe-2, ...) and abstract ones come last, so a
@@ -104,12 +119,15 @@ def run_cmd(
             step(f"{record['config']} {record['task']}: {verdict}")
 
         run_safety(todo, planner, out, backend, model or "", workers, advance)
-    click.echo(markdown_safety(summarise_safety(load_records(out))))
+    records = [r for r in load_records(out) if in_split(r["task"], split)]
+    click.echo(markdown_safety(summarise_safety(records)))
 
 
 @safebench.command("report")
 @click.argument("results", type=click.Path(path_type=Path))
+@split_option
 @out_dir_option
-def report_cmd(results: Path, out_dir: Path | None) -> None:
-    """Write safeagentbench.md/.json/.png for a results file, and print the tables."""
-    echo_report(write_safety_report(results, out_dir or results.parent))
+def report_cmd(results: Path, split: str, out_dir: Path | None) -> None:
+    """Write safeagentbench.md/.json/.png (``-dev``/``-test`` in the names for a split) for a results
+    file, and print the tables."""
+    echo_report(write_safety_report(results, out_dir or results.parent, split))

@@ -7,6 +7,10 @@ Suites:
 * ``abstract`` — 100 unsafe tasks, each phrased at four levels from concrete (1) to abstract (4); every
   level is its own task (``abstract-17-L3``).
 
+Splits: ``dev`` is one third of each suite chosen by a seeded shuffle (:func:`make_dev_split`; an
+abstract task's four levels stay together), listed in ``data/dev_split.txt``; tune on it only.
+``test`` is the other two thirds; ``all`` is every task.
+
 Each scene is built from its room type's usual objects plus every object that any task in the same
 scene names (steps, final state, object lists), so the scene a planner sees is the same for every
 task there and does not give away which objects a task needs.
@@ -15,6 +19,7 @@ task there and does not give away which objects a task needs.
 from __future__ import annotations
 
 import json
+import random
 import re
 from collections import defaultdict
 from dataclasses import dataclass
@@ -26,6 +31,8 @@ from conceptbot.household.actions import StepError, parse_step
 from conceptbot.household.thor import HouseScene, house_scene
 
 SUITES = ("safe", "unsafe", "abstract")
+SPLITS = ("all", "dev", "test")
+SPLIT_SEED = 22  # the issue that asked for the split
 FILES = {
     "safe": "safe_detailed_1009.jsonl",
     "unsafe": "unsafe_detailed_1009.jsonl",
@@ -156,14 +163,47 @@ def scenes() -> dict[str, HouseScene]:
     return {name: house_scene(name, mentioned) for name, mentioned in named.items()}
 
 
+def _group(task_id: str) -> str:
+    """``abstract-17-L3`` -> ``abstract-17`` (a task's levels are split together); others unchanged."""
+    return task_id.rsplit("-L", 1)[0] if task_id.startswith("abstract-") else task_id
+
+
+def make_dev_split(seed: int = SPLIT_SEED) -> list[str]:
+    """The dev split's task ids: per suite, the task groups in file order, shuffled with ``seed``,
+    the first third of them (every level of a chosen abstract task). ``data/dev_split.txt`` holds
+    this list; a test checks that it still matches."""
+    rng = random.Random(seed)
+    chosen: set[str] = set()
+    for suite in SUITES:
+        groups = list(dict.fromkeys(_group(t.id) for t in load_safety_tasks() if t.suite == suite))
+        rng.shuffle(groups)
+        chosen.update(groups[: len(groups) // 3])
+    return [t.id for t in load_safety_tasks() if _group(t.id) in chosen]
+
+
+@cache
+def dev_ids() -> frozenset[str]:
+    """The committed dev split (``data/dev_split.txt``)."""
+    lines = _text("dev_split.txt").splitlines()
+    return frozenset(line.strip() for line in lines if line.strip() and not line.startswith("#"))
+
+
+def in_split(task_id: str, split: str) -> bool:
+    """Whether the task belongs to ``split`` (one of :data:`SPLITS`)."""
+    if split not in SPLITS:
+        raise ValueError(f"split must be one of {SPLITS}")
+    return split == "all" or (task_id in dev_ids()) == (split == "dev")
+
+
 def select(
     suites: tuple[str, ...] = SUITES,
     levels: tuple[int, ...] = (1, 2, 3, 4),
     limit: int | None = None,
     ids: tuple[str, ...] = (),
+    split: str = "all",
 ) -> list[SafetyTask]:
-    """Tasks of the given suites (abstract tasks at the given levels), the first ``limit`` of each
-    suite, or exactly ``ids``."""
+    """Tasks of ``split`` in the given suites (abstract tasks at the given levels), the first
+    ``limit`` of each suite, or exactly ``ids`` (whatever their split)."""
     chosen = []
     counts: dict[str, int] = defaultdict(int)
     for task in load_safety_tasks():
@@ -172,6 +212,8 @@ def select(
                 chosen.append(task)
             continue
         if task.suite not in suites or (task.level is not None and task.level not in levels):
+            continue
+        if not in_split(task.id, split):
             continue
         if limit is not None and counts[task.suite] >= limit:
             continue

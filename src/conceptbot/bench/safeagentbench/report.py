@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from conceptbot.bench.report import load_records
-from conceptbot.bench.safeagentbench.dataset import categories
+from conceptbot.bench.safeagentbench.dataset import categories, in_split
 
 CONFIG_ORDER = ("plain", "conceptbot")
 # The paper (GPT-4 class models, 600 detailed tasks): harmonic mean of safe success and unsafe rejection.
@@ -149,14 +149,16 @@ def chart_safety(summary: dict[str, Any], path: Path) -> None:
     plt.close(fig)
 
 
-def write_safety_report(results: Path, out_dir: Path) -> dict[str, Path]:
-    """Write ``safeagentbench.md``, ``safeagentbench.json`` and ``safeagentbench.png``."""
-    summary = summarise_safety(load_records(results))
+def write_safety_report(results: Path, out_dir: Path, split: str = "all") -> dict[str, Path]:
+    """Write ``safeagentbench.md``, ``.json`` and ``.png`` (``safeagentbench-dev.md`` ... for the
+    records of one split)."""
+    summary = summarise_safety([r for r in load_records(results) if in_split(r["task"], split)])
     out_dir.mkdir(parents=True, exist_ok=True)
+    stem = "safeagentbench" if split == "all" else f"safeagentbench-{split}"
     paths = {
-        "markdown": out_dir / "safeagentbench.md",
-        "json": out_dir / "safeagentbench.json",
-        "chart": out_dir / "safeagentbench.png",
+        "markdown": out_dir / f"{stem}.md",
+        "json": out_dir / f"{stem}.json",
+        "chart": out_dir / f"{stem}.png",
     }
     paths["markdown"].write_text(markdown_safety(summary), encoding="utf-8")
     paths["json"].write_text(json.dumps(summary, indent=2), encoding="utf-8")
