@@ -75,7 +75,7 @@ def test_a_plan_that_breaks_the_rules_is_repaired_once() -> None:
     broken = _reply(False, ["find Book", "find GarbageCan", "put GarbageCan", "open GarbageCan"])
     fixed = _reply(False, ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"])
     llm = FakeLLM([broken, fixed])
-    plan = PlainHouseholdPlanner(llm).plan("Put the book in the garbage can.", bedroom)
+    plan = PlainHouseholdPlanner(llm, llm_repair=True).plan("Put the book in the garbage can.", bedroom)
     assert plan.steps == ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"]
     assert plan.trace["repair"]["failures"] == [
         "put GarbageCan: the hand is empty",
@@ -86,10 +86,9 @@ def test_a_plan_that_breaks_the_rules_is_repaired_once() -> None:
     assert plan.usage["planner"].calls == 2 and plan.trace["repair"]["kept"]
     # A plan that executes is not sent back; a refusal is never "repaired".
     llm = FakeLLM([fixed, _reply(True, [])])
-    assert (
-        PlainHouseholdPlanner(llm).plan("Put the book in the garbage can.", bedroom).steps[1] == "pick Book"
-    )
-    refusal = PlainHouseholdPlanner(llm).plan("Burn the book.", bedroom)
+    planner = PlainHouseholdPlanner(llm, llm_repair=True)
+    assert planner.plan("Put the book in the garbage can.", bedroom).steps[1] == "pick Book"
+    refusal = planner.plan("Burn the book.", bedroom)
     assert refusal.refused and "repair" not in refusal.trace and len(llm.requests) == 2
 
 
@@ -99,8 +98,23 @@ def test_a_repair_that_fails_more_is_not_kept() -> None:
         False, ["find Book", "pick Book", "find GarbageCan", "put GarbageCan", "close GarbageCan"]
     )
     worse = _reply(False, ["find GarbageCan", "pick GarbageCan", "put GarbageCan"])
-    plan = PlainHouseholdPlanner(FakeLLM([nearly, worse])).plan("Put the book in the garbage can.", bedroom)
-    assert plan.steps[:4] == ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"]
+    planner = PlainHouseholdPlanner(FakeLLM([nearly, worse, nearly, _reply(False, [])]), llm_repair=True)
+    plan = planner.plan("Put the book in the garbage can.", bedroom)
+    # the first plan is kept, and grounding drops its impossible last step
+    assert plan.steps == ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"]
     assert not plan.trace["repair"]["kept"] and len(plan.trace["repair"]["proposed_failures"]) == 2
-    gave_up = PlainHouseholdPlanner(FakeLLM([nearly, _reply(False, [])])).plan("Put the book away.", bedroom)
-    assert len(gave_up.steps) == 5
+    assert plan.trace["grounding"] == [
+        {"step": "close GarbageCan", "failure": "GarbageCan is not openable", "change": "dropped the step"}
+    ]
+    gave_up = planner.plan("Put the book away.", bedroom)
+    assert gave_up.steps == plan.steps
+
+
+def test_by_default_a_plan_that_breaks_the_rules_is_grounded_without_another_llm_call() -> None:
+    bedroom = house_scene("FloorPlan301", ["Book", "GarbageCan"])
+    broken = _reply(False, ["find Book", "find GarbageCan", "put GarbageCan", "close GarbageCan"])
+    llm = FakeLLM([broken])
+    plan = PlainHouseholdPlanner(llm).plan("Put the book in the garbage can.", bedroom)
+    assert plan.steps == ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"]
+    assert [g["change"] for g in plan.trace["grounding"]] == ["inserted pick Book", "dropped the step"]
+    assert len(llm.requests) == 1 and "repair" not in plan.trace

@@ -71,13 +71,27 @@ class ObjectState:
         return {**self.flags, "parentReceptacles": list(self.parents), "liquid": self.liquid}
 
 
+# Why a step failed (StepResult.failure), for a skill layer to repair it
+# (:mod:`conceptbot.household.grounding`).
+INVALID = "invalid"  # not one of the actions' syntax
+UNKNOWN_OBJECT = "unknown object"  # no such object here (or none given)
+UNABLE = "unable"  # the object lacks the ability (opening a shelf), or the action is spent
+NOT_FOUND = "not found"  # not found yet
+EMPTY_HAND = "empty hand"  # put, pour, drop or throw with nothing held
+HAND_FULL = "hand full"  # pick while holding something
+CLOSED = "closed"  # put into a closed receptacle, or pick from inside one (StepResult.about)
+
+
 @dataclass
 class StepResult:
-    """What one step did."""
+    """What one step did; a failed one says why (``failure``: one of the kinds above) and, for a
+    closed receptacle, which one (``about``)."""
 
     step: str
     ok: bool
     message: str = ""
+    failure: str = ""
+    about: str = ""
 
 
 @dataclass
@@ -98,7 +112,10 @@ class Execution:
 
 
 class _StepFailedError(Exception):
-    pass
+    def __init__(self, message: str, failure: str = UNABLE, about: str = "") -> None:
+        super().__init__(message)
+        self.failure = failure
+        self.about = about
 
 
 class HouseholdExecutor:
@@ -128,10 +145,10 @@ class HouseholdExecutor:
     # -- helpers -----------------------------------------------------------------------------
     def _object(self, name: str | None) -> str:
         if not name:
-            raise _StepFailedError("no object given")
+            raise _StepFailedError("no object given", UNKNOWN_OBJECT)
         t = self.types.canonical(name)
         if t is None or t not in self.state:
-            raise _StepFailedError(f"there is no {name} here")
+            raise _StepFailedError(f"there is no {name} here", UNKNOWN_OBJECT)
         return t
 
     def _need(self, t: str, ability: str) -> None:
@@ -144,7 +161,7 @@ class HouseholdExecutor:
             return
         if any(p in self.found and p != "Floor" for p in s.parents):
             return
-        raise _StepFailedError(f"{t} has not been found yet (find it first)")
+        raise _StepFailedError(f"{t} has not been found yet (find it first)", NOT_FOUND)
 
     def _closed_around(self, t: str) -> str | None:
         for p in self.state[t].parents:
@@ -154,7 +171,7 @@ class HouseholdExecutor:
 
     def _held(self) -> str:
         if self.held is None:
-            raise _StepFailedError("the hand is empty")
+            raise _StepFailedError("the hand is empty", EMPTY_HAND)
         return self.held
 
     def _make(self, source: str) -> None:
@@ -209,10 +226,10 @@ class HouseholdExecutor:
         if verb == "pick":
             self._need(t, "pickupable")
             if self.held is not None:
-                raise _StepFailedError(f"the hand already holds {self.held}")
+                raise _StepFailedError(f"the hand already holds {self.held}", HAND_FULL, self.held)
             closed = self._closed_around(t)
             if closed:
-                raise _StepFailedError(f"{t} is inside the closed {closed}")
+                raise _StepFailedError(f"{t} is inside the closed {closed}", CLOSED, closed)
             s.flags["isPickedUp"], s.parents, self.held = True, [], t
             return f"picked {t}"
         if verb == "put":
@@ -221,7 +238,7 @@ class HouseholdExecutor:
             if t == held:
                 raise _StepFailedError(f"cannot put {held} into itself")
             if self.types.has(t, "openable") and not s.flags["isOpen"]:
-                raise _StepFailedError(f"{t} is closed (open it first)")
+                raise _StepFailedError(f"{t} is closed (open it first)", CLOSED, t)
             self._land_put(held, t)
             return f"put {held} in/on {t}"
         if verb in ("open", "close"):
@@ -299,8 +316,10 @@ class HouseholdExecutor:
         """Execute one step (text as in a plan)."""
         try:
             result = StepResult(text, True, self._do(parse_step(text)))
-        except (StepError, _StepFailedError) as exc:
-            return StepResult(text, False, str(exc))
+        except StepError as exc:
+            return StepResult(text, False, str(exc), INVALID)
+        except _StepFailedError as exc:
+            return StepResult(text, False, str(exc), exc.failure, exc.about)
         self._settle()
         return result
 
