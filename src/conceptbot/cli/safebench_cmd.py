@@ -22,7 +22,7 @@ from conceptbot.cli.main import AppContext, pass_app
 from conceptbot.cli.progress import count_progress
 from conceptbot.core.urls import redact_secrets
 from conceptbot.household.factory import build_household_planner
-from conceptbot.household.planner import HOUSEHOLD_CONFIGS, HouseholdPlanner
+from conceptbot.household.planner import DEFAULT_HOUSEHOLD_CONFIGS, HOUSEHOLD_CONFIGS, HouseholdPlanner
 from conceptbot.models.registry import split_spec
 
 split_option = click.option(
@@ -46,7 +46,8 @@ def safebench() -> None:
     "configs",
     multiple=True,
     type=click.Choice(HOUSEHOLD_CONFIGS),
-    help="Configuration(s) to run (repeatable; default: plain, conceptbot).",
+    help="Configuration(s) to run (repeatable; default: plain, conceptbot; conceptbot-joint is the "
+    "first design, where the planning call also judges).",
 )
 @click.option(
     "--suite",
@@ -92,7 +93,7 @@ def run_cmd(
     tasks = select(suites or SUITES, levels or (1, 2, 3, 4), limit, ids, split)
     if not tasks:
         raise click.UsageError("no task matches the given suites, levels, ids and split")
-    configs = configs or HOUSEHOLD_CONFIGS
+    configs = configs or DEFAULT_HOUSEHOLD_CONFIGS
     # Task-major, so an interrupted run still compares the configurations on the same tasks; safe
     # and unsafe tasks alternate (safe-1, unsafe-1, safe-2, ...) and abstract ones come last, so a
     # partial run already gives the headline harmonic mean.

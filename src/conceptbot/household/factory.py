@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConfigError
+from conceptbot.household.judge import HarmJudge
 from conceptbot.household.planner import (
     HOUSEHOLD_CONFIGS,
     ConceptBotHouseholdPlanner,
@@ -16,7 +17,9 @@ from conceptbot.pipeline.retrieval import RelationRetriever, default_theta
 
 
 def build_household_planner(settings: Settings, config: str) -> HouseholdPlanner:
-    """``plain`` (the LLM alone) or ``conceptbot`` (OPE Risk Index + URP relations + the LLM).
+    """``plain`` (the LLM alone), ``conceptbot`` (OPE Risk Index + URP relations as evidence for the
+    harm judge, then the LLM plans) or ``conceptbot-joint`` (the same evidence for the LLM's joint
+    judging-and-planning call: the first design).
 
     For ConceptBot, OPE, URP's keywords and the planning call each get their own backend instance
     (for llama.cpp: a context each over the same memory-mapped weights), so each module's system
@@ -28,7 +31,7 @@ def build_household_planner(settings: Settings, config: str) -> HouseholdPlanner
     store = open_store(settings)
     if config == "plain":
         return PlainHouseholdPlanner(open_llm(settings, store, module="planner"))
-    if config == "conceptbot":
+    if config in ("conceptbot", "conceptbot-joint"):
         graph = open_graph(settings)
         embedder = open_embedder(settings, store)
         retriever = RelationRetriever(graph, embedder, default_theta(embedder.model))
@@ -37,5 +40,6 @@ def build_household_planner(settings: Settings, config: str) -> HouseholdPlanner
             retriever,
             planner_llm=open_llm(settings, store, module="planner"),
             keyword_llm=open_llm(settings, store, module="urp"),
+            judge=HarmJudge(open_llm(settings, store, module="judge")) if config == "conceptbot" else None,
         )
     raise ConfigError(f"unknown configuration {config!r}", hint=f"use one of {', '.join(HOUSEHOLD_CONFIGS)}")

@@ -4,8 +4,12 @@
   (the benchmark's plain-LLM baseline, with the same safety instruction as ConceptBot).
 * :class:`ConceptBotHouseholdPlanner` — ConceptBot's modules in front of the same call: OPE's Risk
   Index (1-5, with the knowledge graph's relations) for the scene objects the instruction names, and
-  URP's keywords with their graph relations filtered against the instruction. What they found goes
-  to the planning call as "what the knowledge graph and the risk analysis say".
+  URP's keywords with their graph relations filtered against the instruction. What they found is
+  the evidence for the harm judge (:mod:`conceptbot.household.judge`: "would carrying this out be
+  dangerous?", scored, refused above a threshold chosen on the dev split); an instruction it lets
+  through is planned by the same call, which then must plan. With ``judge=None`` (configuration
+  ``conceptbot-joint``, the first design) the evidence goes to the planning call, which judges and
+  plans at once.
 
 The reply is constrained (JSON schema with a pattern per step), so every step is one of the 17
 actions on an object of the scene; a plan still has to be checked by the executor.
@@ -24,6 +28,7 @@ from conceptbot.core.usage import Usage
 from conceptbot.household.actions import ACTIONS, LIQUIDS, key
 from conceptbot.household.executor import execute
 from conceptbot.household.grounding import ground_plan
+from conceptbot.household.judge import HarmJudge, safety_text
 from conceptbot.household.thor import HouseScene, catalogue
 from conceptbot.models.llm import LLM, ChatRequest, Message
 from conceptbot.models.structured import chat_json
@@ -34,7 +39,8 @@ from conceptbot.pipeline.urp import UserRequestProcessor
 
 PROMPTS = "conceptbot.household.prompts"
 Progress = Callable[[str], None]
-HOUSEHOLD_CONFIGS = ("plain", "conceptbot")
+HOUSEHOLD_CONFIGS = ("plain", "conceptbot", "conceptbot-joint")
+DEFAULT_HOUSEHOLD_CONFIGS = ("plain", "conceptbot")
 
 
 @dataclass
@@ -63,9 +69,10 @@ def plannable_objects(scene: HouseScene) -> list[str]:
     return sorted({*scene.objects, *extra})
 
 
-def response_schema(scene: HouseScene, max_steps: int = 24) -> dict[str, Any]:
+def response_schema(scene: HouseScene, max_steps: int = 24, must_plan: bool = False) -> dict[str, Any]:
     """The reply schema: reasoning, the refusal flag, and steps matching the 17 actions' syntax with
-    the scene's object names."""
+    the scene's object names (``must_plan``: the flag must be false and a step given, for an
+    instruction already judged safe)."""
     objects = "|".join(re.escape(o) for o in plannable_objects(scene))
     with_object = "|".join(v for v, (obj, liquid) in ACTIONS.items() if obj and not liquid)
     without = "|".join(v for v, (obj, _) in ACTIONS.items() if not obj)
@@ -75,11 +82,12 @@ def response_schema(scene: HouseScene, max_steps: int = 24) -> dict[str, Any]:
         "type": "object",
         "properties": {
             "reasoning": {"type": "string", "maxLength": 300},
-            "refuse": {"type": "boolean"},
+            "refuse": {"const": False} if must_plan else {"type": "boolean"},
             "steps": {
                 "type": "array",
                 "items": {"type": "string", "pattern": pattern},
                 "maxItems": max_steps,
+                **({"minItems": 1} if must_plan else {}),
             },
         },
         "required": ["reasoning", "refuse", "steps"],
@@ -125,17 +133,25 @@ class _PlanCall:
         self.repair = repair
 
     def __call__(
-        self, instruction: str, scene: HouseScene, knowledge: str, trace: dict[str, Any]
+        self,
+        instruction: str,
+        scene: HouseScene,
+        knowledge: str,
+        trace: dict[str, Any],
+        must_plan: bool = False,
     ) -> tuple[dict[str, Any], Usage]:
         system = prompts.render(
-            "household_system", PROMPTS, examples=prompts.render("household_examples", PROMPTS)
+            "household_system",
+            PROMPTS,
+            safety=safety_text(),
+            examples=prompts.render("household_examples", PROMPTS),
         )
         user = f"Objects in the scene ({scene.room}): {', '.join(scene.objects)}.\n"
         if knowledge:
             user += knowledge
         user += f"Instruction: {instruction}"
         messages = [Message("user", user)]
-        schema = response_schema(scene)
+        schema = response_schema(scene, must_plan=must_plan)
         value, response = chat_json(
             self.llm, ChatRequest.of(messages, system=system, max_tokens=self.max_tokens), schema
         )
@@ -218,9 +234,9 @@ class ConceptBotHouseholdPlanner:
             context, every task re-evaluates all three prompts.)
         max_relations: Keyword relations shown per keyword.
         llm_repair: Send a plan whose steps fail back to the LLM once before grounding it.
+        judge: Decides refusals from the evidence; None: the planning call decides (the first
+            design, ``conceptbot-joint``).
     """
-
-    config = "conceptbot"
 
     def __init__(
         self,
@@ -230,26 +246,38 @@ class ConceptBotHouseholdPlanner:
         keyword_llm: LLM | None = None,
         max_relations: int = 6,
         llm_repair: bool = False,
+        judge: HarmJudge | None = None,
     ) -> None:
         self.ope = ObjectPropertiesExtractor(_labelled(llm, "ope"), retriever)
         self.urp = UserRequestProcessor(_labelled(keyword_llm or llm, "urp"), retriever)
         self.retriever = retriever
         self.max_relations = max_relations
         self._call = _PlanCall(planner_llm or llm, repair=llm_repair)
+        self.judge = judge
+        self.config = "conceptbot" if judge is not None else "conceptbot-joint"
 
-    def plan(self, instruction: str, scene: HouseScene, progress: Progress | None = None) -> HouseholdPlan:
-        """Plan ``instruction`` in ``scene`` or refuse it."""
-        say = progress or (lambda message: None)
-        usage: dict[str, Usage] = {}
+    def evidence(
+        self,
+        instruction: str,
+        scene: HouseScene,
+        say: Progress,
+        trace: dict[str, Any],
+        usage: dict[str, Usage],
+    ) -> tuple[str, str]:
+        """What OPE and URP found, as text for the judge or the planning call, and the riskiest
+        object's risk line (empty if none); fills ``trace`` and ``usage`` (``ope``, ``urp``)."""
         objects = mentioned_objects(instruction, scene)
         names = {o: _words(o) for o in objects}
-        trace: dict[str, Any] = {"config": self.config, "objects": objects}
+        trace["objects"] = objects
         lines = []
+        riskiest = ""
         if objects:
             say(f"OPE: risk index of {', '.join(objects)}")
             props, _, usage["ope"] = self.ope.run(list(names.values()), modes.RISK, instruction, say)
             trace["risk"] = {n: p.values for n, p in props.items()}
             lines += [f"- {p.summary()} ({p.values.get('reason', '').strip()})" for p in props.values()]
+            top = max(props.values(), key=lambda p: float(p.values.get("dangerous") or 0))
+            riskiest = f"{top.summary()} ({top.values.get('reason', '').strip()})"
         started = time.perf_counter()
         say("URP: keywords and their relations")
         keywords, used = self.urp.keywords(instruction)
@@ -267,8 +295,26 @@ class ConceptBotHouseholdPlanner:
             )
         if relations:
             knowledge += "Commonsense facts:\n" + "\n".join(f"- {r}" for r in relations) + "\n"
+        return knowledge, riskiest
+
+    def plan(self, instruction: str, scene: HouseScene, progress: Progress | None = None) -> HouseholdPlan:
+        """Plan ``instruction`` in ``scene`` or refuse it."""
+        say = progress or (lambda message: None)
+        usage: dict[str, Usage] = {}
+        trace: dict[str, Any] = {"config": self.config}
+        knowledge, riskiest = self.evidence(instruction, scene, say, trace, usage)
+        if self.judge is not None:
+            started = time.perf_counter()
+            say("judge: would carrying it out be dangerous?")
+            verdict, used = self.judge.judge(instruction, scene, knowledge)
+            usage["judge"] = used.with_latency(time.perf_counter() - started)
+            trace["judge"] = verdict.to_dict()
+            if verdict.refuse:
+                reason = f"Carrying it out was judged dangerous (P = {verdict.p_dangerous:.2f})"
+                reason += f"; risk analysis: {riskiest}" if riskiest else "."
+                return _result({"reasoning": reason, "refuse": True, "steps": []}, trace, usage)
         started = time.perf_counter()
-        say("planner: judging and planning")
-        value, used = self._call(instruction, scene, knowledge, trace)
+        say("planner: planning" if self.judge is not None else "planner: judging and planning")
+        value, used = self._call(instruction, scene, knowledge, trace, must_plan=self.judge is not None)
         usage["planner"] = used.with_latency(time.perf_counter() - started)
         return _result(value, trace, usage)

@@ -14,7 +14,7 @@ from typing import Any
 from conceptbot.bench.report import load_records
 from conceptbot.bench.safeagentbench.dataset import categories, in_split
 
-CONFIG_ORDER = ("plain", "conceptbot")
+CONFIG_ORDER = ("plain", "conceptbot", "conceptbot-joint")
 # The paper (GPT-4 class models, 600 detailed tasks): harmonic mean of safe success and unsafe rejection.
 PAPER_HARMONIC = {"conceptbot": 80.0, "ReAct + ThinkSafe (next best)": 46.0}
 
