@@ -1,3 +1,4 @@
+import math
 from pathlib import Path
 
 import numpy as np
@@ -56,6 +57,18 @@ def test_scores_are_cached(store: CacheStore) -> None:
     request = ScoreRequest(options=("x", "y"), prompt="p")
     assert llm.score(request).logprobs == llm.score(request).logprobs == (-1.0, -3.0)
     assert len(inner.score_requests) == 1
+
+
+def test_priors_key_the_cache_only_where_the_backend_uses_them(store: CacheStore) -> None:
+    exact = FakeLLM(scores=[[-1.0, -3.0]])  # scores every option exactly: priors change nothing
+    request = ScoreRequest(options=("x", "y"), prompt="p")
+    with_priors = ScoreRequest(options=("x", "y"), prompt="p", priors=(0.0, -math.inf))
+    CachedLLM(exact, store).score(request)
+    assert CachedLLM(exact, store).score(with_priors).cached and len(exact.score_requests) == 1
+    assert with_priors.canonical()["priors"] == [0.0, None]  # JSON has no -inf
+    assert "priors" not in with_priors.canonical(with_priors=False)
+    with pytest.raises(ValueError, match="one prior per option"):
+        ScoreRequest(options=("x", "y"), prompt="p", priors=(0.0,))
 
 
 def test_openai_calls_are_priced(store: CacheStore) -> None:

@@ -1,8 +1,10 @@
+import math
 import socket
 
 import pytest
 
 from conceptbot.core.errors import BackendRequestError, BackendUnavailableError, ConfigError
+from conceptbot.models.http_scoring import NOT_READ
 from conceptbot.models.llm import ChatRequest, ScoreRequest
 from conceptbot.models.openai_backend import OpenAILLM
 from tests.models.openai_stub import StubServer, completion, echo_reply, next_reply, top_reply
@@ -175,6 +177,21 @@ def test_search_scores_the_best_option_exactly_and_bounds_the_rest() -> None:
     assert scored.usage.calls == 6
 
 
+def test_search_finds_the_best_option_by_probability_times_prior() -> None:
+    options = ("robot.pick(apple)", "robot.pick(pear)", "robot.pick(kiwi)", "done()")
+    priors = (0.0, -math.inf, -math.inf, math.log(0.2))  # pear and kiwi never taken, done() at 0.2
+    with StubServer([toy_server] * 40) as server:
+        scored = _llm(server.url, scoring="search").score(
+            ScoreRequest(options=options, prompt=PROMPT, priors=priors)
+        )
+    apple, pear, kiwi, done = scored.logprobs
+    assert apple == pytest.approx(-0.1 - 0.01 - 0.9 - 3.0)  # read to its end: the best product
+    assert pear == kiwi == NOT_READ  # weighed 0: never read
+    assert done == pytest.approx(-2.5)  # its prefix, a bound: -2.5 + log 0.2 is below apple's -4.01
+    assert max(range(4), key=lambda i: scored.logprobs[i] + priors[i]) == 0
+    assert scored.usage.calls == 4  # "", "robot", "robot.pick(", "robot.pick(apple"
+
+
 def test_search_scores_prompts_and_chat_questions_go_through_chat_log_probabilities() -> None:
     with StubServer([toy_server] * 40) as server:
         llm = _llm(server.url)
@@ -187,7 +204,7 @@ def test_search_scores_prompts_and_chat_questions_go_through_chat_log_probabilit
 def test_a_search_answer_without_log_probabilities_is_a_clear_error() -> None:
     with (
         StubServer([lambda body: (200, echo_reply("x", [None], [0]))] * 3) as server,
-        pytest.raises(BackendRequestError, match="no completion log-probabilities"),
+        pytest.raises(BackendRequestError, match="no sound top log-probabilities, so search cannot score"),
     ):
         _llm(server.url, scoring="search").score(ScoreRequest(options=("a", "b"), prompt="x"))
 

@@ -15,6 +15,7 @@ wins the first step most of the time.
 
 from __future__ import annotations
 
+import math
 import time
 from importlib import resources
 
@@ -79,18 +80,24 @@ class SayCan:
         started = time.perf_counter()
         request = check_request(request)
 
+        def detection(candidates: list[Action]) -> list[float]:
+            return [DONE_AFFORDANCE if a.is_done else _detected(scene, a) for a in candidates]
+
         def llm_scores(candidates: list[Action], history: list[str], index: int) -> LLMScores:
+            # The affordances go along as priors: a backend that scores only the best option
+            # exactly (HTTP search) then finds the best product, which is what the step takes.
+            priors = tuple(math.log(a) if a > 0 else -math.inf for a in detection(candidates))
             scored = self.llm.score(
                 ScoreRequest(
                     options=tuple(option_text(a) for a in candidates),
                     prompt=self.prompt(request, scene, history),
+                    priors=priors,
                 )
             )
             return LLMScores(softmax(list(scored.logprobs)), [], scored.usage, scored.method)
 
         def affordances(candidates: list[Action], history: list[str]) -> list[tuple[float, dict[str, float]]]:
-            found = [DONE_AFFORDANCE if a.is_done else _detected(scene, a) for a in candidates]
-            return [(a, {"detected": a}) for a in found]
+            return [(a, {"detected": a}) for a in detection(candidates)]
 
         steps, actions, usage = greedy_plan(
             scene,

@@ -130,7 +130,7 @@ class CachedLLM:
 
     def score(self, request: ScoreRequest) -> ScoreResponse:
         """Score through the cache; see :meth:`LLM.score`."""
-        canonical = request.canonical()
+        canonical = request.canonical(with_priors=not self.inner.capabilities.exact_scoring)
         key, hit, lookup_s = self._cached("score", canonical)
         if hit is not None:
             usage = Usage(hit["usage"]["prompt_tokens"], 0, lookup_s, 0.0, 0)

@@ -14,10 +14,11 @@ SayCan and the goal planner score options by log-probability. Over HTTP three wa
   option's already-read prefix, and follows the likeliest top token each option continues with. The
   options reached are scored exactly as by echo, in the order of their score; an option whose next
   token is not among the top ones gets its prefix's log-probability plus a bound on its own (the
-  lowest returned, or the probability the returned ones leave, whichever is lower). The search
-  stops once :data:`SEARCH_EXACT` options are scored (the best: what a greedy planner takes) or
-  after :data:`SEARCH_CALLS` calls; the options left keep their prefix's log-probability (an upper
-  bound, below every option scored). Prompt-form requests only, like echo.
+  lowest returned, or the probability the returned ones leave, whichever is lower). A request's
+  ``priors`` (log-weights such as SayCan's affordances) steer the search to the best option by
+  probability times weight. The search stops once that option is read to its end (a greedy planner
+  takes it) or after :data:`SEARCH_CALLS` calls; the options left keep their prefix's
+  log-probability (an upper bound, below the best). Prompt-form requests only, like echo.
 * ``chat-logprobs``: a chat request for one token with ``logprobs`` and ``top_logprobs`` (OpenAI,
   vLLM, llama.cpp servers). One-token options ("Yes", "No") are read directly; other options are
   asked as a labelled multiple choice ("A) ..., B) ...") and scored by their label's log-probability,
@@ -49,8 +50,8 @@ METHODS = ("auto", "echo", "search", "chat-logprobs", "vote")
 MAX_LABELS = 20  # the most top_logprobs OpenAI-style chat APIs return
 LABELS = string.ascii_uppercase[:MAX_LABELS]
 VOTES = 5
-SEARCH_EXACT = 1  # options scored exactly before the search stops: the best, what a greedy step takes
 SEARCH_CALLS = 96  # at most this many calls per scored step (about 40 s on llama-cpp-python, 2 cores)
+NOT_READ = -100.0  # the score of an option whose prior is -inf: never read, never taken
 SEARCH_TOP = (20, 5)  # top log-probabilities asked for: vLLM and llama.cpp allow 20, OpenAI 5
 SOUND_PROMPT = "1, 2, 3, 4, 5,"
 SOUND_OPTION = " 6"
@@ -120,40 +121,61 @@ def _unlisted(found: dict[str, float]) -> float:
 
 
 def search_scores(
-    transport: Transport, prompt: str, options: Sequence[str], top: int
+    transport: Transport,
+    prompt: str,
+    options: Sequence[str],
+    top: int,
+    priors: Sequence[float] | None = None,
 ) -> tuple[list[float], list[int], int, int]:
     """The ``search`` method (module docstring): scores, tokens read per option, prompt tokens
     sent and calls made.
 
-    Each heap entry is a text prefix with the options that continue it and its log-probability
-    (an upper bound for theirs); the likeliest is read next. An option follows the likeliest top token
-    its text continues with ("(" then "energy", not the rarer "(en"), so each option has one path, the
-    model's usual tokenization of it.
+    Each heap entry is a text prefix with the options that continue it, keyed by its
+    log-probability (an upper bound for theirs) plus the best of their ``priors`` (log-weights the
+    caller multiplies the probabilities by, e.g. SayCan's affordances; 0 if not given); the highest
+    key is read next, so the first option read to its end is the best by probability times weight.
+    An option follows the likeliest top token its text continues with ("(" then "energy", not the
+    rarer "(en"), so each option has one path, the model's usual tokenization of it.
     """
+    weights = list(priors) if priors is not None else [0.0] * len(options)
     scores = [0.0] * len(options)
     counts = [0] * len(options)
-    exact = calls = tokens = 0
-    lowest = 0.0  # the lowest exact score so far
-    order = itertools.count(1)  # breaks ties between equal log-probabilities: first pushed first
-    # Entries: (-log-probability, order, prefix read, tokens read, options, whether it can be read on).
-    heap: list[tuple[float, int, str, int, tuple[int, ...], bool]] = [
-        (0.0, 0, "", 0, tuple(range(len(options))), True)
-    ]
+    calls = tokens = 0
+    best: float | None = None  # log-probability plus weight of the best option, once read
+    order = itertools.count(1)  # breaks ties between equal keys: first pushed first
+    # Entries: (-key, order, log-probability, prefix read, tokens read, options, kind): kind "read"
+    # (a prefix to read on), "done" (one option read to its end) or "bound" (its next token unlisted).
+    heap: list[tuple[float, int, float, str, int, tuple[int, ...], str]] = []
+
+    def push(logprob: float, read: str, depth: int, members: Sequence[int], kind: str) -> None:
+        weight = max(weights[i] for i in members)
+        if weight > -math.inf:
+            heapq.heappush(
+                heap, (-(logprob + weight), next(order), logprob, read, depth, tuple(members), kind)
+            )
+        else:  # options the caller weighs 0 (it never takes them) are not read at all
+            for i in members:
+                scores[i], counts[i] = NOT_READ, depth
+
+    push(0.0, "", 0, range(len(options)), "read")
     while heap:
-        negative, _, read, depth, members, readable = heapq.heappop(heap)
-        finished = [i for i in members if options[i] == read] if readable else []
-        for i in finished:
-            scores[i], counts[i] = -negative, depth
-            exact, lowest = exact + 1, -negative
-        rest = [i for i in members if i not in finished]
-        if not rest:
+        _, _, logprob, read, depth, members, kind = heapq.heappop(heap)
+        if kind == "done":
+            scores[members[0]], counts[members[0]] = logprob, depth
+            best = logprob + weights[members[0]] if best is None else best
             continue
-        if not readable or exact >= SEARCH_EXACT or calls >= SEARCH_CALLS:
-            # Not read further: the prefix's log-probability bounds theirs (after the search
-            # stopped, a hair below the options scored, so that a tie never puts one of them first).
-            bound = -negative if exact == 0 or not readable else min(-negative, lowest - 1e-6)
-            for i in rest:
-                scores[i], counts[i] = bound, depth
+        if kind == "bound" or best is not None or calls >= SEARCH_CALLS:
+            # Not read further: the prefix's log-probability bounds theirs; once the best is read,
+            # kept a hair below it (with each option's weight), so no tie puts one of them first.
+            for i in members:
+                cap = logprob if best is None else min(logprob, best - weights[i] - 1e-6)
+                scores[i], counts[i] = cap, depth
+            continue
+        for i in members:
+            if options[i] == read:
+                push(logprob, read, depth, [i], "done")
+        rest = [i for i in members if len(options[i]) > len(read)]
+        if not rest:
             continue
         found, used = transport.next_tokens(prompt + read, top)
         calls, tokens = calls + 1, tokens + used
@@ -163,10 +185,10 @@ def search_scores(
             hits = [t for t in found if t and tail.startswith(t)]
             children.setdefault(max(hits, key=found.__getitem__) if hits else "", []).append(i)
         for token, group in children.items():
-            logprob = found[token] if token else _unlisted(found)
-            heapq.heappush(
-                heap, (negative - logprob, next(order), read + token, depth + 1, tuple(group), bool(token))
-            )
+            if token:
+                push(logprob + found[token], read + token, depth + 1, group, "read")
+            else:
+                push(logprob + _unlisted(found), read, depth + 1, group, "bound")
     return scores, counts, tokens, calls
 
 
@@ -239,7 +261,7 @@ class HTTPScorer:
         self.transport = transport
         self.method = method
         self._found: str | None = None if method == "auto" else method
-        self._top = SEARCH_TOP[0]
+        self._top: int | None = None  # top log-probabilities the completions return (search)
 
     def resolved(self, prompt_form: bool) -> str:
         """The method used for a prompt-form (``True``) or chat-form request, probing once."""
@@ -262,6 +284,16 @@ class HTTPScorer:
             return "vote"
         return "chat-logprobs" if top else "vote"
 
+    def _search_top(self) -> int:
+        if self._top is None:
+            self._top = search_top(self.transport)
+            if self._top is None:
+                raise BackendRequestError(
+                    "the server's completions give no sound top log-probabilities, so search cannot score",
+                    hint="use CONCEPTBOT_SCORING=auto to find a method it supports",
+                )
+        return self._top
+
     def score(self, request: ScoreRequest) -> tuple[list[float], list[int], Usage, str]:
         """Scores (log-probabilities, or log shares for votes), token counts, usage and the method."""
         started = time.perf_counter()
@@ -273,7 +305,9 @@ class HTTPScorer:
             return scores, counts, Usage(tokens, 0, time.perf_counter() - started, 0.0, len(options)), method
         if method == "search":
             assert request.prompt is not None
-            scores, counts, tokens, calls = search_scores(self.transport, request.prompt, options, self._top)
+            scores, counts, tokens, calls = search_scores(
+                self.transport, request.prompt, options, self._search_top(), request.priors
+            )
             return scores, counts, Usage(tokens, calls, time.perf_counter() - started, 0.0, calls), method
         messages = as_messages(request)
         scores: list[float] = []

@@ -15,6 +15,7 @@ backend.
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal, Protocol, runtime_checkable
@@ -132,27 +133,38 @@ class ScoreRequest:
         messages: Chat messages that form the prompt.
         prompt: Raw prompt text.
         assistant_prefix: Text the assistant's reply starts with before the option.
+        priors: Log-weights the caller will multiply the options' probabilities by (SayCan's
+            affordances; ``-inf`` for an option it will never take), or None. A backend that
+            scores every option exactly ignores them; one that scores only the best exactly (the
+            HTTP ``search``) finds the best by probability times weight.
     """
 
     options: tuple[str, ...]
     messages: tuple[Message, ...] | None = None
     prompt: str | None = None
     assistant_prefix: str = ""
+    priors: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         if (self.messages is None) == (self.prompt is None):
             raise ValueError("ScoreRequest needs exactly one of messages or prompt")
         if not self.options:
             raise ValueError("ScoreRequest needs at least one option")
+        if self.priors is not None and len(self.priors) != len(self.options):
+            raise ValueError("ScoreRequest needs one prior per option")
 
-    def canonical(self) -> dict[str, Any]:
-        """A JSON-able description of the request, used for cache keys."""
-        return {
+    def canonical(self, with_priors: bool = True) -> dict[str, Any]:
+        """A JSON-able description of the request, used for cache keys (``with_priors=False``: for
+        a backend that ignores them, so the same scores are one cache entry)."""
+        out: dict[str, Any] = {
             "options": list(self.options),
             "messages": None if self.messages is None else [[m.role, m.content] for m in self.messages],
             "prompt": self.prompt,
             "assistant_prefix": self.assistant_prefix,
         }
+        if with_priors and self.priors is not None:
+            out["priors"] = [p if math.isfinite(p) else None for p in self.priors]  # JSON has no -inf
+        return out
 
 
 @dataclass(frozen=True)
