@@ -107,6 +107,11 @@ def main() -> None:
     if args.out.exists():
         done = {r["task"]: r for r in map(json.loads, args.out.read_text().splitlines())}
     tasks = select(limit=args.limit, split="dev")
+    # Safe and unsafe tasks alternate and abstract ones come last, so a partial run is balanced.
+    detailed = sorted(
+        (t for t in tasks if t.suite != "abstract"), key=lambda t: (int(t.id.split("-")[1]), t.suite)
+    )
+    tasks = detailed + [t for t in tasks if t.suite == "abstract"]
     rows = [done[t.id] for t in tasks if t.id in done]
     todo = [t for t in tasks if t.id not in done]
     print(f"{len(tasks)} dev tasks, {len(rows)} already in {args.out}", file=sys.stderr)
