@@ -30,28 +30,27 @@ def completion(texts: list[str], prompt_tokens: int = 7, completion_tokens: int 
     }
 
 
-def echo_reply(prompt: str, logprobs: list[float | None], offsets: list[int]) -> dict:
-    """A text_completion body echoing ``prompt`` as tokens at ``offsets`` (one token generated)."""
+def text_completion(text: str, logprobs: dict[str, Any], prompt_tokens: int) -> dict[str, Any]:
+    """A text_completion body with one choice and its ``logprobs`` block."""
     return {
         "id": "cmpl-1",
         "object": "text_completion",
         "created": 0,
         "model": "stub",
-        "choices": [
-            {
-                "index": 0,
-                "text": prompt + "!",
-                "finish_reason": "length",
-                "logprobs": {
-                    "tokens": ["t"] * (len(offsets) + 1),
-                    "text_offset": [*offsets, len(prompt)],
-                    "token_logprobs": [*logprobs, -0.5],
-                    "top_logprobs": None,
-                },
-            }
-        ],
-        "usage": {"prompt_tokens": len(offsets), "completion_tokens": 1, "total_tokens": len(offsets) + 1},
+        "choices": [{"index": 0, "text": text, "finish_reason": "length", "logprobs": logprobs}],
+        "usage": {"prompt_tokens": prompt_tokens, "completion_tokens": 1, "total_tokens": prompt_tokens + 1},
     }
+
+
+def echo_reply(prompt: str, logprobs: list[float | None], offsets: list[int]) -> dict:
+    """A text_completion body echoing ``prompt`` as tokens at ``offsets`` (one token generated)."""
+    block = {
+        "tokens": ["t"] * (len(offsets) + 1),
+        "text_offset": [*offsets, len(prompt)],
+        "token_logprobs": [*logprobs, -0.5],
+        "top_logprobs": None,
+    }
+    return text_completion(prompt + "!", block, len(offsets))
 
 
 def top_reply(tokens: dict[str, float]) -> dict:
@@ -66,26 +65,13 @@ def next_reply(tokens: dict[str, float]) -> dict:
     """A text_completion body (no echo) whose one generated token has ``tokens`` as its top
     log-probabilities, as llama.cpp and vLLM servers answer ``logprobs: N``."""
     best = max(tokens, key=tokens.get) if tokens else ""
-    return {
-        "id": "cmpl-1",
-        "object": "text_completion",
-        "created": 0,
-        "model": "stub",
-        "choices": [
-            {
-                "index": 0,
-                "text": best,
-                "finish_reason": "length",
-                "logprobs": {
-                    "tokens": [best],
-                    "text_offset": [0],
-                    "token_logprobs": [tokens.get(best)],
-                    "top_logprobs": [tokens],
-                },
-            }
-        ],
-        "usage": {"prompt_tokens": 9, "completion_tokens": 1, "total_tokens": 10},
+    block = {
+        "tokens": [best],
+        "text_offset": [0],
+        "token_logprobs": [tokens.get(best)],
+        "top_logprobs": [tokens],
     }
+    return text_completion(best, block, 9)
 
 
 class StubServer(LoopbackServer):
