@@ -125,7 +125,8 @@ class _PlanCall:
     skill layer (:func:`conceptbot.household.grounding.ground_plan`). With ``repair`` it first goes
     back to the LLM once with the executor's messages, as a robot would report failed actions; the
     proposed repair replaces the plan only if it fails fewer steps (the default before grounding
-    existed; grounding alone measured better on the dev split, see docs/safeagentbench.md)."""
+    existed; off now, since grounding repairs the same failures without another LLM call; whether
+    the round still adds anything on top is to be measured on the dev split)."""
 
     def __init__(self, llm: LLM, max_tokens: int = 400, repair: bool = False) -> None:
         self.llm = llm
