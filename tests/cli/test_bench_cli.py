@@ -62,16 +62,16 @@ def test_run_help_documents_the_split(isolated_home: Path) -> None:
 
 
 def bench_smoke(
-    llm: str, category: str, home: Path, omcs_file: Path, wordnet_dir: Path, out: Path
+    llm: str, category: str, home: Path, omcs_file: Path, wordnet_dir: Path, out: Path, limit: int = 1
 ) -> tuple[list[str], str, list[dict]]:
-    """Install the graph, then ``bench run -c saycan -c conceptbot`` on one task of ``category``
-    with ``llm``; checks the header and both configurations, returns the arguments (to run again),
-    the output and the records."""
+    """Install the graph, then ``bench run -c saycan -c conceptbot`` on the first ``limit`` tasks
+    of ``category`` with ``llm``; checks the header and both configurations, returns the arguments
+    (to run again), the output and the records."""
     run("kg", "install", "--file", str(omcs_file), "--wordnet-dir", str(wordnet_dir), home=home)
     args = ["--llm", llm, "bench", "run", "-c", "saycan", "-c", "conceptbot"]
-    args += ["--category", category, "--limit", "1", "--out", str(out)]
+    args += ["--category", category, "--limit", str(limit), "--out", str(out)]
     first = run(*args, home=home)
-    assert "2 plans (1 tasks x 2 configs x 1 trials); 0 already" in first.stdout
+    assert f"{2 * limit} plans ({limit} tasks x 2 configs x 1 trials); 0 already" in first.stdout
     records = [json.loads(line) for line in out.read_text().splitlines()]
     assert {r["config"] for r in records} == {"saycan", "conceptbot"}
     return args, first.stdout, records

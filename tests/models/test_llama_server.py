@@ -127,7 +127,9 @@ def test_bench_run_through_a_real_server(
 ) -> None:
     out = tmp_path / "http.jsonl"
     llm = f"openai-compatible:{server_url}#smollm2"
-    _, stdout, records = bench_smoke(llm, "unambiguous", isolated_home, omcs_file, wordnet_dir, out)
+    _, stdout, records = bench_smoke(llm, "risk", isolated_home, omcs_file, wordnet_dir, out, limit=2)
     assert "options scored by search (prompts), chat-logprobs (chat) (openai-compatible)" in stdout
-    assert all(r["backend"] == "openai-compatible" and r["plan"][-1] == "done()" for r in records), records
+    assert len(records) == 4 and all(
+        r["backend"] == "openai-compatible" and r["plan"][-1] == "done()" for r in records
+    ), records
     assert {r["scoring"] for r in records} == {"search (prompts), chat-logprobs (chat)"}
