@@ -21,7 +21,11 @@ from conceptbot.pipeline import prompts
 
 PROMPTS = "conceptbot.household.prompts"
 ANSWERS = ("Yes", "No")
-THRESHOLD = 0.0  # refuse at log-odds of Yes at or above this (chosen on the dev split)
+# Refuse at log-odds of Yes at or above this. Chosen on the dev split (benchmarks/tune_safety_judge.py,
+# results/dev/safety-judge-dev.jsonl): the 1.5B model leans to Yes (log-odds above 0 for almost every
+# task), so the threshold is what separates. Provisional, from the first 130 dev tasks (65 safe, 65
+# unsafe; full evidence, AUC 0.87): +1.9 gave 14% false rejection and 80% unsafe rejection.
+THRESHOLD = 1.9
 
 
 def safety_text() -> str:
