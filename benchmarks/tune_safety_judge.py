@@ -27,7 +27,7 @@ import sys
 import time
 from pathlib import Path
 
-from conceptbot.bench.safeagentbench.dataset import scenes, select
+from conceptbot.bench.safeagentbench.dataset import interleaved, scenes, select
 from conceptbot.core.config import load_settings
 from conceptbot.household.factory import build_household_planner
 from conceptbot.household.planner import ConceptBotHouseholdPlanner
@@ -106,12 +106,7 @@ def main() -> None:
     done = {}
     if args.out.exists():
         done = {r["task"]: r for r in map(json.loads, args.out.read_text().splitlines())}
-    tasks = select(limit=args.limit, split="dev")
-    # Safe and unsafe tasks alternate and abstract ones come last, so a partial run is balanced.
-    detailed = sorted(
-        (t for t in tasks if t.suite != "abstract"), key=lambda t: (int(t.id.split("-")[1]), t.suite)
-    )
-    tasks = detailed + [t for t in tasks if t.suite == "abstract"]
+    tasks = interleaved(select(limit=args.limit, split="dev"))
     rows = [done[t.id] for t in tasks if t.id in done]
     todo = [t for t in tasks if t.id not in done]
     print(f"{len(tasks)} dev tasks, {len(rows)} already in {args.out}", file=sys.stderr)

@@ -8,7 +8,7 @@ import click
 
 from conceptbot.bench.report import load_records
 from conceptbot.bench.runner import pending
-from conceptbot.bench.safeagentbench.dataset import SPLITS, SUITES, in_split, select
+from conceptbot.bench.safeagentbench.dataset import SPLITS, SUITES, in_split, interleaved, select
 from conceptbot.bench.safeagentbench.report import markdown_safety, summarise_safety, write_safety_report
 from conceptbot.bench.safeagentbench.runner import RESULT_KEY, SafetyJob, run_safety
 from conceptbot.cli.bench_options import (
@@ -97,10 +97,7 @@ def run_cmd(
     # Task-major, so an interrupted run still compares the configurations on the same tasks; safe
     # and unsafe tasks alternate (safe-1, unsafe-1, safe-2, ...) and abstract ones come last, so a
     # partial run already gives the headline harmonic mean.
-    detailed = [t for t in tasks if t.suite != "abstract"]
-    order = sorted(detailed, key=lambda t: (int(t.id.rsplit("-", 1)[1]), t.suite))
-    order += [t for t in tasks if t.suite == "abstract"]
-    jobs = [SafetyJob(t, c) for t in order for c in configs]
+    jobs = [SafetyJob(t, c) for t in interleaved(tasks) for c in configs]
     todo = pending(jobs, out, backend, model or "", RESULT_KEY)
     click.echo(
         f"{len(jobs)} plans ({len(tasks)} tasks x {len(configs)} configs); "

@@ -163,6 +163,14 @@ def scenes() -> dict[str, HouseScene]:
     return {name: house_scene(name, mentioned) for name, mentioned in named.items()}
 
 
+def interleaved(tasks: list[SafetyTask]) -> list[SafetyTask]:
+    """Safe and unsafe tasks alternating by number (safe-1, unsafe-1, safe-2, ...), abstract ones
+    last: a partial run over them is already balanced."""
+    detailed = [t for t in tasks if t.suite != "abstract"]
+    order = sorted(detailed, key=lambda t: (int(t.id.rsplit("-", 1)[1]), t.suite))
+    return order + [t for t in tasks if t.suite == "abstract"]
+
+
 def _group(task_id: str) -> str:
     """``abstract-17-L3`` -> ``abstract-17`` (a task's levels are split together); others unchanged."""
     return task_id.rsplit("-L", 1)[0] if task_id.startswith("abstract-") else task_id
