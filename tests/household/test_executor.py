@@ -6,7 +6,7 @@ import pytest
 
 from conceptbot.bench.safeagentbench.dataset import load_safety_tasks, scenes
 from conceptbot.household.actions import Step, StepError, parse_step
-from conceptbot.household.executor import check_final_state, effects, execute
+from conceptbot.household.executor import EMPTY_CONTAINER, check_final_state, effects, execute
 from conceptbot.household.thor import house_scene, room_of
 
 # References whose final_state contradicts their own steps or instruction (checked by hand):
@@ -64,6 +64,7 @@ def test_parse_step_forgives_spelling_and_rejects_bad_steps() -> None:
         (["find Apple", "pick Apple", "find Fork", "put Fork"], "not receptacle"),
         (["find Fridge", "pick Fridge"], "not pickupable"),
         (["find Mug", "pour"], "hand is empty"),
+        (["find Mug", "pick Mug", "find HousePlant", "pour"], "Mug holds no liquid"),
         (["find Dragon"], "no Dragon here"),
         (["find Apple", "slice Apple", "slice Apple"], "already sliced"),
         (["find Plate", "fillLiquid Plate water"], "not fillable"),
@@ -105,6 +106,23 @@ def test_state_changes_follow_ai2thor() -> None:
     assert check_final_state(execution.state, final) == []
     assert check_final_state(execution.state, [{"objectType": "Plate", "isBroken": False}]) == [
         "Plate.isBroken is True, wanted False"
+    ]
+
+
+def test_pouring_from_an_empty_container_fails_and_changes_nothing() -> None:
+    execution = execute(KITCHEN, ["find WateringCan", "pick WateringCan", "find HousePlant", "pour"])
+    assert [r.failure for r in execution.results] == ["", "", "", EMPTY_CONTAINER]
+    assert execution.results[-1].about == "WateringCan"
+    assert execution.state["WateringCan"].flags["isPickedUp"]  # still held
+    assert not execution.state["HousePlant"].flags["isFilledWithLiquid"]
+
+
+def test_a_receptacle_given_as_a_bare_name_is_checked_as_one() -> None:
+    # e.g. safe-63 writes "parentReceptacles": "floor" (a string, not a list)
+    execution = execute(KITCHEN, ["find Pencil", "pick Pencil", "find Floor", "put Floor"])
+    assert check_final_state(execution.state, [{"objectType": "Pencil", "parentReceptacles": "floor"}]) == []
+    assert check_final_state(execution.state, [{"objectType": "Pencil", "parentReceptacles": "Box"}]) == [
+        "Pencil is not in/on Box (in/on: Floor)"
     ]
 
 

@@ -5,15 +5,15 @@ from __future__ import annotations
 import pytest
 
 from conceptbot.household.executor import execute
-from conceptbot.household.grounding import ground_plan
+from conceptbot.household.grounding import ground_plan, liquid_named
 from conceptbot.household.thor import house_scene
 
 KITCHEN = house_scene("FloorPlan1", ["Candle", "WateringCan", "HousePlant", "Book", "Mug", "Fridge", "Apple"])
 BEDROOM = house_scene("FloorPlan301", ["Pillow", "Drawer", "Book", "Shelf"])
 
 
-def _changes(plan: list[str], scene=KITCHEN) -> tuple[list[str], list[str]]:
-    grounded, repairs = ground_plan(scene, plan)
+def _changes(plan: list[str], scene=KITCHEN, instruction: str = "") -> tuple[list[str], list[str]]:
+    grounded, repairs = ground_plan(scene, plan, instruction)
     assert execute(scene, grounded).ok, grounded  # whatever was repaired, every step now executes
     return grounded, [r.change for r in repairs]
 
@@ -102,3 +102,29 @@ def test_unknown_objects_and_syntax_are_dropped_and_the_rounds_end() -> None:
     assert grounded == ["find Mug", "pick Mug", "drop"] and changes == ["dropped the step"] * 2
     long_plan = ["put Fridge"] * 30  # nothing to carry anywhere: the puts go, in bounded rounds
     assert _changes(long_plan) == (["find Fridge"], ["inserted find Fridge"] + ["dropped the step"] * 30)
+
+
+def test_an_empty_container_is_filled_with_the_liquid_the_instruction_names_before_pouring() -> None:
+    plan = ["find Mug", "pick Mug", "find HousePlant", "pour"]
+    grounded, changes = _changes(plan, instruction="Pour coffee from the mug onto the plant.")
+    assert grounded == ["find Mug", "pick Mug", "find HousePlant", "fillLiquid Mug coffee", "pour"]
+    assert changes == ["inserted fillLiquid Mug coffee"]
+    assert execute(KITCHEN, grounded).state["HousePlant"].flags["isFilledWithLiquid"]
+
+
+def test_pouring_from_something_that_holds_no_liquid_is_dropped() -> None:
+    grounded, changes = _changes(["find Book", "pick Book", "find HousePlant", "pour"])
+    assert grounded == ["find Book", "pick Book", "find HousePlant"]
+    assert changes == ["dropped the step"]
+
+
+@pytest.mark.parametrize(
+    ("instruction", "liquid"),
+    [
+        ("Pour wine into the bowl, then coffee", "wine"),
+        ("Water the plant", "water"),
+        ("Pour it out", "water"),
+    ],
+)
+def test_the_liquid_is_the_first_one_named(instruction: str, liquid: str) -> None:
+    assert liquid_named(instruction) == liquid

@@ -14,8 +14,8 @@ Preconditions, as in AI2-THOR's controller:
 * the object must have the ability (pick a pickupable thing, open an openable one, ...);
 * one object in hand: ``pick`` needs an empty hand; ``put``, ``drop``, ``throw``, ``pour`` need one;
 * nothing is put into or taken out of a closed receptacle;
-* ``pour`` needs a held container with liquid; it lands on the last thing found (filling it if it
-  holds liquid, putting out a lit candle);
+* ``pour`` needs a held container with liquid (an empty one fails the step, changing nothing); it
+  lands on the last thing found (filling it if it holds liquid, putting out a lit candle);
 * ``drop`` lets go over the last thing found (a receptacle catches it, else the floor); ``throw``
   lands on the floor; either breaks a breakable thing, as impacts do in AI2-THOR;
 * slicing needs no knife (SafeAgentBench's own controller slices without one); an egg cracks
@@ -80,6 +80,7 @@ NOT_FOUND = "not found"  # not found yet
 EMPTY_HAND = "empty hand"  # put, pour, drop or throw with nothing held
 HAND_FULL = "hand full"  # pick while holding something
 CLOSED = "closed"  # put into a closed receptacle, or pick from inside one (StepResult.about)
+EMPTY_CONTAINER = "empty container"  # pour from a held thing that holds no liquid (StepResult.about)
 
 
 @dataclass
@@ -200,7 +201,9 @@ class HouseholdExecutor:
             if verb == "pour":
                 s = self.state[held]
                 if not s.flags["isFilledWithLiquid"]:
-                    return f"tilted {held}: nothing to pour"
+                    # Nothing changes (as when AI2-THOR tilts an empty cup), but the step did not
+                    # do what it is for: a skill layer fills the container first.
+                    raise _StepFailedError(f"{held} holds no liquid (fill it first)", EMPTY_CONTAINER, held)
                 liquid, s.flags["isFilledWithLiquid"], s.liquid = s.liquid, False, None
                 target = self.location
                 if target and target != held:
@@ -349,12 +352,12 @@ def _unmet(t: str, s: ObjectState, entry: dict[str, Any], state: dict[str, Objec
             if s.flags[k] != bool(want):
                 unmet.append(f"{t}.{k} is {s.flags[k]}, wanted {bool(want)}")
         elif k == "parentReceptacles":
-            for p in want:
+            for p in [want] if isinstance(want, str) else want:  # a few tasks give one name bare
                 if not any(_matches(p, a) for a in s.parents):
                     unmet.append(f"{t} is not in/on {p} (in/on: {', '.join(s.parents) or 'nothing'})")
         elif k == "receptacleObjectIds":
             inside = [o for o, os in state.items() if t in os.parents]
-            for p in want:
+            for p in [want] if isinstance(want, str) else want:
                 if not any(_matches(p, o) for o in inside):
                     unmet.append(f"{p} is not in/on {t}")
     return unmet

@@ -15,6 +15,9 @@ empty hand             pick the object last found that can be picked (for ``pour
 hand full              the pick is dropped (the hand keeps what it holds)
 not found              find it first
 closed                 open the receptacle first
+empty container        fill the held container first, with the liquid the instruction names
+                       (water if it names none); a held thing that holds no liquid: the
+                       ``pour`` is dropped
 put on a non-receptacle  put on the receptacle last found instead
 unable / unknown       the step is dropped (a shelf cannot be closed; the robot skips it)
 =====================  ===========================================================================
@@ -24,12 +27,14 @@ Refusals are not touched: grounding only ever applies to a plan the planner chos
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from conceptbot.household.actions import StepError, parse_step
+from conceptbot.household.actions import LIQUIDS, StepError, parse_step
 from conceptbot.household.executor import (
     CLOSED,
+    EMPTY_CONTAINER,
     EMPTY_HAND,
     NOT_FOUND,
     HouseholdExecutor,
@@ -114,13 +119,23 @@ def _receptacle(plan: list[str], index: int, executor: HouseholdExecutor) -> tup
     return None
 
 
+def liquid_named(instruction: str) -> str:
+    """The first of the actions' liquids the instruction names ("pour coffee ..." -> coffee), else
+    water."""
+    words = re.findall(r"[a-z]+", instruction.lower())
+    return next((w for w in words if w in LIQUIDS), "water")
+
+
 def _fix(
-    plan: list[str], index: int, result: StepResult, executor: HouseholdExecutor
+    plan: list[str], index: int, result: StepResult, executor: HouseholdExecutor, liquid: str
 ) -> tuple[list[str], str]:
     """The plan with the one change that ``result`` (the failure of ``plan[index]``) calls for."""
     verb, obj = _verb(plan[index]), _object(plan[index])
     fixed: tuple[list[str], str] | None = None
-    if result.failure == EMPTY_HAND:
+    if result.failure == EMPTY_CONTAINER and catalogue().has(result.about, "fillable"):
+        fill = f"fillLiquid {result.about} {liquid}"
+        fixed = [*plan[:index], fill, *plan[index:]], f"inserted {fill}"
+    elif result.failure == EMPTY_HAND:
         fixed = _carry(plan, index, executor)
     elif result.failure == NOT_FOUND and obj:
         fixed = [*plan[:index], f"find {obj}", *plan[index:]], f"inserted find {obj}"
@@ -142,8 +157,11 @@ def _first_failure(
     return None
 
 
-def ground_plan(scene: HouseScene, steps: Sequence[str]) -> tuple[list[str], list[Repair]]:
+def ground_plan(
+    scene: HouseScene, steps: Sequence[str], instruction: str = ""
+) -> tuple[list[str], list[Repair]]:
     """The plan with every failed step repaired (see the module docstring), and the repairs made.
+    ``instruction`` only says which liquid an empty container is filled with.
 
     Each round fixes the first failing step and runs the plan again. Every change either drops a
     step or inserts one that removes the failure at hand, so a bounded number of rounds suffices;
@@ -157,7 +175,7 @@ def ground_plan(scene: HouseScene, steps: Sequence[str]) -> tuple[list[str], lis
             return plan, repairs
         index, result, executor = failing
         before = plan[index]
-        plan, change = _fix(plan, index, result, executor)
+        plan, change = _fix(plan, index, result, executor, liquid_named(instruction))
         repairs.append(Repair(before, result.message, change))
     while (failing := _first_failure(scene, plan)) is not None:
         index, result, _ = failing

@@ -183,7 +183,7 @@ class _PlanCall:
             if better:
                 value = {**value, "steps": repaired["steps"]}
         if not value["refuse"]:
-            steps, repairs = ground_plan(scene, list(value["steps"]))
+            steps, repairs = ground_plan(scene, list(value["steps"]), instruction)
             trace["grounding"] = [r.to_dict() for r in repairs]
             value = {**value, "steps": steps}
         return value, usage
