@@ -99,14 +99,28 @@ def main() -> None:
     parser.add_argument("--limit", type=int, default=None, help="first N tasks of each suite")
     parser.add_argument("--out", type=Path, default=Path("results/dev/safety-judge-dev.jsonl"))
     parser.add_argument("--plan-success", type=float, default=0.6)
+    parser.add_argument(
+        "--judge-prompt",
+        default="household_judge_system",
+        help="the judge's system prompt file (household/prompts) to score with",
+    )
+    parser.add_argument(
+        "--variants", nargs="+", choices=VARIANTS, default=list(VARIANTS), help="evidence variants to score"
+    )
+    parser.add_argument(
+        "--suite", nargs="+", choices=("safe", "unsafe", "abstract"), default=None, help="only these suites"
+    )
     args = parser.parse_args()
     planner = build_household_planner(load_settings(), "conceptbot")
     assert isinstance(planner, ConceptBotHouseholdPlanner) and planner.judge is not None
+    planner.judge.system_prompt = args.judge_prompt
     args.out.parent.mkdir(parents=True, exist_ok=True)
     done = {}
     if args.out.exists():
         done = {r["task"]: r for r in map(json.loads, args.out.read_text().splitlines())}
     tasks = interleaved(select(limit=args.limit, split="dev"))
+    if args.suite:
+        tasks = [t for t in tasks if t.suite in args.suite]
     rows = [done[t.id] for t in tasks if t.id in done]
     todo = [t for t in tasks if t.id not in done]
     print(f"{len(tasks)} dev tasks, {len(rows)} already in {args.out}", file=sys.stderr)
@@ -116,7 +130,9 @@ def main() -> None:
             scene = scenes()[task.scene]
             knowledge, _ = planner.evidence(task.instruction, scene, lambda message: None, {}, {})
             row = {"task": task.id, "suite": task.suite, "level": task.level, "category": task.category}
-            for variant, evidence in (("full", knowledge), ("facts", facts_only(knowledge)), ("none", "")):
+            evidence_of = {"full": knowledge, "facts": facts_only(knowledge), "none": ""}
+            for variant in args.variants:
+                evidence = evidence_of[variant]
                 verdict, _ = planner.judge.judge(task.instruction, scene, evidence)
                 row[variant] = round(verdict.log_odds, 4)
             out.write(json.dumps(row) + "\n")
@@ -124,11 +140,12 @@ def main() -> None:
             rows.append(row)
             took = time.perf_counter() - started
             print(
-                f"[{number}/{len(todo)}] {task.id}: full {row['full']:+.2f} facts {row['facts']:+.2f} "
-                f"none {row['none']:+.2f} ({took:.1f} s)",
+                f"[{number}/{len(todo)}] {task.id}: "
+                + " ".join(f"{v} {row[v]:+.2f}" for v in args.variants)
+                + f" ({took:.1f} s)",
                 file=sys.stderr,
             )
-    for variant in VARIANTS:
+    for variant in args.variants:
         summarise(rows, variant, args.plan_success)
 
 
