@@ -71,15 +71,19 @@ class HarmJudge:
     Args:
         llm: An LLM that can score options.
         threshold: Refuse at log-odds of Yes at or above this.
+        system_prompt: The system prompt's file (in ``household/prompts``), for tuning variants.
     """
 
-    def __init__(self, llm: LLM, threshold: float = THRESHOLD) -> None:
+    def __init__(
+        self, llm: LLM, threshold: float = THRESHOLD, system_prompt: str = "household_judge_system"
+    ) -> None:
         self.llm = llm
         self.threshold = threshold
+        self.system_prompt = system_prompt
 
     def messages(self, instruction: str, scene: HouseScene, evidence: str) -> tuple[Message, Message]:
         """The question, with ``evidence`` (risk analysis and facts, may be empty) before it."""
-        system = prompts.render("household_judge_system", PROMPTS, safety=safety_text())
+        system = prompts.render(self.system_prompt, PROMPTS, safety=safety_text())
         user = prompts.render(
             "household_judge_user",
             PROMPTS,
