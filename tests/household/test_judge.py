@@ -5,11 +5,10 @@ from __future__ import annotations
 import json
 import math
 
-import jsonschema
 import pytest
 
 from conceptbot.household.judge import HarmJudge, HarmVerdict, safety_text
-from conceptbot.household.planner import ConceptBotHouseholdPlanner, PlainHouseholdPlanner, response_schema
+from conceptbot.household.planner import ConceptBotHouseholdPlanner, PlainHouseholdPlanner
 from conceptbot.household.thor import house_scene
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.retrieval import RelationRetriever
@@ -22,23 +21,30 @@ def _reply(refuse: bool, steps: list[str]) -> str:
     return json.dumps({"reasoning": "r", "refuse": refuse, "steps": steps})
 
 
-def test_the_verdict_compares_the_log_odds_of_yes_with_the_threshold() -> None:
-    llm = FakeLLM(scores=[[math.log(0.8), math.log(0.2)], [math.log(0.3), math.log(0.7)]])
+def test_the_verdict_adds_a_reading_with_evidence_to_one_without_and_compares_the_threshold() -> None:
+    llm = FakeLLM(scores=[[math.log(0.8), math.log(0.2)], [math.log(0.6), math.log(0.4)]] * 2)
     judge = HarmJudge(llm, threshold=1.0)
     risky, _ = judge.judge(
         "Put the mug with a fork in the microwave.", KITCHEN, "Risk analysis: fork, danger 5/5"
     )
-    assert risky.log_odds == pytest.approx(math.log(4)) and risky.refuse  # log 4 = 1.39 >= 1.0
-    assert risky.p_dangerous == pytest.approx(0.8) and risky.to_dict()["refuse"] is True
-    ordinary, _ = judge.judge("Put the mug in the microwave.", KITCHEN)
-    assert not ordinary.refuse and ordinary.log_odds < 0
-    asked = llm.score_requests[0]
-    assert asked.options == ("Yes", "No")
-    system, user = asked.messages
-    assert safety_text() in system.content and "start a fire" in system.content
-    assert "Instruction: Put the mug with a fork in the microwave." in user.content
-    assert "danger 5/5" in user.content and "Microwave" in user.content
+    assert risky.without_evidence == pytest.approx(math.log(4))  # 0.8 / 0.2
+    assert risky.with_evidence == pytest.approx(math.log(1.5))  # 0.6 / 0.4
+    assert risky.log_odds == pytest.approx(math.log(6)) and risky.refuse  # 1.79 >= 1.0
+    assert risky.to_dict()["refuse"] is True
+    blind, informed = llm.score_requests
+    assert blind.options == informed.options == ("Yes", "No")
+    assert safety_text() in informed.messages[0].content and "-> Yes" in informed.messages[0].content
+    assert "Instruction: Put the mug with a fork in the microwave." in informed.messages[1].content
+    assert "danger 5/5" in informed.messages[1].content and "danger 5/5" not in blind.messages[1].content
+    assert "Microwave" in blind.messages[1].content
     assert not HarmVerdict(0.99, 1.0).refuse and HarmVerdict(1.0, 1.0).refuse
+
+
+def test_without_evidence_the_one_reading_counts_twice() -> None:
+    llm = FakeLLM(scores=[[math.log(0.3), math.log(0.7)]])
+    verdict, _ = HarmJudge(llm, threshold=1.0).judge("Put the mug in the microwave.", KITCHEN)
+    assert verdict.log_odds == pytest.approx(2 * math.log(3 / 7)) and not verdict.refuse
+    assert len(llm.score_requests) == 1
 
 
 def test_both_planners_share_the_safety_instruction() -> None:
@@ -62,23 +68,25 @@ def _conceptbot(judge_scores: list[list[float]], plan_replies: list[str]):
 
 
 def test_a_judged_dangerous_instruction_is_refused_without_a_planning_call() -> None:
-    planner, planner_llm, judge_llm = _conceptbot([[math.log(0.9), math.log(0.1)]], [])
+    planner, planner_llm, judge_llm = _conceptbot([[math.log(0.9), math.log(0.1)]] * 2, [])
     plan = planner.plan("Put the lit candle in the microwave.", KITCHEN)
     assert plan.refused and plan.steps == [] and planner_llm.requests == []
-    assert plan.trace["judge"]["refuse"] and plan.trace["config"] == "conceptbot"
-    assert "judged dangerous (P = 0.90)" in plan.reason and "danger 4/5" in plan.reason
-    evidence = judge_llm.score_requests[0].messages[-1].content
+    assert plan.trace["judge"]["refuse"] and plan.trace["refused_by"] == "judge"
+    assert plan.trace["config"] == "conceptbot"
+    assert "judged dangerous (score +4.39, threshold +0.50)" in plan.reason and "danger 4/5" in plan.reason
+    evidence = judge_llm.score_requests[1].messages[-1].content
     assert "Risk analysis" in evidence and "candle is used for light" in evidence
     assert set(plan.usage) >= {"ope", "urp", "judge", "total"}
 
 
-def test_an_instruction_judged_safe_must_be_planned() -> None:
-    planner, planner_llm, _ = _conceptbot([[math.log(0.2), math.log(0.8)]], [_reply(False, ["find Candle"])])
+def test_behind_the_judge_the_plain_planners_call_plans_and_may_still_refuse() -> None:
+    planner, planner_llm, _ = _conceptbot(
+        [[math.log(0.2), math.log(0.8)]] * 4, [_reply(False, ["find Candle"]), _reply(True, [])]
+    )
     plan = planner.plan("Find the candle.", KITCHEN)
     assert not plan.refused and plan.steps == ["find Candle"] and not plan.trace["judge"]["refuse"]
-    schema = json.loads(planner_llm.requests[0].json_schema or "{}")
-    with pytest.raises(jsonschema.ValidationError):  # the planning call cannot refuse any more
-        jsonschema.validate({"reasoning": "", "refuse": True, "steps": []}, schema)
-    with pytest.raises(jsonschema.ValidationError):
-        jsonschema.validate({"reasoning": "", "refuse": False, "steps": []}, schema)
-    jsonschema.validate({"reasoning": "", "refuse": True, "steps": []}, response_schema(KITCHEN))
+    plain_llm = FakeLLM([_reply(False, ["find Candle"])])
+    PlainHouseholdPlanner(plain_llm).plan("Find the candle.", KITCHEN)
+    assert planner_llm.requests[0] == plain_llm.requests[0]  # the same call, evidence and all
+    refused = planner.plan("Find the candle.", KITCHEN)
+    assert refused.refused and refused.trace["refused_by"] == "planner"

@@ -2,14 +2,15 @@
 
 * :class:`PlainHouseholdPlanner` — the LLM alone: one call that judges the instruction and plans it
   (the benchmark's plain-LLM baseline, with the same safety instruction as ConceptBot).
-* :class:`ConceptBotHouseholdPlanner` — ConceptBot's modules in front of the same call: OPE's Risk
-  Index (1-5, with the knowledge graph's relations) for the scene objects the instruction names, and
-  URP's keywords with their graph relations filtered against the instruction. What they found is
-  the evidence for the harm judge (:mod:`conceptbot.household.judge`: "would carrying this out be
-  dangerous?", scored, refused above a threshold chosen on the dev split); an instruction it lets
-  through is planned by the same call, which then must plan. With ``judge=None`` (configuration
-  ``conceptbot-joint``, the first design) the evidence goes to the planning call, which judges and
-  plans at once.
+* :class:`ConceptBotHouseholdPlanner` — ConceptBot's modules as a safety layer over the same call:
+  OPE's Risk Index (1-5, with the knowledge graph's relations) for the scene objects the instruction
+  names, and URP's keywords with their graph relations filtered against the instruction, are the
+  evidence for the harm judge (:mod:`conceptbot.household.judge`: "would carrying this out be
+  dangerous?", scored, refused at or above a threshold chosen on the dev split). An instruction it
+  lets through goes to the plain planner's call, unchanged, which may still refuse: ConceptBot
+  refuses what either refuses and plans exactly as the plain planner does. With ``judge=None``
+  (configuration ``conceptbot-joint``, the first design) the evidence goes to the planning call,
+  which judges and plans at once.
 
 The reply is constrained (JSON schema with a pattern per step), so every step is one of the 17
 actions on an object of the scene; a plan still has to be checked by the executor.
@@ -69,10 +70,9 @@ def plannable_objects(scene: HouseScene) -> list[str]:
     return sorted({*scene.objects, *extra})
 
 
-def response_schema(scene: HouseScene, max_steps: int = 24, must_plan: bool = False) -> dict[str, Any]:
+def response_schema(scene: HouseScene, max_steps: int = 24) -> dict[str, Any]:
     """The reply schema: reasoning, the refusal flag, and steps matching the 17 actions' syntax with
-    the scene's object names (``must_plan``: the flag must be false and a step given, for an
-    instruction already judged safe)."""
+    the scene's object names."""
     objects = "|".join(re.escape(o) for o in plannable_objects(scene))
     with_object = "|".join(v for v, (obj, liquid) in ACTIONS.items() if obj and not liquid)
     without = "|".join(v for v, (obj, _) in ACTIONS.items() if not obj)
@@ -82,12 +82,11 @@ def response_schema(scene: HouseScene, max_steps: int = 24, must_plan: bool = Fa
         "type": "object",
         "properties": {
             "reasoning": {"type": "string", "maxLength": 300},
-            "refuse": {"const": False} if must_plan else {"type": "boolean"},
+            "refuse": {"type": "boolean"},
             "steps": {
                 "type": "array",
                 "items": {"type": "string", "pattern": pattern},
                 "maxItems": max_steps,
-                **({"minItems": 1} if must_plan else {}),
             },
         },
         "required": ["reasoning", "refuse", "steps"],
@@ -139,7 +138,6 @@ class _PlanCall:
         scene: HouseScene,
         knowledge: str,
         trace: dict[str, Any],
-        must_plan: bool = False,
     ) -> tuple[dict[str, Any], Usage]:
         system = prompts.render(
             "household_system",
@@ -152,7 +150,7 @@ class _PlanCall:
             user += knowledge
         user += f"Instruction: {instruction}"
         messages = [Message("user", user)]
-        schema = response_schema(scene, must_plan=must_plan)
+        schema = response_schema(scene)
         value, response = chat_json(
             self.llm, ChatRequest.of(messages, system=system, max_tokens=self.max_tokens), schema
         )
@@ -224,7 +222,8 @@ class PlainHouseholdPlanner:
 
 
 class ConceptBotHouseholdPlanner:
-    """ConceptBot's OPE (Risk Index) and URP (keyword relations) in front of the planning call.
+    """ConceptBot's OPE (Risk Index) and URP (keyword relations) as the evidence of a harm judge in
+    front of the plain planner's call (or, without a judge, in the planning call itself).
 
     Args:
         llm: The LLM for OPE and URP's keywords.
@@ -311,11 +310,20 @@ class ConceptBotHouseholdPlanner:
             usage["judge"] = used.with_latency(time.perf_counter() - started)
             trace["judge"] = verdict.to_dict()
             if verdict.refuse:
-                reason = f"Carrying it out was judged dangerous (P = {verdict.p_dangerous:.2f})"
+                trace["refused_by"] = "judge"
+                reason = (
+                    f"Carrying it out was judged dangerous (score {verdict.log_odds:+.2f}, "
+                    f"threshold {verdict.threshold:+.2f})"
+                )
                 reason += f"; risk analysis: {riskiest}" if riskiest else "."
                 return _result({"reasoning": reason, "refuse": True, "steps": []}, trace, usage)
         started = time.perf_counter()
-        say("planner: planning" if self.judge is not None else "planner: judging and planning")
-        value, used = self._call(instruction, scene, knowledge, trace, must_plan=self.judge is not None)
+        say("planner: judging and planning")
+        # Behind the judge the planning call is the plain planner's, unchanged: the evidence in it
+        # made the first design refuse a third of the safe tasks; here it may refuse too, and
+        # ConceptBot refuses what either refuses.
+        value, used = self._call(instruction, scene, "" if self.judge is not None else knowledge, trace)
         usage["planner"] = used.with_latency(time.perf_counter() - started)
+        if value["refuse"]:
+            trace["refused_by"] = "planner"
         return _result(value, trace, usage)
