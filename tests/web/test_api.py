@@ -172,7 +172,7 @@ class _FixedPlan:
     """A planner system that returns a given plan (or a refusal) at once."""
 
     def __init__(self, actions: list[str], refused: bool = False, reason: str | None = None) -> None:
-        self.result = Plan(actions, [], refused, reason, {}, {})
+        self.result = Plan(actions, [], refused, reason)
 
     def plan(self, request, scene, risk=False, progress=None, feedback=None, events=None) -> Plan:
         return self.result

@@ -20,8 +20,9 @@ import time
 from importlib import resources
 
 from conceptbot.core.limits import check_request
-from conceptbot.core.plan import Action, EventSink, Feedback, Plan
+from conceptbot.core.plan import DONE, Action, EventSink, Feedback, Plan
 from conceptbot.core.scene import Scene
+from conceptbot.core.trace import PlanTrace
 from conceptbot.models.llm import LLM, ScoreRequest
 from conceptbot.pipeline.greedy import LLMScores, greedy_plan
 from conceptbot.pipeline.planner import softmax
@@ -39,7 +40,7 @@ def _context() -> str:
 
 def option_text(action: Action) -> str:
     """The option as SayCan writes it."""
-    return "done()" if action.is_done else f"robot.pick_and_place({action.obj}, {action.target})"
+    return DONE if action.is_done else f"robot.pick_and_place({action.obj}, {action.target})"
 
 
 class SayCan:
@@ -99,7 +100,7 @@ class SayCan:
         def affordances(candidates: list[Action], history: list[str]) -> list[tuple[float, dict[str, float]]]:
             return [(a, {"detected": a}) for a in detection(candidates)]
 
-        steps, actions, usage = greedy_plan(
+        result = greedy_plan(
             scene,
             llm_scores,
             affordances,
@@ -111,9 +112,9 @@ class SayCan:
             progress=progress,
             events=events,
         )
-        total = usage.with_latency(time.perf_counter() - started)
-        trace = {"config": self.config, "request": request, "scene": scene.name}
-        return Plan(actions, steps, False, None, trace, {"planner": total, "total": total})
+        total = result.usage.with_latency(time.perf_counter() - started)
+        trace = PlanTrace(config=self.config, request=request, scene=scene.name)
+        return Plan(result.actions, result.steps, False, None, trace, {"planner": total, "total": total})
 
 
 def _detected(scene: Scene, action: Action) -> float:

@@ -25,6 +25,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
+from conceptbot.core.trace import PlanTrace
 from conceptbot.core.usage import Usage
 from conceptbot.household.actions import ACTIONS, LIQUIDS, key
 from conceptbot.household.executor import execute
@@ -46,12 +47,13 @@ DEFAULT_HOUSEHOLD_CONFIGS = ("plain", "conceptbot")
 
 @dataclass
 class HouseholdPlan:
-    """A plan of household steps, or a refusal."""
+    """A plan of household steps, or a refusal (``trace``: ``config`` and, in ``extra``, the parts
+    :class:`~conceptbot.core.trace.PlanTrace` lists for the household planners)."""
 
     steps: list[str]
     refused: bool
     reason: str
-    trace: dict[str, Any] = field(default_factory=dict)
+    trace: PlanTrace = field(default_factory=PlanTrace)
     usage: dict[str, Usage] = field(default_factory=dict)
 
 
@@ -195,7 +197,8 @@ def _result(value: dict[str, Any], trace: dict[str, Any], usage: dict[str, Usage
     for part in usage.values():
         total = total + part
     usage["total"] = total
-    return HouseholdPlan(steps, refused, value["reasoning"].strip(), trace, usage)
+    parts = PlanTrace(config=trace["config"], extra={k: v for k, v in trace.items() if k != "config"})
+    return HouseholdPlan(steps, refused, value["reasoning"].strip(), parts, usage)
 
 
 class PlainHouseholdPlanner:
@@ -273,7 +276,8 @@ class ConceptBotHouseholdPlanner:
         riskiest = ""
         if objects:
             say(f"OPE: risk index of {', '.join(objects)}")
-            props, _, usage["ope"] = self.ope.run(list(names.values()), modes.RISK, instruction, say)
+            found = self.ope.run(list(names.values()), modes.RISK, instruction, say)
+            props, usage["ope"] = found.properties, found.usage
             trace["risk"] = {n: p.values for n, p in props.items()}
             lines += [f"- {p.summary()} ({p.values.get('reason', '').strip()})" for p in props.values()]
             top = max(props.values(), key=lambda p: float(p.values.get("dangerous") or 0))

@@ -24,16 +24,17 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, field
-from typing import Any
 
-from conceptbot.core.plan import Action, CandidateScore, EventSink, Step
+from conceptbot.core.plan import DONE, Action, CandidateScore, EventSink, Step
 from conceptbot.core.scene import Scene
+from conceptbot.core.trace import DecisionTrace, GoalTrace, PlanTrace, RiskCheck, StackTrace
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.affordance import PEOPLE, Gripper, affordance
 from conceptbot.pipeline.decide import Decider, Judgement
 from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor, Progress
 from conceptbot.pipeline.targets import ALL, Target, TargetFinder, is_stacking, mentions
+from conceptbot.pipeline.tracing import judgement_trace, target_trace
 
 METHOD = "decide"
 TOP_K = 6
@@ -79,13 +80,17 @@ class Thresholds:
 
 @dataclass
 class GoalPlanResult:
-    """What the goal planner produced, for :class:`~conceptbot.core.plan.Plan` and the trace."""
+    """What the goal planner produced, for :class:`~conceptbot.core.plan.Plan` and the trace.
+
+    ``trace`` holds the goal planner's parts (``goal``, ``decisions``, ``stack``, ``risk``); the
+    system that ran it adds the rest (:class:`~conceptbot.pipeline.conceptbot.ConceptBot`).
+    """
 
     actions: list[str]
     steps: list[Step]
     refused: bool
     reason: str | None
-    trace: dict[str, Any]
+    trace: PlanTrace
     usage: dict[str, Usage]
     properties: dict[str, ObjectProperties] = field(default_factory=dict)
 
@@ -189,15 +194,16 @@ class GoalPlanner:
         else:
             say("Goal: where the request sends things")
             targets, usage["goal"] = self.targets.find(request, scene)
-        trace: dict[str, Any] = {"goal": {"targets": [t.to_dict() for t in targets], "stack": stack}}
-        emit("goal", trace["goal"])
-        ranked, trace["decisions"], usage["decide"] = self._decide(request, scene, targets, stack, say)
-        emit("decisions", {"decisions": trace["decisions"]})
+        goal = GoalTrace(tuple(target_trace(t) for t in targets), stack)
+        emit("goal", goal.to_dict())
+        ranked, decisions, usage["decide"] = self._decide(request, scene, targets, stack, say)
+        emit("decisions", {"decisions": [d.to_dict() for d in decisions]})
+        pile: StackTrace | None = None
         if stack:
-            moves = self._stack(request, scene, ranked, trace, usage)
+            moves, pile = self._stack(request, scene, ranked, usage)
             ranked = {}
         blocked: set[tuple[str, str]] = set()
-        checks: dict[tuple[str, str], dict[str, Any]] = {}
+        checks: dict[tuple[str, str], RiskCheck] = {}
         properties: dict[str, ObjectProperties] = {}
         usage["ope"] = Usage(calls=0)
         usage["risk"] = Usage(calls=0)
@@ -215,29 +221,26 @@ class GoalPlanner:
             self._properties(request, scene, handed, properties, usage, say)
             for obj, target in fresh:
                 checks[(obj, target)] = self._check(request, scene, obj, target, properties, usage, say)
-            dropped = {m for m in fresh if checks[m]["dropped"]}
+            dropped = {m for m in fresh if checks[m].dropped}
             if not dropped:
                 break
             blocked |= dropped
             if stack:
                 moves = [m for m in moves if m not in dropped]
-        trace["risk"] = list(checks.values())
-        emit("risk", {"checks": trace["risk"]})
+        risk = tuple(checks.values())
+        emit("risk", {"checks": [c.to_dict() for c in risk]})
         steps = self._steps(moves, ranked, scene, properties)
         for step in steps:
             emit("step", step.to_dict())
         refused = not moves and bool(blocked)
-        reason = (
-            "; ".join(f"{c['move']}: {c['why']}" for c in checks.values() if c["dropped"])
-            if refused
-            else None
-        )
-        actions = [str(Action(o, t)) for o, t in moves] + ["done()"]
+        reason = "; ".join(f"{c.move}: {c.why}" for c in risk if c.dropped) if refused else None
+        actions = [str(Action(o, t)) for o, t in moves] + [DONE]
+        trace = PlanTrace(goal=goal, decisions=decisions, stack=pile, risk=risk)
         return GoalPlanResult(actions, steps, refused, reason, trace, usage, properties)
 
     def _decide(
         self, request: str, scene: Scene, targets: list[Target], stack: bool, say: Progress
-    ) -> tuple[dict[str, list[Judgement]], list[dict[str, Any]], Usage]:
+    ) -> tuple[dict[str, list[Judgement]], tuple[DecisionTrace, ...], Usage]:
         """Per target: the named objects first, then every other object as decided, best first."""
         usage = Usage(calls=0)
         ranked: dict[str, list[Judgement]] = {}
@@ -248,7 +251,7 @@ class GoalPlanner:
             needs_more = target.count == ALL or target.count > len(target.named)
             if stack or not needs_more:
                 ranked[target.name] = named
-                decisions.append({**target.to_dict(), "decided": False, "objects": []})
+                decisions.append(DecisionTrace(target_trace(target), decided=False))
                 continue
             others = [o for o in scene.pickable if o != target.name and o not in named_anywhere]
             say(f"Decide: which objects go to the {target.name} ({len(others)} objects)")
@@ -274,17 +277,16 @@ class GoalPlanner:
                 order = {o: yes_no[o] + self.thresholds.name_weight * named_z[o] for o in order}
             ranked[target.name] = named + sorted(judgements, key=lambda j: -order[j.subject])
             decisions.append(
-                {
-                    **target.to_dict(),
-                    "decided": True,
-                    "context": list(context),
-                    "objects": [
-                        {**j.to_dict(), **({"name_score": round(names[j.subject], 3)} if names else {})}
-                        for j in judgements
-                    ],
-                }
+                DecisionTrace(
+                    target_trace(target),
+                    decided=True,
+                    objects=tuple(
+                        judgement_trace(j, names[j.subject] if names else None) for j in judgements
+                    ),
+                    context=tuple(context),
+                )
             )
-        return ranked, decisions, usage
+        return ranked, tuple(decisions), usage
 
     def _choose(
         self, targets: list[Target], ranked: dict[str, list[Judgement]], blocked: set[tuple[str, str]]
@@ -330,9 +332,9 @@ class GoalPlanner:
         if self.ope is None or not wanted:
             return
         say(f"OPE: properties of {', '.join(wanted)}")
-        found, _retrievals, used = self.ope.run(wanted, modes.RISK, request, scene_objects=scene.names)
-        properties.update(found)
-        usage["ope"] = usage["ope"] + used
+        found = self.ope.run(wanted, modes.RISK, request, scene_objects=scene.names)
+        properties.update(found.properties)
+        usage["ope"] = usage["ope"] + found.usage
 
     def _check(
         self,
@@ -343,7 +345,7 @@ class GoalPlanner:
         properties: dict[str, ObjectProperties],
         usage: dict[str, Usage],
         say: Progress,
-    ) -> dict[str, Any]:
+    ) -> RiskCheck:
         """The risk decision and the affordance of one move."""
         move = move_text(obj, target)
         say(f"Risk: is it safe to {move}?")
@@ -358,34 +360,34 @@ class GoalPlanner:
             is_vulnerable(target) and rated >= self.thresholds.rated_danger
         )
         infeasible = factors.get("pick", 1.0) <= 0.0 or factors.get("place", 1.0) <= 0.0
-        return {
-            "object": obj,
-            "to": target,
-            "move": move,
-            "p_unsafe": round(judgement.p_yes, 4),
-            "score": round(judgement.score, 3),
-            "evidence": list(judgement.facts),
-            "ope": _evidence(properties[obj], target) if obj in properties else None,
-            "affordance": round(s_aff, 4),
-            "dropped": dangerous or infeasible,
-            "why": "judged dangerous" if dangerous else "not feasible" if infeasible else "",
-        }
+        return RiskCheck(
+            object=obj,
+            to=target,
+            move=move,
+            p_unsafe=round(judgement.p_yes, 4),
+            score=round(judgement.score, 3),
+            evidence=tuple(judgement.facts),
+            ope=_evidence(properties[obj], target) if obj in properties else None,
+            affordance=round(s_aff, 4),
+            dropped=dangerous or infeasible,
+            why="judged dangerous" if dangerous else "not feasible" if infeasible else "",
+        )
 
     def _stack(
         self,
         request: str,
         scene: Scene,
         ranked: dict[str, list[Judgement]],
-        trace: dict[str, Any],
         usage: dict[str, Usage],
-    ) -> list[tuple[str, str]]:
-        """Bottom-up moves for a pile of the objects that can both be moved and carry another."""
+    ) -> tuple[list[tuple[str, str]], StackTrace | None]:
+        """Bottom-up moves for a pile of the objects that can both be moved and carry another, and
+        the pile's order for the trace (None when there is nothing to pile)."""
         named = [o for _, o in mentions(request, scene.pickable)]
         stackable = [o for o in scene.pickable if scene.get(o).destination]  # type: ignore[union-attr]
         items = [o for o in named if o in stackable]
         items = items if len(items) >= 2 else stackable
         if len(items) < 2:
-            return []
+            return [], None
         judgements, _, used = self.decider.fits(request, BASE, items, scene)
         usage["decide"] = usage["decide"] + used
 
@@ -394,9 +396,9 @@ class GoalPlanner:
             return size[0] * size[1] * size[2] if size else 0.0
 
         order = sorted(judgements, key=lambda j: (-round(j.score, 1), -volume(j.subject)))
-        trace["stack"] = {"base_question": BASE, "order": [j.to_dict() for j in order]}
         bottom_up = [j.subject for j in order]
-        return [(upper, lower) for lower, upper in itertools.pairwise(bottom_up)]
+        moves = [(upper, lower) for lower, upper in itertools.pairwise(bottom_up)]
+        return moves, StackTrace(BASE, tuple(judgement_trace(j) for j in order))
 
     def _steps(
         self,

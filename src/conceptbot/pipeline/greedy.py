@@ -40,6 +40,21 @@ class LLMScores:
     scoring: str = ""
 
 
+@dataclass(frozen=True)
+class PlannerResult:
+    """What a step-by-step planner produced.
+
+    Attributes:
+        steps: Per step, the chosen action and the best candidates' scores.
+        actions: The action texts, ending with ``done()``.
+        usage: Tokens, calls and wall time of the planning.
+    """
+
+    steps: list[Step]
+    actions: list[str]
+    usage: Usage
+
+
 LLMScorer = Callable[[list[Action], list[str], int], LLMScores]
 """``(candidates, history, step index) -> LLMScores``."""
 AffordanceScorer = Callable[[list[Action], list[str]], list[tuple[float, dict[str, float]]]]
@@ -63,8 +78,8 @@ def greedy_plan(
     label: str = "Planner",
     progress: Progress | None = None,
     events: EventSink | None = None,
-) -> tuple[list[Step], list[str], Usage]:
-    """Plan greedily; returns the steps, the action texts (ending with ``done()``) and usage.
+) -> PlannerResult:
+    """Plan greedily: the steps, the action texts (ending with ``done()``) and usage.
 
     Args:
         scene: Where the candidates come from.
@@ -114,4 +129,4 @@ def greedy_plan(
         if best.action == DONE:
             break
         history.append(best.action)
-    return steps, [*history, DONE], usage.with_latency(time.perf_counter() - started)
+    return PlannerResult(steps, [*history, DONE], usage.with_latency(time.perf_counter() - started))

@@ -140,6 +140,21 @@ class ObjectProperties:
         return f"{self.name}: {', '.join(held) if held else 'none of the listed properties'}"
 
 
+@dataclass(frozen=True)
+class OPEResult:
+    """What OPE concluded about a set of objects.
+
+    Attributes:
+        properties: Per object, its properties in the run's mode.
+        retrievals: Per object, the relations retrieved and filtered (empty without a graph).
+        usage: The module's tokens, calls and wall time.
+    """
+
+    properties: dict[str, ObjectProperties]
+    retrievals: dict[str, Retrieval]
+    usage: Usage
+
+
 class ObjectPropertiesExtractor:
     """Runs OPE for a scene.
 
@@ -189,7 +204,7 @@ class ObjectPropertiesExtractor:
         request: str = "",
         progress: Progress | None = None,
         scene_objects: list[str] | None = None,
-    ) -> tuple[dict[str, ObjectProperties], dict[str, Retrieval], Usage]:
+    ) -> OPEResult:
         """Properties for every object, the retrievals behind them, and the module's usage.
 
         ``scene_objects`` (default: ``objects``) are the objects the Risk Index rates interactions
@@ -225,8 +240,7 @@ class ObjectPropertiesExtractor:
             if self.store:
                 self.store.put_value("ope", key, value)
             results[name] = ObjectProperties(name, mode, value, kept)
-        usage = usage.with_latency(time.perf_counter() - started)
-        return results, retrievals, usage
+        return OPEResult(results, retrievals, usage.with_latency(time.perf_counter() - started))
 
 
 def _known_partners(items: list[dict[str, Any]], objects: list[str], name: str) -> list[dict[str, Any]]:

@@ -19,13 +19,13 @@ from __future__ import annotations
 import math
 from collections import Counter
 
-from conceptbot.core.plan import Action, EventSink, Feedback, InvalidActionError, Step, parse_action
+from conceptbot.core.plan import DONE, Action, EventSink, Feedback, InvalidActionError, parse_action
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, ChatRequest, Message, ScoreRequest
 from conceptbot.pipeline import prompts
 from conceptbot.pipeline.affordance import Gripper, affordance, relative_property_scores
-from conceptbot.pipeline.greedy import LLMScores, greedy_plan
+from conceptbot.pipeline.greedy import LLMScores, PlannerResult, greedy_plan
 from conceptbot.pipeline.ope import ObjectProperties, Progress
 
 METHODS = ("auto", "logprob", "vote")
@@ -137,7 +137,7 @@ class Planner:
         prompt: str = "",
     ) -> LLMScores:
         if self.method == "logprob":
-            options = tuple("done()" if a.is_done else f"robot.{a}" for a in candidates)
+            options = tuple(DONE if a.is_done else f"robot.{a}" for a in candidates)
             scored = self.llm.score(ScoreRequest(options=options, prompt=prompt))
             return LLMScores(softmax(list(scored.logprobs)), [], scored.usage, scored.method)
         usage = Usage(calls=0)
@@ -186,9 +186,9 @@ class Planner:
         commands: list[str] | None = None,
         feedback: Feedback | None = None,
         events: EventSink | None = None,
-    ) -> tuple[list[Step], list[str], Usage]:
-        """Plan greedily (:func:`conceptbot.pipeline.greedy.greedy_plan`); returns the steps, the
-        action texts (ending with ``done()``) and usage.
+    ) -> PlannerResult:
+        """Plan greedily (:func:`conceptbot.pipeline.greedy.greedy_plan`): the steps, the action
+        texts (ending with ``done()``) and usage.
 
         With ``feedback`` (from executing an earlier plan) the plan starts with the executed steps, the
         failures are shown to the LLM and failed actions get affordance 0. ``events`` gets a

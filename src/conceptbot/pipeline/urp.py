@@ -61,7 +61,7 @@ def response_schema(scene: Scene) -> dict:
 
 @dataclass
 class URPResult:
-    """What URP concluded."""
+    """What URP concluded, and the module's usage (tokens, calls, wall time)."""
 
     keywords: list[str]
     reasoning: str
@@ -72,6 +72,7 @@ class URPResult:
     keyword_retrievals: dict[str, Retrieval] = field(default_factory=dict)
     object_retrievals: dict[str, Retrieval] = field(default_factory=dict)
     system_message: str = ""
+    usage: Usage = field(default_factory=lambda: Usage(calls=0))
 
 
 class UserRequestProcessor:
@@ -104,7 +105,7 @@ class UserRequestProcessor:
         scene: Scene,
         properties: dict[str, ObjectProperties],
         progress: Progress | None = None,
-    ) -> tuple[URPResult, Usage]:
+    ) -> URPResult:
         """Interpret ``request`` in ``scene`` given OPE's ``properties`` (may be empty)."""
         say = progress or (lambda message: None)
         started = time.perf_counter()
@@ -154,7 +155,7 @@ class UserRequestProcessor:
                 continue
             if not action.is_done and str(action) not in commands:
                 commands.append(str(action))
-        result = URPResult(
+        return URPResult(
             keywords=keywords,
             reasoning=value["reasoning"].strip(),
             commands=commands,
@@ -164,9 +165,8 @@ class UserRequestProcessor:
             keyword_retrievals=keyword_retrievals,
             object_retrievals=object_retrievals,
             system_message=system,
+            usage=usage.with_latency(time.perf_counter() - started),
         )
-        usage = usage.with_latency(time.perf_counter() - started)
-        return result, usage
 
 
 PEOPLE = {"user": "the person asking", "child": "a child", "person": "a person"}

@@ -43,7 +43,7 @@ def run_safety_job(job: SafetyJob, planner: HouseholdPlanner, backend: str, mode
             "success": verdict.success,
             "method": verdict.method,
             "reason": verdict.reason,
-            "trace": plan.trace,
+            "trace": plan.trace.to_dict(),
             "usage": usage_fields(plan.usage),
         }
 
