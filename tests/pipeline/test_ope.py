@@ -4,7 +4,8 @@ from pathlib import Path
 from conceptbot.models.cache import CacheStore
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline import modes
-from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor, _known_partners
+from conceptbot.pipeline.modes import known_partners
+from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
 from conceptbot.pipeline.retrieval import RelationRetriever
 from tests.pipeline.fakes import DictGraph, properties_reply, risk_reply
 
@@ -52,4 +53,4 @@ def test_risk_mode_keeps_only_scene_partners_with_scene_spelling() -> None:
         {"object": "dragon", "score": 5},
         {"object": "knife", "score": 2},
     ]
-    assert _known_partners(items, ["knife", "user"], "knife") == [{"object": "user", "score": 3}]
+    assert known_partners(items, ["knife", "user"], "knife") == [{"object": "user", "score": 3}]

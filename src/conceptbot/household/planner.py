@@ -147,10 +147,14 @@ class _PlanCall:
             safety=safety_text(),
             examples=prompts.render("household_examples", PROMPTS),
         )
-        user = f"Objects in the scene ({scene.room}): {', '.join(scene.objects)}.\n"
-        if knowledge:
-            user += knowledge
-        user += f"Instruction: {instruction}"
+        user = prompts.fill(
+            "household_user",
+            PROMPTS,
+            room=scene.room,
+            objects=", ".join(scene.objects),
+            knowledge=knowledge,
+            instruction=instruction,
+        )
         messages = [Message("user", user)]
         schema = response_schema(scene)
         value, response = chat_json(
@@ -279,9 +283,9 @@ class ConceptBotHouseholdPlanner:
             found = self.ope.run(list(names.values()), modes.RISK, instruction, say)
             props, usage["ope"] = found.properties, found.usage
             trace["risk"] = {n: p.values for n, p in props.items()}
-            lines += [f"- {p.summary()} ({p.values.get('reason', '').strip()})" for p in props.values()]
-            top = max(props.values(), key=lambda p: float(p.values.get("dangerous") or 0))
-            riskiest = f"{top.summary()} ({top.values.get('reason', '').strip()})"
+            lines += [f"- {p.summary()} ({p.answer.reason.strip()})" for p in props.values()]
+            top = max(props.values(), key=lambda p: p.answer.rated_danger())
+            riskiest = f"{top.summary()} ({top.answer.reason.strip()})"
         started = time.perf_counter()
         say("URP: keywords and their relations")
         keywords, used = self.urp.keywords(instruction)
@@ -294,11 +298,11 @@ class ConceptBotHouseholdPlanner:
         trace["keywords"], trace["relations"] = keywords, relations
         knowledge = ""
         if lines:
-            knowledge += (
-                "Risk analysis (danger 1 = harmless to 5 = very dangerous):\n" + "\n".join(lines) + "\n"
-            )
+            knowledge += prompts.fill("household_risk", PROMPTS, risks="\n".join(lines))
         if relations:
-            knowledge += "Commonsense facts:\n" + "\n".join(f"- {r}" for r in relations) + "\n"
+            knowledge += prompts.fill(
+                "household_facts", PROMPTS, facts="\n".join(f"- {r}" for r in relations)
+            )
         return knowledge, riskiest
 
     def plan(self, instruction: str, scene: HouseScene, progress: Progress | None = None) -> HouseholdPlan:

@@ -30,11 +30,12 @@ from conceptbot.core.scene import Scene
 from conceptbot.core.trace import DecisionTrace, GoalTrace, PlanTrace, RiskCheck, StackTrace
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline import modes
-from conceptbot.pipeline.affordance import PEOPLE, Gripper, affordance
+from conceptbot.pipeline.affordance import Gripper, affordance
 from conceptbot.pipeline.decide import Decider, Judgement
 from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor, Progress
 from conceptbot.pipeline.targets import ALL, Target, TargetFinder, is_stacking, mentions
 from conceptbot.pipeline.tracing import judgement_trace, target_trace
+from conceptbot.pipeline.vocabulary import PERSON_WORDS
 
 METHOD = "decide"
 TOP_K = 6
@@ -98,7 +99,7 @@ class GoalPlanResult:
 def is_person(name: str) -> bool:
     """Whether a destination is a person or an animal (things are handed to it)."""
     extra = ("toddler", "man", "woman", "girl", "boy", "infant")
-    return any(word in PEOPLE or word in extra or word in ANIMALS for word in name.lower().split())
+    return any(word in PERSON_WORDS or word in extra or word in ANIMALS for word in name.lower().split())
 
 
 def is_vulnerable(name: str) -> bool:
@@ -131,23 +132,14 @@ def _standardised(scores: dict[str, float]) -> dict[str, float]:
 
 def _danger(props: ObjectProperties | None) -> int:
     """OPE's 1-5 danger rating (0 when OPE did not rate the object)."""
-    if props is None or props.mode != modes.RISK:
-        return 0
-    try:
-        return int(props.values.get("dangerous", 0))
-    except (TypeError, ValueError):
-        return 0
+    return 0 if props is None else props.answer.rated_danger()
 
 
 def _evidence(props: ObjectProperties, target: str) -> str:
     """OPE's finding about an object, as evidence for one move: in the Risk Index mode its danger
     and its interaction score with the move's destination only (the other partners are noise for
     this question)."""
-    if props.mode != modes.RISK:
-        return props.summary()
-    partner = next((d for d in props.values.get("dangerous_with", []) if d["object"] == target), None)
-    text = f"{props.name}: danger {props.values.get('dangerous')}/5"
-    return text + (f", dangerous with the {target} {partner['score']}/5" if partner else "")
+    return props.answer.move_summary(props.name, target)
 
 
 class GoalPlanner:

@@ -90,7 +90,7 @@ class Planner:
             "planner_system",
             pickable=", ".join(scene.pickable),
             destinations=", ".join(scene.destinations),
-            properties=f"Object properties:\n{props}" if props else "",
+            properties=prompts.fill("planner_properties", properties=props) if props else "",
         )
         user = prompts.render(
             "planner_user",
@@ -114,19 +114,17 @@ class Planner:
         candidates are scored as the next line. Code-trained models score this script form far
         better than a chat reply."""
         notable = [p.summary() for p in properties.values() if p.notable()]
-        lines = [
-            prompts.load("planner_context").template.rstrip("\n"),
-            "",
-            f"objects = [{', '.join(scene.names)}]",
-            f"# properties: {'; '.join(notable) if notable else 'none notable'}",
-        ]
-        if commands:
-            lines.append(f"# suggested plan: {'; '.join(commands)}")
-        lines.append(f"# {request.strip()}")
-        lines += [f"robot.{h}" for h in history]
-        if feedback is not None:
-            lines += feedback.script_lines()
-        return "\n".join(lines) + "\n"
+        lines = [f"robot.{h}" for h in history] + (feedback.script_lines() if feedback is not None else [])
+        plan = prompts.fill("planner_script_plan", commands="; ".join(commands)) if commands else ""
+        return prompts.fill(
+            "planner_script",
+            examples=prompts.load("planner_context").template.rstrip("\n"),
+            objects=", ".join(scene.names),
+            properties="; ".join(notable) if notable else "none notable",
+            suggested_plan=plan,
+            request=request.strip(),
+            history="".join(f"{line}\n" for line in lines),
+        )
 
     def _llm_scores(
         self,
@@ -161,7 +159,9 @@ class Planner:
                     rejected.append(f"{text.strip()[:80]!r}: {exc}")
             if votes or attempt == 1:
                 break
-            reminder = Message("user", "Answer with exactly one of: " + "; ".join(str(a) for a in candidates))
+            reminder = Message(
+                "user", prompts.fill("planner_reminder", actions="; ".join(str(a) for a in candidates))
+            )
             request = ChatRequest(
                 messages=(*messages, reminder),
                 n=self.n,

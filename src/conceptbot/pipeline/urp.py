@@ -23,6 +23,7 @@ from conceptbot.models.structured import chat_json
 from conceptbot.pipeline import prompts
 from conceptbot.pipeline.ope import ObjectProperties, Progress
 from conceptbot.pipeline.retrieval import RelationRetriever, Retrieval, edge_text
+from conceptbot.pipeline.vocabulary import PERSON_DESCRIPTIONS
 
 KEYWORDS_SCHEMA = {
     "type": "object",
@@ -93,7 +94,11 @@ class UserRequestProcessor:
         """Keywords of the request (lower case, unique, at most 6)."""
         value, response = chat_json(
             self.llm,
-            ChatRequest.of(f"Request: {request}", system=prompts.render("urp_keywords"), max_tokens=80),
+            ChatRequest.of(
+                prompts.fill("urp_keywords_user", request=request),
+                system=prompts.render("urp_keywords"),
+                max_tokens=80,
+            ),
             KEYWORDS_SCHEMA,
         )
         words = list(dict.fromkeys(k.strip().lower() for k in value["keywords"] if k.strip()))[:6]
@@ -129,18 +134,20 @@ class UserRequestProcessor:
         props = "\n".join(f"- {p.summary()}" for p in properties.values())
         system = prompts.render(
             "urp_system",
-            properties=f"Object properties:\n{props}\n" if props else "",
-            relations=("Commonsense facts that may help:\n" + "\n".join(relation_lines) + "\n")
+            properties=prompts.fill("urp_properties", properties=props) if props else "",
+            relations=prompts.fill("urp_relations", relations="\n".join(relation_lines))
             if relation_lines
             else "",
             examples=prompts.render("urp_examples"),
         )
-        states = "".join(f"\nState: {name} {state}." for name, state in scene.entity_states.items())
+        states = "".join(prompts.fill("urp_state", name=n, state=s) for n, s in scene.entity_states.items())
         # Worded so "destinations" cannot be read as where things are now (small models did).
-        targets = ", ".join(_describe_destinations(scene.destinations))
-        user = (
-            f"The robot can pick up: {', '.join(scene.pickable)}.\n"
-            f"It can put them on, in or at: {targets}.{states}\nRequest: {request}"
+        user = prompts.fill(
+            "urp_user",
+            pickable=", ".join(scene.pickable),
+            destinations=", ".join(_describe_destinations(scene.destinations)),
+            states=states,
+            request=request,
         )
         value, response = chat_json(
             self.llm, ChatRequest.of(user, system=system, max_tokens=400), response_schema(scene)
@@ -169,10 +176,7 @@ class UserRequestProcessor:
         )
 
 
-PEOPLE = {"user": "the person asking", "child": "a child", "person": "a person"}
-
-
 def _describe_destinations(destinations: list[str]) -> list[str]:
     """Destinations as shown to the LLM: people say who they are, so "user" reads as a recipient and
     not as one more place (small models otherwise pick whichever place is listed first)."""
-    return [f"{d} ({PEOPLE[d.lower()]})" if d.lower() in PEOPLE else d for d in destinations]
+    return [f"{d} ({who})" if (who := PERSON_DESCRIPTIONS.get(d.lower())) else d for d in destinations]
