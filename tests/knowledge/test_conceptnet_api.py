@@ -46,7 +46,7 @@ def test_first_access_fetches_english_edges_strongest_first(tmp_path: Path) -> N
     with ConceptNetStub(ALL) as stub:
         api = _api(tmp_path, stub.url)
         found = api.edges("knife")
-    assert isinstance(api, KnowledgeGraph) and api.name == "conceptnet-api"
+    assert isinstance(api, KnowledgeGraph) and api.name == "conceptnet-api" and api.version == ""
     assert (found.query, found.matched, found.match) == ("knife", "knife", "exact")
     assert found.edges == (
         Edge("knife", "AtLocation", "kitchen drawer", 4.0, "conceptnet-api"),

@@ -25,6 +25,7 @@ class DictGraph:
     """A KnowledgeGraph over a dict of edges (normalised look-up like the real stores)."""
 
     name = "dict"
+    version = "test"
 
     def __init__(self, edges: dict[str, list[tuple[str, str, str]]] | None = None) -> None:
         self.data = edges if edges is not None else EDGES

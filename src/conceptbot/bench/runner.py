@@ -19,10 +19,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol, TypeVar
 
-from conceptbot.baselines.factory import PlannerSystem
 from conceptbot.bench.grading import Task, grade, task_scene
 from conceptbot.core.errors import ConceptBotError
 from conceptbot.core.usage import Usage
+from conceptbot.systems import PlannerSystem
 
 J = TypeVar("J")
 

@@ -6,7 +6,6 @@ from pathlib import Path
 
 import click
 
-from conceptbot.baselines.factory import SYSTEMS, build_system
 from conceptbot.bench.grading import CATEGORIES, SPLITS, load_tasks
 from conceptbot.bench.report import load_records, markdown, summarise, write_report
 from conceptbot.bench.runner import Job, pending, run
@@ -16,10 +15,11 @@ from conceptbot.cli.bench_options import (
     out_dir_option,
     workers_option,
 )
-from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.cli.progress import count_progress
 from conceptbot.core.urls import redact_secrets
 from conceptbot.models.registry import scoring_method, split_spec
+from conceptbot.systems import SYSTEMS, SystemOptions, build_system
 
 DEFAULT_RESULTS = {"test": Path("results/bench.jsonl"), "dev": Path("results/bench-dev.jsonl")}
 """Results file of each task split when --out is not given."""
@@ -97,8 +97,7 @@ def run_cmd(
 
     def system(config: str):
         if config not in systems:
-            options = {} if config == "saycan" else {"n": 5}
-            systems[config] = build_system(settings, config, **options)
+            systems[config] = build_system(settings, config, SystemOptions(n=5))  # SayCan has none
         return systems[config]
 
     todo = len(pending(jobs, out, backend, model or ""))

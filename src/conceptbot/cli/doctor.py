@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import click
 
-from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.core.config import DEFAULT_EMBEDDER, DEFAULT_LLM, Settings
 from conceptbot.core.errors import ConceptBotError
 from conceptbot.core.urls import redact_secrets

@@ -9,13 +9,13 @@ import click
 from rich.console import Console
 from rich.table import Table
 
-from conceptbot.baselines.factory import SYSTEMS, build_system
-from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.core.limits import check_request
 from conceptbot.core.plan import Plan
 from conceptbot.core.trace import PlanTrace, RetrievalTrace
 from conceptbot.pipeline.planner import METHODS
 from conceptbot.scenes import resolve_scene
+from conceptbot.systems import SYSTEMS, SystemOptions, build_system
 
 
 @click.command("plan")
@@ -67,10 +67,8 @@ def plan(
     """Plan REQUEST in a scene; print properties, relations, reasoning, step scores and the plan."""
     request = check_request(request)
     scene = resolve_scene(scene_ref)
-    options = (
-        {} if config == "saycan" else {"theta": theta, "planner_method": method, "n": n, "fallback": fallback}
-    )
-    bot = build_system(app.settings, config, **options)
+    options = SystemOptions(theta=theta, planner_method=method, n=n, fallback=fallback)  # SayCan has none
+    bot = build_system(app.settings, config, options)
     result = bot.plan(
         request, scene, risk=risk, progress=lambda message: click.secho(message, dim=True, err=True)
     )

@@ -18,7 +18,7 @@ from conceptbot.cli.bench_options import (
     results_option,
     workers_option,
 )
-from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.cli.progress import count_progress
 from conceptbot.core.urls import redact_secrets
 from conceptbot.household.factory import build_household_planner

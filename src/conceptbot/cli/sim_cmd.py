@@ -7,12 +7,12 @@ from pathlib import Path
 
 import click
 
-from conceptbot.baselines.factory import SYSTEMS, build_system
-from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.core.errors import ConfigError
 from conceptbot.core.plan import InvalidActionError, parse_action
 from conceptbot.scenes import resolve_scene
 from conceptbot.sim import GRASP_MODES
+from conceptbot.systems import SYSTEMS, build_system
 
 GIF_SIZE = (320, 240)
 

@@ -116,8 +116,7 @@ def _words(obj: str) -> str:
 
 def _labelled(llm: LLM, module: str) -> LLM:
     """The LLM logging its calls under ``module`` where it keeps a call log."""
-    relabel = getattr(llm, "with_module", None)
-    return relabel(module) if relabel else llm
+    return llm.with_module(module)
 
 
 class _PlanCall:

@@ -112,6 +112,10 @@ class LlamaCppLLM:
             )
         return self._formatter
 
+    def with_module(self, module: str) -> LlamaCppLLM:
+        """This backend itself: it keeps no call log to label (see :meth:`LLM.with_module`)."""
+        return self
+
     # -- chat -----------------------------------------------------------------------------------
     def chat(self, request: ChatRequest) -> ChatResponse:
         """Chat completion; see :meth:`conceptbot.models.llm.LLM.chat`."""

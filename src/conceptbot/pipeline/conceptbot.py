@@ -106,8 +106,7 @@ class ConceptBot:
         self.config = config
         self.switches = SWITCHES[config]
         retriever = retriever if self.switches.knowledge else None
-        module = getattr(llm, "with_module", None)
-        self._llm_for = (lambda name: module(name)) if module else (lambda name: llm)
+        self._llm_for = llm.with_module
         self.ope = ObjectPropertiesExtractor(self._llm_for("ope"), retriever, store, graph_version)
         self.urp = UserRequestProcessor(self._llm_for("urp"), retriever)
         self.planner = Planner(self._llm_for("planner"), method=planner_method, n=n)

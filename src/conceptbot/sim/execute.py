@@ -16,11 +16,11 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from conceptbot.baselines.factory import PlannerSystem
 from conceptbot.core.plan import Feedback, Plan, parse_action
 from conceptbot.core.scene import Scene
 from conceptbot.sim.skills import PickAndPlace, SkillResult, same_place
 from conceptbot.sim.world import World
+from conceptbot.systems import PlannerSystem
 
 
 @dataclass

@@ -43,11 +43,11 @@ from starlette.datastructures import Headers, MutableHeaders
 from starlette.middleware.base import BaseHTTPMiddleware, RequestResponseEndpoint
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from conceptbot.baselines.factory import SYSTEMS
 from conceptbot.core.errors import ConceptBotError
 from conceptbot.core.scene import Scene, scene_from_dict
 from conceptbot.core.urls import redact_secrets
 from conceptbot.scenes import demo_scene_names, load_demo_scene
+from conceptbot.systems import SYSTEMS
 from conceptbot.web.runs import BusyError, Run, RunManager, RunSpec
 from conceptbot.web.worker import PICTURES
 

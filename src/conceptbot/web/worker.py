@@ -8,9 +8,9 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from conceptbot.baselines.factory import PlannerSystem, build_system
 from conceptbot.core.config import Settings
 from conceptbot.models import store
+from conceptbot.systems import PlannerSystem, build_system
 from conceptbot.web.runs import RunSpec, Worker
 
 Emit = Callable[[str, dict[str, Any]], None]
