@@ -12,6 +12,7 @@ PACKAGE = Path(conceptbot.__file__).parent
 # A layer may import its own modules and those of lower rank, never a higher or equal other layer.
 RANK = {
     "core": 0,
+    "schemas": 0,  # data only (JSON Schema files core reads as package resources)
     "models": 1,
     "scenes": 1,
     "knowledge": 2,
