@@ -66,10 +66,6 @@ class ObjectState:
     parents: list[str] = field(default_factory=list)
     liquid: str | None = None
 
-    def as_dict(self) -> dict[str, Any]:
-        """JSON form."""
-        return {**self.flags, "parentReceptacles": list(self.parents), "liquid": self.liquid}
-
 
 # Why a step failed (StepResult.failure), for a skill layer to repair it
 # (:mod:`conceptbot.household.grounding`).
