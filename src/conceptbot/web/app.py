@@ -48,8 +48,8 @@ from conceptbot.core.errors import ConceptBotError
 from conceptbot.core.scene import Scene, scene_from_dict
 from conceptbot.core.urls import redact_secrets
 from conceptbot.scenes import demo_scene_names, load_demo_scene
+from conceptbot.sim import PICTURES
 from conceptbot.web.runs import BusyError, Run, RunManager, RunSpec
-from conceptbot.web.worker import PICTURES
 
 COOKIE = "conceptbot_session"
 MAX_BODY = 32 * 1024
