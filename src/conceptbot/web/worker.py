@@ -65,7 +65,15 @@ def simulate(
     spec: RunSpec, plan_on: Callable[[Scene], Plan], emit: Emit, out_dir: Path, options: SimOptions = WEB_SIM
 ) -> None:
     """Build the world from the scene, let the detector look, plan on what it sees with ``plan_on``,
-    and execute the plan unless it was refused; pictures go to ``out_dir``."""
+    and execute the plan unless it was refused.
+
+    Args:
+        spec: The run (request and scene).
+        plan_on: Plans the request in a scene (and emits the plan to the page).
+        emit: Sends an event to the page; a ``sim`` event ends an executed run.
+        out_dir: Where the pictures go.
+        options: How the simulator run is set up (default :data:`WEB_SIM`).
+    """
     from conceptbot.sim.session import SimSession, run_in_simulator
 
     def act(session: SimSession) -> Execution | None:
