@@ -36,7 +36,11 @@ def test_a_planner_from_backend_objects_plans_with_them() -> None:
     result = planner.plan("Bring me an apple", conceptbot.scene_from_dict(SCENE))
     assert result.actions == ["pick_and_place(apple, user)", "done()"]
     assert result.refused is False and result.reason is None
-    assert result.to_dict()["plan"] == result.actions and result.trace.ope is not None and result.trace.urp is not None
+    assert (
+        result.to_dict()["plan"] == result.actions
+        and result.trace.ope is not None
+        and result.trace.urp is not None
+    )
     assert "apple" in graph.asked and len(llm.requests) == 7  # the objects given did the work
     # Like a configured backend, the model went behind the call log, each call under its module.
     modules = {call.module for call in open_store(conceptbot.load_settings()).calls() if call.kind == "chat"}

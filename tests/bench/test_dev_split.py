@@ -21,7 +21,8 @@ from conceptbot.bench.grading import (
     reference_plan,
     task_scene,
 )
-from conceptbot.bench.report import load_records, markdown, summarise
+from conceptbot.bench.report import markdown, summarise
+from conceptbot.bench.results import load_records
 from conceptbot.bench.runner import Job, run
 from conceptbot.core.errors import ConfigError
 from conceptbot.core.plan import Plan

@@ -189,6 +189,26 @@ def test_a_refusal_reaches_the_page_with_its_reason(make_client) -> None:
     assert not any(e["type"] == "sim" for e in events)  # nothing to execute
 
 
+def test_a_simulated_run_plans_on_what_the_detector_sees(make_client) -> None:
+    planned_on = []
+
+    class Recording(_FixedPlan):
+        def plan(self, request, scene, risk=False, progress=None, feedback=None, events=None) -> Plan:
+            planned_on.append(scene)
+            return self.result
+
+    refusing = Recording(["done()"], refused=True, reason="sharp")
+    client = make_client(
+        worker=make_worker(lambda config, backend: refusing, can_simulate=True), can_simulate=True
+    )
+    events = events_of(client, client.post("/api/runs", json={**RUN, "simulate": True}).json()["id"])
+    assert [e["type"] for e in events if e["type"] in ("plan", "sim")] == ["plan"]
+    # As in `conceptbot sim run`: the camera measured every object before the planner saw it.
+    [scene] = planned_on
+    scissors = scene.get("scissors")
+    assert scissors is not None and scissors.bbox_px is not None and scissors.size_m is not None
+
+
 @pytest.mark.slow
 def test_simulated_run_serves_its_pictures(make_client) -> None:
     plan = _FixedPlan(["pick_and_place(safety scissors, child)", "done()"])

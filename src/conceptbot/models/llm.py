@@ -192,10 +192,6 @@ class ScoreResponse:
     cached: bool = False
     method: str = "logprob"
 
-    def mean_logprobs(self) -> tuple[float, ...]:
-        """Per-token average log-probability (length-normalised)."""
-        return tuple(lp / max(n, 1) for lp, n in zip(self.logprobs, self.token_counts, strict=False))
-
 
 @dataclass(frozen=True)
 class Capabilities:
