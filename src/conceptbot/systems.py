@@ -28,8 +28,8 @@ from conceptbot.core.plan import EventSink, Feedback, Plan
 from conceptbot.core.scene import Scene
 from conceptbot.knowledge.base import KnowledgeGraph
 from conceptbot.knowledge.registry import open_graph
-from conceptbot.models.cache import CacheStore
-from conceptbot.models.cached import CachedEmbedder, CachedLLM
+from conceptbot.models.cache_db import CacheStore
+from conceptbot.models.caching import CachedEmbedder, CachedLLM
 from conceptbot.models.embedder import Embedder
 from conceptbot.models.llm import LLM
 from conceptbot.models.registry import open_embedder, open_llm, open_store

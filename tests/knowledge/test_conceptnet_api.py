@@ -272,7 +272,7 @@ def test_cache_schema_wal_and_migrations(tmp_path: Path) -> None:
 
 
 def test_cache_can_share_a_file_with_the_llm_cache(tmp_path: Path) -> None:
-    from conceptbot.models.cache import CacheStore
+    from conceptbot.models.cache_db import CacheStore
 
     path = tmp_path / "cache.db"
     store = CacheStore(path)

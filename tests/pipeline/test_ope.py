@@ -1,7 +1,7 @@
 import json
 from pathlib import Path
 
-from conceptbot.models.cache import CacheStore
+from conceptbot.models.cache_db import CacheStore
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.modes import known_partners

@@ -251,7 +251,7 @@ class LLM(Protocol):
 
         Every stage of a pipeline asks for its own labelled view, so the call log says which module
         spent the tokens. A backend without a call log returns itself; the cache wrapper
-        (:class:`~conceptbot.models.cached.CachedLLM`) returns a view logging under the new name.
+        (:class:`~conceptbot.models.caching.CachedLLM`) returns a view logging under the new name.
 
         Args:
             module: The label.

@@ -30,7 +30,7 @@ from conceptbot.core.plan import DONE, EventSink, Feedback, Plan
 from conceptbot.core.scene import Scene
 from conceptbot.core.trace import OPETrace, PlannerSummary, PlanTrace, URPTrace
 from conceptbot.core.usage import Usage
-from conceptbot.models.cache import CacheStore
+from conceptbot.models.cache_db import CacheStore
 from conceptbot.models.llm import LLM
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.decide import Decider, FactFinder

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from conceptbot.core.usage import Usage
-from conceptbot.models.cache import CacheStore
+from conceptbot.models.cache_db import CacheStore
 from conceptbot.models.llm import LLM, ChatRequest
 from conceptbot.models.structured import chat_json
 from conceptbot.pipeline import modes

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 from conceptbot.core.config import Settings
 from conceptbot.core.plan import Plan
 from conceptbot.core.scene import Scene
-from conceptbot.models import store
+from conceptbot.models import weights
 from conceptbot.sim.options import SimOptions
 from conceptbot.systems import PlannerSystem, build_system
 from conceptbot.web.runs import RunSpec, Worker
@@ -40,9 +40,9 @@ def cached_systems(settings: Settings) -> SystemFactory:
 def available_backends(settings: Settings) -> list[str]:
     """The configured backend first, then every installed embedded model (names only)."""
     backends = [settings.llm]
-    for name, entry in store.catalogue().items():
+    for name, entry in weights.catalogue().items():
         spec = f"llamacpp:{name}"
-        if spec not in backends and store.model_path(settings.models_dir, entry).is_file():
+        if spec not in backends and weights.model_path(settings.models_dir, entry).is_file():
             backends.append(spec)
     return backends
 
