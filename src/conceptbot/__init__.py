@@ -29,6 +29,9 @@ _EXPORTS: dict[str, str] = {
     "scene_from_dict": "conceptbot.core.scene",
     "Scene": "conceptbot.core.scene",
     "Plan": "conceptbot.core.plan",
+    "Observer": "conceptbot.core.observe",
+    "Callbacks": "conceptbot.core.observe",
+    "FanOut": "conceptbot.core.observe",
     "Settings": "conceptbot.core.config",
     "load_settings": "conceptbot.core.config",
     "SYSTEMS": "conceptbot.systems",
@@ -44,10 +47,13 @@ _EXPORTS: dict[str, str] = {
 __all__ = [  # the names of _EXPORTS, written out for tools that read __all__ without running it
     "LLM",
     "SYSTEMS",
+    "Callbacks",
     "ConceptBotError",
     "ConfigError",
     "Embedder",
+    "FanOut",
     "KnowledgeGraph",
+    "Observer",
     "Plan",
     "PlannerSystem",
     "Scene",
@@ -64,6 +70,7 @@ if TYPE_CHECKING:  # the same names for type checkers and editors, which do not 
     from conceptbot.api import load_scene, open_planner
     from conceptbot.core.config import Settings, load_settings
     from conceptbot.core.errors import ConceptBotError, ConfigError
+    from conceptbot.core.observe import Callbacks, FanOut, Observer
     from conceptbot.core.plan import Plan
     from conceptbot.core.scene import Scene, scene_from_dict
     from conceptbot.knowledge.base import KnowledgeGraph

@@ -11,6 +11,10 @@ instead of going through the CLI or the web page. Everything here is also at the
     result.refused, result.reason, result.trace
     result.to_dict()  # the JSON object `conceptbot plan --json` prints
 
+    # watch it work: progress messages as each piece starts, each module's results as it finishes
+    watch = conceptbot.Callbacks(on_progress=print, on_event=lambda name, data: print(name, data))
+    planner.plan("Bring me something to eat", conceptbot.load_scene("kitchen"), observer=watch)
+
     # another system or backend, by the names the CLI uses
     conceptbot.open_planner("saycan", llm="openai-compatible:http://127.0.0.1:8000/v1#llama-3.3-70b")
     # your own backends: objects implementing conceptbot.LLM, KnowledgeGraph, Embedder

@@ -24,7 +24,8 @@ from typing import Protocol
 from conceptbot.baselines.saycan import SayCan
 from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConfigError, NotSupportedError
-from conceptbot.core.plan import EventSink, Feedback, Plan
+from conceptbot.core.observe import Observer
+from conceptbot.core.plan import Feedback, Plan
 from conceptbot.core.scene import Scene
 from conceptbot.knowledge.base import KnowledgeGraph
 from conceptbot.knowledge.registry import open_graph
@@ -47,9 +48,8 @@ class PlannerSystem(Protocol):
         request: str,
         scene: Scene,
         risk: bool = False,
-        progress: Callable[[str], None] | None = None,
         feedback: Feedback | None = None,
-        events: EventSink | None = None,
+        observer: Observer | None = None,
     ) -> Plan:
         """Plan ``request`` in ``scene``.
 
@@ -57,10 +57,10 @@ class PlannerSystem(Protocol):
             request: What the person asked for, in their words.
             scene: The objects the robot sees, what it may pick and where things may go.
             risk: Rate each object's danger 1-5 (the Risk Index) instead of yes/no properties.
-            progress: Called with a short message as each stage starts, or None.
             feedback: What happened when an earlier plan ran (steps done, the failed action), to
                 plan the rest from there; None for a fresh plan.
-            events: Gets each module's results as they finish, or None.
+            observer: Gets a short message as each piece of work starts and each module's results
+                as they finish (:class:`~conceptbot.core.observe.Observer`); None: nobody listens.
 
         Returns:
             The plan (actions ending with ``done()``, or a refusal with its reason) and its trace.

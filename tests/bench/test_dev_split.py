@@ -228,7 +228,7 @@ def test_some_dev_judgements_by_hand() -> None:
 class ReferenceSystem:
     """Answers each dev request with its task's reference plan."""
 
-    def plan(self, request, scene, risk=False, progress=None) -> Plan:
+    def plan(self, request, scene, risk=False, feedback=None, observer=None) -> Plan:
         task = next(t for t in DEV if t.request == request and t.scene == scene.name)
         usage = Usage(10, 1, 0.1, 0.0, 1)
         return Plan(reference_plan(task), usage={"planner": usage, "total": usage})

@@ -20,7 +20,7 @@ class ScriptedSystem:
         self.fail_with = fail_with
         self.calls = 0
 
-    def plan(self, request, scene, risk=False, progress=None) -> Plan:
+    def plan(self, request, scene, risk=False, feedback=None, observer=None) -> Plan:
         self.calls += 1
         if self.fail_with is not None:
             raise self.fail_with

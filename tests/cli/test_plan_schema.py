@@ -56,7 +56,7 @@ def home(isolated_home: Path, omcs_file: Path, wordnet_dir: Path) -> Path:
     return isolated_home
 
 
-def _plan_json(tmp_path: Path, config: str, replies: list[str]) -> dict:
+def _plan_json(tmp_path: Path, config: str, replies: list[str], progress: list[str] | None = None) -> dict:
     scene = tmp_path / "scene.json"
     scene.write_text(json.dumps(SCENE))
     replies_file = tmp_path / "replies.json"
@@ -66,6 +66,8 @@ def _plan_json(tmp_path: Path, config: str, replies: list[str]) -> dict:
     result = CliRunner().invoke(cli, args)
     assert result.exit_code == 0, f"{result.output}\n{result.exception!r}"
     # Progress messages go to stderr; stdout is the one JSON object.
+    if progress is not None:
+        progress += result.stderr.splitlines()
     return json.loads(result.stdout)
 
 
@@ -84,8 +86,10 @@ def test_plan_json_of_each_configuration_validates(home: Path, tmp_path: Path, c
 
 def test_a_refusal_validates(home: Path, tmp_path: Path) -> None:
     refuse = urp_reply([], refuse=True, why="not safe")
-    data = _plan_json(tmp_path, "conceptbot", OPE + KEYWORDS + [refuse])
+    progress: list[str] = []
+    data = _plan_json(tmp_path, "conceptbot", OPE + KEYWORDS + [refuse], progress)
     _validator().validate(data)
+    assert progress == ["URP: keywords"]  # then URP refuses: no planner steps
     assert data["refused"] and data["plan"] == ["done()"] and data["reason"] == "not safe"
     assert data["steps"] == [] and "planner" not in data["trace"] and data["trace"]["urp"]["refused"]
 

@@ -12,7 +12,7 @@ from conceptbot.household.planner import ConceptBotHouseholdPlanner, PlainHouseh
 from conceptbot.household.thor import house_scene
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.retrieval import RelationRetriever
-from tests.pipeline.fakes import DictGraph, risk_reply
+from tests.pipeline.fakes import DictGraph, Recorder, risk_reply
 
 KITCHEN = house_scene("FloorPlan1", ["Candle", "Mug", "Microwave"])
 
@@ -83,8 +83,15 @@ def test_behind_the_judge_the_plain_planners_call_plans_and_may_still_refuse() -
     planner, planner_llm, _ = _conceptbot(
         [[math.log(0.2), math.log(0.8)]] * 4, [_reply(False, ["find Candle"]), _reply(True, [])]
     )
-    plan = planner.plan("Find the candle.", KITCHEN)
+    seen = Recorder()
+    plan = planner.plan("Find the candle.", KITCHEN, observer=seen)
     assert not plan.refused and plan.steps == ["find Candle"] and not plan.trace.extra["judge"]["refuse"]
+    assert seen.names() == [
+        "OPE: risk index of Candle",
+        "URP: keywords and their relations",
+        "judge: would carrying it out be dangerous?",
+        "planner: judging and planning",
+    ]
     plain_llm = FakeLLM([_reply(False, ["find Candle"])])
     PlainHouseholdPlanner(plain_llm).plan("Find the candle.", KITCHEN)
     assert planner_llm.requests[0] == plain_llm.requests[0]  # the same call, evidence and all

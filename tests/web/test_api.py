@@ -174,7 +174,7 @@ class _FixedPlan:
     def __init__(self, actions: list[str], refused: bool = False, reason: str | None = None) -> None:
         self.result = Plan(actions, [], refused, reason)
 
-    def plan(self, request, scene, risk=False, progress=None, feedback=None, events=None) -> Plan:
+    def plan(self, request, scene, risk=False, feedback=None, observer=None) -> Plan:
         return self.result
 
 
@@ -193,7 +193,7 @@ def test_a_simulated_run_plans_on_what_the_detector_sees(make_client) -> None:
     planned_on = []
 
     class Recording(_FixedPlan):
-        def plan(self, request, scene, risk=False, progress=None, feedback=None, events=None) -> Plan:
+        def plan(self, request, scene, risk=False, feedback=None, observer=None) -> Plan:
             planned_on.append(scene)
             return self.result
 
@@ -240,6 +240,18 @@ def test_a_goal_planner_run_streams_its_targets_decisions_and_risk_checks(make_c
     events = events_of(client, client.post("/api/runs", json=RUN).json()["id"])
     kinds = [e["type"] for e in events]
     assert kinds.index("goal") < kinds.index("decisions") < kinds.index("risk") < kinds.index("plan")
+    # The plan's progress messages arrive as status events between its own events, in order.
+    assert [e.get("message", e["type"]) for e in events] == [
+        "loading conceptbot on llamacpp:qwen2.5-coder-1.5b",
+        "Goal: where the request sends things",
+        "goal",
+        "decisions",
+        "OPE: properties of scissors",
+        "Risk: is it safe to give the scissors to the child?",
+        "risk",
+        "plan",
+        "done",
+    ]
     goal = next(e for e in events if e["type"] == "goal")["data"]
     assert goal["targets"][0]["to"] == "child" and goal["targets"][0]["named"] == ["scissors"]
     [check] = next(e for e in events if e["type"] == "risk")["data"]["checks"]

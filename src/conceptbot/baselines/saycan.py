@@ -20,7 +20,8 @@ import time
 from importlib import resources
 
 from conceptbot.core.limits import check_request
-from conceptbot.core.plan import DONE, Action, EventSink, Feedback, Plan
+from conceptbot.core.observe import SILENT, Observer
+from conceptbot.core.plan import DONE, Action, Feedback, Plan
 from conceptbot.core.scene import Scene
 from conceptbot.core.trace import PlanTrace
 from conceptbot.models.llm import LLM, ScoreRequest
@@ -68,15 +69,15 @@ class SayCan:
         request: str,
         scene: Scene,
         risk: bool = False,
-        progress=None,
         feedback: Feedback | None = None,
-        events: EventSink | None = None,
+        observer: Observer | None = None,
     ) -> Plan:
         """Plan greedily (``risk`` is ignored: SayCan has no risk assessment).
 
         With ``feedback`` the plan continues from the executed steps and failed actions are
         infeasible (affordance 0), as SayCan's affordance would report after a failed attempt.
-        ``events`` gets a ``step`` event as each step is chosen.
+        ``observer`` gets a progress message as each step starts and a ``step`` event as it is
+        chosen.
         """
         started = time.perf_counter()
         request = check_request(request)
@@ -109,8 +110,7 @@ class SayCan:
             feedback=feedback,
             normalise=True,
             label="SayCan",
-            progress=progress,
-            events=events,
+            observer=observer if observer is not None else SILENT,
         )
         total = result.usage.with_latency(time.perf_counter() - started)
         trace = PlanTrace(config=self.config, request=request, scene=scene.name)

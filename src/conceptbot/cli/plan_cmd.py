@@ -10,6 +10,7 @@ from rich.console import Console
 from rich.table import Table
 
 from conceptbot.cli.context import AppContext, pass_app
+from conceptbot.cli.progress import ON_STDERR
 from conceptbot.core.limits import check_request
 from conceptbot.core.plan import Plan
 from conceptbot.core.trace import PlanTrace, RetrievalTrace
@@ -69,9 +70,7 @@ def plan(
     scene = resolve_scene(scene_ref)
     options = SystemOptions(theta=theta, planner_method=method, n=n, fallback=fallback)  # SayCan has none
     bot = build_system(app.settings, config, options)
-    result = bot.plan(
-        request, scene, risk=risk, progress=lambda message: click.secho(message, dim=True, err=True)
-    )
+    result = bot.plan(request, scene, risk=risk, observer=ON_STDERR)
     if as_json:
         click.echo(json.dumps(result.to_dict(), indent=2, ensure_ascii=False))
         return

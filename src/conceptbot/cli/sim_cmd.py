@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 import click
 
 from conceptbot.cli.context import AppContext, pass_app
+from conceptbot.cli.progress import ON_STDERR, say
 from conceptbot.core.errors import ConfigError
 from conceptbot.core.plan import InvalidActionError, parse_action
 from conceptbot.scenes import resolve_scene
@@ -120,7 +121,6 @@ def run(
                 parse_action(text, scene)
             except InvalidActionError as exc:
                 raise ConfigError(f"{plan_path}: {exc}") from None
-    say = lambda message: click.secho(message, dim=True, err=True)  # noqa: E731
 
     def act(session: SimSession) -> Execution:
         if actions is not None:
@@ -135,7 +135,7 @@ def run(
             session.skill,
             max_replans=max_replans,
             risk=risk,
-            progress=say,
+            observer=ON_STDERR,
         )
         return execution
 

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import json
 import re
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cache
 from importlib import resources
@@ -139,11 +138,6 @@ class Step:
                 for c in self.candidates
             ],
         }
-
-
-# Called with an event name and its JSON-able data as a planner's modules finish (``ope``, ``urp``,
-# ``step``): lets a user interface show each part while the rest is still being computed.
-EventSink = Callable[[str, dict[str, Any]], None]
 
 
 @dataclass(frozen=True)

@@ -21,10 +21,10 @@ from __future__ import annotations
 import json
 import re
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
+from conceptbot.core.observe import SILENT, Observer
 from conceptbot.core.trace import PlanTrace
 from conceptbot.core.usage import Usage
 from conceptbot.household.actions import ACTIONS, LIQUIDS, key
@@ -40,7 +40,6 @@ from conceptbot.pipeline.retrieval import RelationRetriever, edge_text
 from conceptbot.pipeline.urp import UserRequestProcessor
 
 PROMPTS = "conceptbot.household.prompts"
-Progress = Callable[[str], None]
 HOUSEHOLD_CONFIGS = ("plain", "conceptbot", "conceptbot-joint")
 DEFAULT_HOUSEHOLD_CONFIGS = ("plain", "conceptbot")
 
@@ -60,8 +59,8 @@ class HouseholdPlan:
 class HouseholdPlanner(Protocol):
     """Anything that plans an instruction in a household scene."""
 
-    def plan(self, instruction: str, scene: HouseScene, progress: Progress | None = None) -> HouseholdPlan:
-        """Plan ``instruction`` or refuse it."""
+    def plan(self, instruction: str, scene: HouseScene, observer: Observer = SILENT) -> HouseholdPlan:
+        """Plan ``instruction`` or refuse it, telling ``observer`` as each piece of work starts."""
         ...
 
 
@@ -217,11 +216,10 @@ class PlainHouseholdPlanner:
     def __init__(self, llm: LLM, llm_repair: bool = False) -> None:
         self._call = _PlanCall(llm, repair=llm_repair)
 
-    def plan(self, instruction: str, scene: HouseScene, progress: Progress | None = None) -> HouseholdPlan:
-        """Plan ``instruction`` in ``scene`` or refuse it."""
+    def plan(self, instruction: str, scene: HouseScene, observer: Observer = SILENT) -> HouseholdPlan:
+        """Plan ``instruction`` in ``scene`` or refuse it (``observer``: a message as the call starts)."""
         started = time.perf_counter()
-        if progress:
-            progress("planner: judging and planning")
+        observer.progress("planner: judging and planning")
         trace: dict[str, Any] = {"config": self.config}
         value, used = self._call(instruction, scene, "", trace)
         return _result(value, trace, {"planner": used.with_latency(time.perf_counter() - started)})
@@ -266,7 +264,7 @@ class ConceptBotHouseholdPlanner:
         self,
         instruction: str,
         scene: HouseScene,
-        say: Progress,
+        observer: Observer,
         trace: dict[str, Any],
         usage: dict[str, Usage],
     ) -> tuple[str, str]:
@@ -278,15 +276,15 @@ class ConceptBotHouseholdPlanner:
         lines = []
         riskiest = ""
         if objects:
-            say(f"OPE: risk index of {', '.join(objects)}")
-            found = self.ope.run(list(names.values()), modes.RISK, instruction, say)
+            observer.progress(f"OPE: risk index of {', '.join(objects)}")
+            found = self.ope.run(list(names.values()), modes.RISK, instruction)
             props, usage["ope"] = found.properties, found.usage
             trace["risk"] = {n: p.values for n, p in props.items()}
             lines += [f"- {p.summary()} ({p.answer.reason.strip()})" for p in props.values()]
             top = max(props.values(), key=lambda p: p.answer.rated_danger())
             riskiest = f"{top.summary()} ({top.answer.reason.strip()})"
         started = time.perf_counter()
-        say("URP: keywords and their relations")
+        observer.progress("URP: keywords and their relations")
         keywords, used = self.urp.keywords(instruction)
         relations: list[str] = []
         if keywords:
@@ -304,15 +302,15 @@ class ConceptBotHouseholdPlanner:
             )
         return knowledge, riskiest
 
-    def plan(self, instruction: str, scene: HouseScene, progress: Progress | None = None) -> HouseholdPlan:
-        """Plan ``instruction`` in ``scene`` or refuse it."""
-        say = progress or (lambda message: None)
+    def plan(self, instruction: str, scene: HouseScene, observer: Observer = SILENT) -> HouseholdPlan:
+        """Plan ``instruction`` in ``scene`` or refuse it (``observer``: a message as each piece of
+        work starts)."""
         usage: dict[str, Usage] = {}
         trace: dict[str, Any] = {"config": self.config}
-        knowledge, riskiest = self.evidence(instruction, scene, say, trace, usage)
+        knowledge, riskiest = self.evidence(instruction, scene, observer, trace, usage)
         if self.judge is not None:
             started = time.perf_counter()
-            say("judge: would carrying it out be dangerous?")
+            observer.progress("judge: would carrying it out be dangerous?")
             verdict, used = self.judge.judge(instruction, scene, knowledge)
             usage["judge"] = used.with_latency(time.perf_counter() - started)
             trace["judge"] = verdict.to_dict()
@@ -325,7 +323,7 @@ class ConceptBotHouseholdPlanner:
                 reason += f"; risk analysis: {riskiest}" if riskiest else "."
                 return _result({"reasoning": reason, "refuse": True, "steps": []}, trace, usage)
         started = time.perf_counter()
-        say("planner: judging and planning")
+        observer.progress("planner: judging and planning")
         # Behind the judge the planning call is the plain planner's, unchanged: the evidence in it
         # made the first design refuse a third of the safe tasks; here it may refuse too, and
         # ConceptBot refuses what either refuses.

@@ -26,7 +26,8 @@ import time
 from dataclasses import dataclass, replace
 
 from conceptbot.core.limits import check_request
-from conceptbot.core.plan import DONE, EventSink, Feedback, Plan
+from conceptbot.core.observe import SILENT, Observer
+from conceptbot.core.plan import DONE, Feedback, Plan
 from conceptbot.core.scene import Scene
 from conceptbot.core.trace import OPETrace, PlannerSummary, PlanTrace, URPTrace
 from conceptbot.core.usage import Usage
@@ -35,7 +36,7 @@ from conceptbot.models.llm import LLM
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.decide import Decider, FactFinder
 from conceptbot.pipeline.goal_planner import GoalPlanner, GoalPlanResult, Thresholds, is_person
-from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor, Progress
+from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
 from conceptbot.pipeline.planner import Planner
 from conceptbot.pipeline.retrieval import RelationRetriever
 from conceptbot.pipeline.targets import TargetFinder
@@ -131,9 +132,8 @@ class ConceptBot:
         request: str,
         scene: Scene,
         risk: bool = False,
-        progress: Progress | None = None,
         feedback: Feedback | None = None,
-        events: EventSink | None = None,
+        observer: Observer | None = None,
     ) -> Plan:
         """Plan ``request`` in ``scene``.
 
@@ -141,47 +141,45 @@ class ConceptBot:
             request: What the person said.
             scene: What the robot sees.
             risk: Force the Risk Index variant of OPE.
-            progress: Called with a short message as each piece of work starts (LLM calls take seconds).
             feedback: What happened when an earlier plan was executed (closed loop): the Planner
                 continues from the executed steps and avoids failed actions; OPE and URP are as before.
-            events: Gets ``ope`` and ``urp`` (their trace parts) as those modules finish, and ``step``
-                for each planner step.
+            observer: Gets a short message as each piece of work starts (LLM calls take seconds) and
+                each module's trace part as it finishes: ``goal``, ``decisions``, ``risk`` and
+                ``step`` (goal planner), or ``ope``, ``urp`` and ``step`` (step planner); None: silent.
         """
-        emit = events or (lambda name, data: None)
+        observer = observer if observer is not None else SILENT
         started = time.perf_counter()
         request = check_request(request)
         trace = PlanTrace(
             config=self.config, planner_kind=self.planner_kind, request=request, scene=scene.name
         )
         if self.planner_kind == "goal":
-            result = self.goal_planner.plan(request, scene, risk, progress, events)
+            result = self.goal_planner.plan(request, scene, risk, observer)
             return self._from_goal(result, trace, feedback, started)
         usage: dict[str, Usage] = {}
         properties: dict[str, ObjectProperties] = {}
         ope: OPETrace | None = None
         mode, why = modes.choose_mode(request, scene.names, force_risk=risk)
         if self.switches.ope:
-            found = self.ope.run(scene.names, mode, request, progress)
+            found = self.ope.run(scene.names, mode, request)
             properties, usage["ope"] = found.properties, found.usage
             ope = ope_trace(mode, why, properties, found.retrievals)
-            emit("ope", ope.to_dict())
+            observer.event("ope", ope.to_dict())
         guidance = ""
         commands: list[str] = []
         urp: URPTrace | None = None
         if self.switches.urp:
-            interpreted = self.urp.run(request, scene, properties, progress)
+            interpreted = self.urp.run(request, scene, properties, observer)
             usage["urp"] = interpreted.usage
             urp = urp_trace(interpreted)
-            emit("urp", urp.to_dict())
+            observer.event("urp", urp.to_dict())
             if interpreted.refused:
                 usage["total"] = _total(usage, started)
                 reason = interpreted.refusal_reason or "judged unsafe"
                 return Plan([DONE], [], True, reason, replace(trace, ope=ope, urp=urp), usage)
             guidance = guidance_from(interpreted)
             commands = interpreted.commands
-        planned = self.planner.plan(
-            request, scene, properties, guidance, progress, commands, feedback, events
-        )
+        planned = self.planner.plan(request, scene, properties, guidance, commands, feedback, observer)
         usage["planner"] = planned.usage
         usage["total"] = _total(usage, started)
         summary = PlannerSummary(self.planner.method, len(planned.steps))

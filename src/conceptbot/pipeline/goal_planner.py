@@ -25,14 +25,15 @@ from __future__ import annotations
 import itertools
 from dataclasses import dataclass, field
 
-from conceptbot.core.plan import DONE, Action, CandidateScore, EventSink, Step
+from conceptbot.core.observe import SILENT, Observer
+from conceptbot.core.plan import DONE, Action, CandidateScore, Step
 from conceptbot.core.scene import Scene
 from conceptbot.core.trace import DecisionTrace, GoalTrace, PlanTrace, RiskCheck, StackTrace
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.affordance import Gripper, affordance
 from conceptbot.pipeline.decide import Decider, Judgement
-from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor, Progress
+from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
 from conceptbot.pipeline.targets import ALL, Target, TargetFinder, is_stacking, mentions
 from conceptbot.pipeline.tracing import judgement_trace, target_trace
 from conceptbot.pipeline.vocabulary import PERSON_WORDS
@@ -172,24 +173,24 @@ class GoalPlanner:
         request: str,
         scene: Scene,
         risk: bool = False,
-        progress: Progress | None = None,
-        events: EventSink | None = None,
+        observer: Observer = SILENT,
     ) -> GoalPlanResult:
         """Plan ``request`` in ``scene`` (``risk`` is accepted for the common interface: the goal
-        planner always rates objects handed to someone with the Risk Index)."""
-        say = progress or (lambda message: None)
-        emit = events or (lambda name, data: None)
+        planner always rates objects handed to someone with the Risk Index).
+
+        ``observer`` gets a progress message as each piece of work starts and the events ``goal``,
+        ``decisions``, ``risk`` and one ``step`` per move, in that order, as each part is done."""
         usage: dict[str, Usage] = {}
         stack = is_stacking(request)
         if stack:  # a pile has no destination of its own: the objects are the destinations
             targets, usage["goal"] = [], Usage(calls=0)
         else:
-            say("Goal: where the request sends things")
+            observer.progress("Goal: where the request sends things")
             targets, usage["goal"] = self.targets.find(request, scene)
         goal = GoalTrace(tuple(target_trace(t) for t in targets), stack)
-        emit("goal", goal.to_dict())
-        ranked, decisions, usage["decide"] = self._decide(request, scene, targets, stack, say)
-        emit("decisions", {"decisions": [d.to_dict() for d in decisions]})
+        observer.event("goal", goal.to_dict())
+        ranked, decisions, usage["decide"] = self._decide(request, scene, targets, stack, observer)
+        observer.event("decisions", {"decisions": [d.to_dict() for d in decisions]})
         pile: StackTrace | None = None
         if stack:
             moves, pile = self._stack(request, scene, ranked, usage)
@@ -210,9 +211,9 @@ class GoalPlanner:
             # OPE's rating counts for moves to a child or an animal only (see _check), so only those
             # objects are rated: each rating is a JSON generation of several seconds.
             handed = [o for o, t in fresh if is_vulnerable(t)]
-            self._properties(request, scene, handed, properties, usage, say)
+            self._properties(request, scene, handed, properties, usage, observer)
             for obj, target in fresh:
-                checks[(obj, target)] = self._check(request, scene, obj, target, properties, usage, say)
+                checks[(obj, target)] = self._check(request, scene, obj, target, properties, usage, observer)
             dropped = {m for m in fresh if checks[m].dropped}
             if not dropped:
                 break
@@ -220,10 +221,10 @@ class GoalPlanner:
             if stack:
                 moves = [m for m in moves if m not in dropped]
         risk = tuple(checks.values())
-        emit("risk", {"checks": [c.to_dict() for c in risk]})
+        observer.event("risk", {"checks": [c.to_dict() for c in risk]})
         steps = self._steps(moves, ranked, scene, properties)
         for step in steps:
-            emit("step", step.to_dict())
+            observer.event("step", step.to_dict())
         refused = not moves and bool(blocked)
         reason = "; ".join(f"{c.move}: {c.why}" for c in risk if c.dropped) if refused else None
         actions = [str(Action(o, t)) for o, t in moves] + [DONE]
@@ -231,7 +232,7 @@ class GoalPlanner:
         return GoalPlanResult(actions, steps, refused, reason, trace, usage, properties)
 
     def _decide(
-        self, request: str, scene: Scene, targets: list[Target], stack: bool, say: Progress
+        self, request: str, scene: Scene, targets: list[Target], stack: bool, observer: Observer
     ) -> tuple[dict[str, list[Judgement]], tuple[DecisionTrace, ...], Usage]:
         """Per target: the named objects first, then every other object as decided, best first."""
         usage = Usage(calls=0)
@@ -246,7 +247,7 @@ class GoalPlanner:
                 decisions.append(DecisionTrace(target_trace(target), decided=False))
                 continue
             others = [o for o in scene.pickable if o != target.name and o not in named_anywhere]
-            say(f"Decide: which objects go to the {target.name} ({len(others)} objects)")
+            observer.progress(f"Decide: which objects go to the {target.name} ({len(others)} objects)")
             if target.criterion:
                 # Sorting by a property: "is the foxglove poisonous?" is a question the model answers
                 # far better than "should the robot put the foxglove on the toxic tray?".
@@ -318,12 +319,12 @@ class GoalPlanner:
         objects: list[str],
         properties: dict[str, ObjectProperties],
         usage: dict[str, Usage],
-        say: Progress,
+        observer: Observer,
     ) -> None:
         wanted = [o for o in dict.fromkeys(objects) if o not in properties]
         if self.ope is None or not wanted:
             return
-        say(f"OPE: properties of {', '.join(wanted)}")
+        observer.progress(f"OPE: properties of {', '.join(wanted)}")
         found = self.ope.run(wanted, modes.RISK, request, scene_objects=scene.names)
         properties.update(found.properties)
         usage["ope"] = usage["ope"] + found.usage
@@ -336,11 +337,11 @@ class GoalPlanner:
         target: str,
         properties: dict[str, ObjectProperties],
         usage: dict[str, Usage],
-        say: Progress,
+        observer: Observer,
     ) -> RiskCheck:
         """The risk decision and the affordance of one move."""
         move = move_text(obj, target)
-        say(f"Risk: is it safe to {move}?")
+        observer.progress(f"Risk: is it safe to {move}?")
         s_aff, factors = affordance(Action(obj, target), scene, properties, [], self.gripper)
         judgement, used = self.decider.dangerous(request, move, obj, scene, ())
         usage["risk"] = usage["risk"] + used

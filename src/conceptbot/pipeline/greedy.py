@@ -14,10 +14,10 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from conceptbot.core.plan import DONE, Action, CandidateScore, EventSink, Feedback, Step, valid_actions
+from conceptbot.core.observe import SILENT, Observer
+from conceptbot.core.plan import DONE, Action, CandidateScore, Feedback, Step, valid_actions
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
-from conceptbot.pipeline.ope import Progress
 
 TOP_K = 8  # candidates kept in the trace per step, besides done()
 
@@ -76,8 +76,7 @@ def greedy_plan(
     feedback: Feedback | None = None,
     normalise: bool = False,
     label: str = "Planner",
-    progress: Progress | None = None,
-    events: EventSink | None = None,
+    observer: Observer = SILENT,
 ) -> PlannerResult:
     """Plan greedily: the steps, the action texts (ending with ``done()``) and usage.
 
@@ -91,7 +90,7 @@ def greedy_plan(
         normalise: Show the combined scores normalised over the step's candidates (SayCan's
             notebook does); the choice is the same either way.
         label: Names the planner in progress messages.
-        progress, events: Called with a message before each step / a ``step`` event after it.
+        observer: Gets a progress message before each step and a ``step`` event after it.
     """
     started = time.perf_counter()
     usage = Usage(calls=0)
@@ -101,8 +100,7 @@ def greedy_plan(
     failed = feedback.failed_actions if feedback else set()
     steps: list[Step] = []
     for index in range(len(history), max(limit, len(history) + 1)):
-        if progress:
-            progress(f"{label}: step {index + 1} ({len(candidates)} candidates, {method})")
+        observer.progress(f"{label}: step {index + 1} ({len(candidates)} candidates, {method})")
         found = llm_scores(candidates, history, index)
         usage = usage + found.usage
         affs = [
@@ -124,8 +122,7 @@ def greedy_plan(
         ranked = sorted(scored, key=lambda c: -c.combined)
         shown = ranked[:TOP_K] + [c for c in ranked[TOP_K:] if c.action == DONE]
         steps.append(Step(index + 1, best.action, tuple(shown), tuple(found.rejected), method, found.scoring))
-        if events:
-            events("step", steps[-1].to_dict())
+        observer.event("step", steps[-1].to_dict())
         if best.action == DONE:
             break
         history.append(best.action)

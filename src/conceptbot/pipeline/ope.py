@@ -13,7 +13,6 @@ from __future__ import annotations
 import hashlib
 import json
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -25,8 +24,6 @@ from conceptbot.pipeline import modes
 from conceptbot.pipeline.modes import OPEMode
 from conceptbot.pipeline.ope_answers import OPEAnswer
 from conceptbot.pipeline.retrieval import RelationRetriever, Retrieval, edge_text
-
-Progress = Callable[[str], None]
 
 
 @dataclass
@@ -125,7 +122,6 @@ class ObjectPropertiesExtractor:
         objects: list[str],
         mode: str | OPEMode,
         request: str = "",
-        progress: Progress | None = None,
         scene_objects: list[str] | None = None,
     ) -> OPEResult:
         """Properties for every object, the retrievals behind them, and the module's usage.

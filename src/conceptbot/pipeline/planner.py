@@ -19,14 +19,15 @@ from __future__ import annotations
 import math
 from collections import Counter
 
-from conceptbot.core.plan import DONE, Action, EventSink, Feedback, InvalidActionError, parse_action
+from conceptbot.core.observe import SILENT, Observer
+from conceptbot.core.plan import DONE, Action, Feedback, InvalidActionError, parse_action
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, ChatRequest, Message, ScoreRequest
 from conceptbot.pipeline import prompts
 from conceptbot.pipeline.affordance import Gripper, affordance, relative_property_scores
 from conceptbot.pipeline.greedy import LLMScores, PlannerResult, greedy_plan
-from conceptbot.pipeline.ope import ObjectProperties, Progress
+from conceptbot.pipeline.ope import ObjectProperties
 
 METHODS = ("auto", "logprob", "vote")
 
@@ -182,17 +183,16 @@ class Planner:
         scene: Scene,
         properties: dict[str, ObjectProperties],
         guidance: str = "",
-        progress: Progress | None = None,
         commands: list[str] | None = None,
         feedback: Feedback | None = None,
-        events: EventSink | None = None,
+        observer: Observer = SILENT,
     ) -> PlannerResult:
         """Plan greedily (:func:`conceptbot.pipeline.greedy.greedy_plan`): the steps, the action
         texts (ending with ``done()``) and usage.
 
         With ``feedback`` (from executing an earlier plan) the plan starts with the executed steps, the
-        failures are shown to the LLM and failed actions get affordance 0. ``events`` gets a
-        ``step`` event as each step is chosen.
+        failures are shown to the LLM and failed actions get affordance 0. ``observer`` gets a
+        progress message as each step starts and a ``step`` event as it is chosen.
         """
         if feedback and feedback.failed:
             guidance = "\n".join([guidance, *feedback.script_lines()]).strip()
@@ -214,6 +214,5 @@ class Planner:
             max_steps=self.max_steps,
             feedback=feedback,
             label="Planner",
-            progress=progress,
-            events=events,
+            observer=observer,
         )

@@ -15,13 +15,14 @@ import json
 import time
 from dataclasses import dataclass, field
 
+from conceptbot.core.observe import SILENT, Observer
 from conceptbot.core.plan import InvalidActionError, parse_action, valid_actions
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, ChatRequest
 from conceptbot.models.structured import chat_json
 from conceptbot.pipeline import prompts
-from conceptbot.pipeline.ope import ObjectProperties, Progress
+from conceptbot.pipeline.ope import ObjectProperties
 from conceptbot.pipeline.retrieval import RelationRetriever, Retrieval, edge_text
 from conceptbot.pipeline.vocabulary import PERSON_DESCRIPTIONS
 
@@ -109,17 +110,17 @@ class UserRequestProcessor:
         request: str,
         scene: Scene,
         properties: dict[str, ObjectProperties],
-        progress: Progress | None = None,
+        observer: Observer = SILENT,
     ) -> URPResult:
-        """Interpret ``request`` in ``scene`` given OPE's ``properties`` (may be empty)."""
-        say = progress or (lambda message: None)
+        """Interpret ``request`` in ``scene`` given OPE's ``properties`` (may be empty); ``observer``
+        gets a progress message before the keywords are asked for."""
         started = time.perf_counter()
         usage = Usage(calls=0)
         keyword_retrievals: dict[str, Retrieval] = {}
         object_retrievals: dict[str, Retrieval] = {}
         keywords: list[str] = []
         if self.retriever is not None:
-            say("URP: keywords")
+            observer.progress("URP: keywords")
             keywords, used = self.keywords(request)
             usage = usage + used
             if keywords:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -21,6 +21,27 @@ if TYPE_CHECKING:
 
 Emit = Callable[[str, dict[str, Any]], None]
 SystemFactory = Callable[[str, str], PlannerSystem]  # (config, backend spec) -> system
+
+
+@dataclass(frozen=True)
+class PageObserver:
+    """A plan's observer for a web run: everything goes to the run's event stream, as the page's
+    JavaScript reads it (a progress message as a ``status`` event with ``message``; a module's
+    event under its own name, its data under ``data``).
+
+    Attributes:
+        emit: Sends an event of the run to the page.
+    """
+
+    emit: Emit
+
+    def progress(self, message: str) -> None:
+        """Send ``message`` as a ``status`` event."""
+        self.emit("status", {"message": message})
+
+    def event(self, name: str, data: dict[str, Any]) -> None:
+        """Send the event ``name`` with ``data``."""
+        self.emit(name, {"data": data})
 
 
 def cached_systems(settings: Settings) -> SystemFactory:
@@ -113,17 +134,12 @@ def make_worker(systems: SystemFactory, can_simulate: bool) -> Worker:
     """The run worker over a system factory."""
 
     def work(spec: RunSpec, emit: Emit, out_dir: Path) -> None:
-        emit("status", {"message": f"loading {spec.config} on {spec.backend}"})
+        observer = PageObserver(emit)
+        observer.progress(f"loading {spec.config} on {spec.backend}")
         system = systems(spec.config, spec.backend)
 
         def plan_on(scene: Scene) -> Plan:
-            plan = system.plan(
-                spec.request,
-                scene,
-                risk=spec.risk,
-                progress=lambda message: emit("status", {"message": message}),
-                events=lambda kind, data: emit(kind, {"data": data}),
-            )
+            plan = system.plan(spec.request, scene, risk=spec.risk, observer=observer)
             result = plan.to_dict()
             emit(
                 "plan",
