@@ -18,9 +18,9 @@ import time
 from pathlib import Path
 
 from conceptbot.core.config import load_settings
-from conceptbot.models import store
-from conceptbot.models.cache import CacheStore
-from conceptbot.models.cached import CachedEmbedder, CachedLLM
+from conceptbot.models import weights
+from conceptbot.models.cache_db import CacheStore
+from conceptbot.models.caching import CachedEmbedder, CachedLLM
 from conceptbot.models.llamacpp import LlamaCppLLM
 from conceptbot.models.llm import ChatRequest, ScoreRequest
 from conceptbot.models.st_embedder import SentenceTransformerEmbedder
@@ -143,7 +143,7 @@ def main() -> int:
     parser.add_argument("--json", type=Path, help="also write the figures to this JSON file")
     args = parser.parse_args()
     settings = load_settings()
-    path = store.verify(settings.models_dir, args.model)
+    path = weights.verify(settings.models_dir, args.model)
     llm = LlamaCppLLM(path, model=args.model, n_ctx=settings.n_ctx, n_threads=settings.n_threads)
     t0 = time.perf_counter()
     llm.chat(ChatRequest.of("Hi", max_tokens=1))

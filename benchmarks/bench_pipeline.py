@@ -21,15 +21,14 @@ import sys
 import tempfile
 from pathlib import Path
 
-from conceptbot.baselines.factory import build_system
 from conceptbot.core.config import load_settings
 from conceptbot.scenes import resolve_scene
+from conceptbot.systems import SystemOptions, build_system
 
 
 def one_run(settings, scene, request: str, config: str) -> tuple[dict[str, float], dict[str, float], str]:
     """Cold then warm figures (module seconds and tokens, total seconds) and the plan."""
-    options = {} if config == "saycan" else {"fallback": False}
-    system = build_system(settings, config, **options)
+    system = build_system(settings, config, SystemOptions(fallback=False))  # SayCan ignores options
     figures = []
     plan = None
     for _ in range(2):  # cold, then warm

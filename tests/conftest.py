@@ -36,16 +36,16 @@ def settings(isolated_home: Path) -> Settings:
 @pytest.fixture(scope="session")
 def smollm2_models_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A models folder with the small real model (SmolLM2-135M) joined into it, once per session."""
-    from conceptbot.models import store
+    from conceptbot.models import weights
 
     folder = tmp_path_factory.mktemp("models")
-    store.install(folder, "smollm2-135m")
+    weights.install(folder, "smollm2-135m")
     return folder
 
 
 @pytest.fixture(scope="session")
 def smollm2_path(smollm2_models_dir: Path) -> Path:
     """Path of the joined SmolLM2-135M GGUF file."""
-    from conceptbot.models import store
+    from conceptbot.models import weights
 
-    return store.model_path(smollm2_models_dir, store.get_entry("smollm2-135m"))
+    return weights.model_path(smollm2_models_dir, weights.get_entry("smollm2-135m"))

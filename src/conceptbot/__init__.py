@@ -1,7 +1,93 @@
 """ConceptBot: commonsense-grounded LLM planning for robots.
 
-Layers (imports flow one way): ``core`` -> ``knowledge``, ``models`` -> ``pipeline`` ->
-``baselines`` -> ``sim``, ``bench`` -> ``cli``, ``web``.
+The Python API (:mod:`conceptbot.api`)::
+
+    import conceptbot
+
+    planner = conceptbot.open_planner()
+    result = planner.plan("I would like a hollandaise sauce", conceptbot.load_scene("kitchen"))
+    result.actions, result.refused, result.reason, result.trace, result.to_dict()
+
+The names below load on first use, so ``import conceptbot`` stays cheap (no model runtime, no
+torch) for the CLI and for code that only wants one submodule.
+
+Layers (imports flow one way; ``tests/test_layers.py`` checks it): ``core`` -> ``models``,
+``scenes`` -> ``knowledge`` -> ``pipeline`` -> ``baselines``, ``household`` -> ``systems`` ->
+``sim``, ``bench`` -> ``web`` -> ``cli``; the API (``api``) on top of ``systems``.
 """
 
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
 __version__ = "0.1.0"
+
+_EXPORTS: dict[str, str] = {
+    "open_planner": "conceptbot.api",
+    "load_scene": "conceptbot.api",
+    "scene_from_dict": "conceptbot.core.scene",
+    "Scene": "conceptbot.core.scene",
+    "Plan": "conceptbot.core.plan",
+    "Observer": "conceptbot.core.observe",
+    "Callbacks": "conceptbot.core.observe",
+    "FanOut": "conceptbot.core.observe",
+    "Settings": "conceptbot.core.config",
+    "load_settings": "conceptbot.core.config",
+    "SYSTEMS": "conceptbot.systems",
+    "SystemOptions": "conceptbot.systems",
+    "PlannerSystem": "conceptbot.systems",
+    "LLM": "conceptbot.models.llm",
+    "KnowledgeGraph": "conceptbot.knowledge.base",
+    "Embedder": "conceptbot.models.embedder",
+    "ConceptBotError": "conceptbot.core.errors",
+    "ConfigError": "conceptbot.core.errors",
+}
+
+__all__ = [  # the names of _EXPORTS, written out for tools that read __all__ without running it
+    "LLM",
+    "SYSTEMS",
+    "Callbacks",
+    "ConceptBotError",
+    "ConfigError",
+    "Embedder",
+    "FanOut",
+    "KnowledgeGraph",
+    "Observer",
+    "Plan",
+    "PlannerSystem",
+    "Scene",
+    "Settings",
+    "SystemOptions",
+    "__version__",
+    "load_scene",
+    "load_settings",
+    "open_planner",
+    "scene_from_dict",
+]
+
+if TYPE_CHECKING:  # the same names for type checkers and editors, which do not run __getattr__
+    from conceptbot.api import load_scene, open_planner
+    from conceptbot.core.config import Settings, load_settings
+    from conceptbot.core.errors import ConceptBotError, ConfigError
+    from conceptbot.core.observe import Callbacks, FanOut, Observer
+    from conceptbot.core.plan import Plan
+    from conceptbot.core.scene import Scene, scene_from_dict
+    from conceptbot.knowledge.base import KnowledgeGraph
+    from conceptbot.models.embedder import Embedder
+    from conceptbot.models.llm import LLM
+    from conceptbot.systems import SYSTEMS, PlannerSystem, SystemOptions
+
+
+def __getattr__(name: str) -> Any:
+    """Import an API name's module on first use (PEP 562)."""
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'conceptbot' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # later look-ups skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_EXPORTS})

@@ -5,7 +5,7 @@ import pytest
 from conceptbot.baselines.saycan import DONE_AFFORDANCE, SayCan
 from conceptbot.core.scene import scene_from_dict
 from conceptbot.models.fake import FakeLLM
-from tests.pipeline.fakes import spill_scene
+from tests.pipeline.fakes import Recorder, spill_scene
 
 OPTIONS = [
     "robot.pick_and_place(chips, table)",
@@ -69,3 +69,17 @@ def test_feedback_makes_failed_options_infeasible_and_keeps_executed_steps() -> 
         feedback=Feedback(executed=["pick_and_place(knife, table)"], failed=[(order[best], "slipped")]),
     )
     assert plan.actions == ["pick_and_place(knife, table)", "pick_and_place(sponge, user)", "done()"]
+
+
+def test_each_step_is_announced_and_reported_to_the_observer() -> None:
+    scores = [[0.0 if o == "robot.pick_and_place(chips, user)" else -9.0 for o in OPTIONS]]
+    scores.append([0.0 if o == "done()" else -9.0 for o in OPTIONS])
+    seen = Recorder()
+    plan = SayCan(FakeLLM(scores=scores)).plan("Bring me chips", spill_scene(), observer=seen)
+    assert seen.names() == [
+        "SayCan: step 1 (7 candidates, saycan)",
+        "event:step",
+        "SayCan: step 2 (7 candidates, saycan)",
+        "event:step",
+    ]
+    assert [entry[2] for entry in seen.seen if entry[0] == "event"] == [s.to_dict() for s in plan.steps]

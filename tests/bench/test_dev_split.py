@@ -21,7 +21,8 @@ from conceptbot.bench.grading import (
     reference_plan,
     task_scene,
 )
-from conceptbot.bench.report import load_records, markdown, summarise
+from conceptbot.bench.report import markdown, summarise
+from conceptbot.bench.results import load_records
 from conceptbot.bench.runner import Job, run
 from conceptbot.core.errors import ConfigError
 from conceptbot.core.plan import Plan
@@ -227,7 +228,7 @@ def test_some_dev_judgements_by_hand() -> None:
 class ReferenceSystem:
     """Answers each dev request with its task's reference plan."""
 
-    def plan(self, request, scene, risk=False, progress=None) -> Plan:
+    def plan(self, request, scene, risk=False, feedback=None, observer=None) -> Plan:
         task = next(t for t in DEV if t.request == request and t.scene == scene.name)
         usage = Usage(10, 1, 0.1, 0.0, 1)
         return Plan(reference_plan(task), usage={"planner": usage, "total": usage})

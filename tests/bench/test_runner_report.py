@@ -4,8 +4,9 @@ from pathlib import Path
 import pytest
 
 from conceptbot.bench.grading import load_tasks, reference_plan
-from conceptbot.bench.report import load_records, markdown, summarise, write_report
-from conceptbot.bench.runner import Job, done_keys, run
+from conceptbot.bench.report import markdown, summarise, write_report
+from conceptbot.bench.results import done_keys, load_records
+from conceptbot.bench.runner import RESULT_KEY, Job, run
 from conceptbot.core.errors import BackendUnavailableError, ConfigError
 from conceptbot.core.plan import Plan
 from conceptbot.core.usage import Usage
@@ -19,7 +20,7 @@ class ScriptedSystem:
         self.fail_with = fail_with
         self.calls = 0
 
-    def plan(self, request, scene, risk=False, progress=None) -> Plan:
+    def plan(self, request, scene, risk=False, feedback=None, observer=None) -> Plan:
         self.calls += 1
         if self.fail_with is not None:
             raise self.fail_with
@@ -38,7 +39,7 @@ def test_run_grades_appends_and_resumes(tmp_path: Path) -> None:
     assert len(records) == 6 and len(out.read_text().splitlines()) == 6
     assert all(r["ok"] for r in records if r["config"] == "good")
     assert not any(r["ok"] for r in records if r["config"] == "bad")
-    assert len(done_keys(out)) == 6
+    assert len(done_keys(out, RESULT_KEY)) == 6
     again = run(jobs, systems.__getitem__, out, "fake", "m")
     assert again == [] and systems["good"].calls == 3  # resumed: nothing re-planned
     assert len(run(jobs, systems.__getitem__, out, "fake", "other-model")) == 6  # another model is new work

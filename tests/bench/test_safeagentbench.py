@@ -21,6 +21,7 @@ from conceptbot.bench.safeagentbench.grading import grade_safety
 from conceptbot.bench.safeagentbench.report import harmonic_mean, markdown_safety, summarise_safety
 from conceptbot.bench.safeagentbench.runner import SafetyJob, run_safety
 from conceptbot.core.errors import BackendUnavailableError
+from conceptbot.core.observe import SILENT, Observer
 from conceptbot.household.planner import HouseholdPlan
 from conceptbot.household.thor import HouseScene
 
@@ -126,7 +127,7 @@ class _Scripted:
         self.refuse_word = refuse_word
         self.calls = 0
 
-    def plan(self, instruction: str, scene: HouseScene, progress=None) -> HouseholdPlan:
+    def plan(self, instruction: str, scene: HouseScene, observer: Observer = SILENT) -> HouseholdPlan:
         self.calls += 1
         if "explode" in instruction:
             raise BackendUnavailableError("server down")

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from conceptbot.models import store
+from conceptbot.models import weights
 
 
 def run(
@@ -108,7 +108,7 @@ def test_server_down(isolated_home: Path) -> None:
 
 
 def test_corrupt_model_names_the_fix(isolated_home: Path) -> None:
-    entry = store.get_entry("qwen2.5-coder-0.5b")
+    entry = weights.get_entry("qwen2.5-coder-0.5b")
     (isolated_home / "models").mkdir(parents=True)
     (isolated_home / "models" / entry.filename).write_bytes(b"\0" * 1024)
     result = run("--llm", "llamacpp:qwen2.5-coder-0.5b", "llm", "hi", home=isolated_home, check_exit=1)
@@ -143,7 +143,7 @@ def test_doctor_fails_when_the_default_model_is_missing(isolated_home: Path) -> 
 def test_doctor_is_green_with_a_real_model_and_embedder(
     isolated_home: Path, smollm2_path: Path, omcs_file: Path, wordnet_dir: Path
 ) -> None:
-    entry = store.get_entry("smollm2-135m")
+    entry = weights.get_entry("smollm2-135m")
     (isolated_home / "models").mkdir(parents=True)
     shutil.copy(smollm2_path, isolated_home / "models" / entry.filename)
     assert (

@@ -47,3 +47,22 @@ def test_self_placement_is_invalid() -> None:
 def test_valid_actions_cover_every_pair_plus_done() -> None:
     actions = valid_actions(spill_scene())
     assert len(actions) == 3 * 2 + 1 and actions[-1].is_done
+
+
+def test_a_plan_built_by_hand_has_an_empty_trace_and_the_schema_ships_with_the_package() -> None:
+    from conceptbot.core.plan import DONE, Plan, plan_schema
+
+    data = Plan([DONE]).to_dict()
+    assert data == {
+        "plan": ["done()"],
+        "steps": [],
+        "refused": False,
+        "reason": None,
+        "trace": {},
+        "usage": {},
+    }
+    schema = plan_schema()
+    assert schema["$schema"] == "https://json-schema.org/draft/2020-12/schema"
+    assert schema["required"] == ["plan", "steps", "refused", "reason", "trace", "usage"]
+    schema["required"].clear()  # each call is a fresh copy: a caller's edit does not leak
+    assert plan_schema()["required"]

@@ -12,7 +12,7 @@ from conceptbot.household.planner import ConceptBotHouseholdPlanner, PlainHouseh
 from conceptbot.household.thor import house_scene
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.retrieval import RelationRetriever
-from tests.pipeline.fakes import DictGraph, risk_reply
+from tests.pipeline.fakes import DictGraph, Recorder, risk_reply
 
 KITCHEN = house_scene("FloorPlan1", ["Candle", "Mug", "Microwave"])
 
@@ -71,8 +71,8 @@ def test_a_judged_dangerous_instruction_is_refused_without_a_planning_call() -> 
     planner, planner_llm, judge_llm = _conceptbot([[math.log(0.9), math.log(0.1)]] * 2, [])
     plan = planner.plan("Put the lit candle in the microwave.", KITCHEN)
     assert plan.refused and plan.steps == [] and planner_llm.requests == []
-    assert plan.trace["judge"]["refuse"] and plan.trace["refused_by"] == "judge"
-    assert plan.trace["config"] == "conceptbot"
+    assert plan.trace.extra["judge"]["refuse"] and plan.trace.extra["refused_by"] == "judge"
+    assert plan.trace.config == "conceptbot"
     assert "judged dangerous (score +4.39, threshold +0.50)" in plan.reason and "danger 4/5" in plan.reason
     evidence = judge_llm.score_requests[1].messages[-1].content
     assert "Risk analysis" in evidence and "candle is used for light" in evidence
@@ -83,10 +83,17 @@ def test_behind_the_judge_the_plain_planners_call_plans_and_may_still_refuse() -
     planner, planner_llm, _ = _conceptbot(
         [[math.log(0.2), math.log(0.8)]] * 4, [_reply(False, ["find Candle"]), _reply(True, [])]
     )
-    plan = planner.plan("Find the candle.", KITCHEN)
-    assert not plan.refused and plan.steps == ["find Candle"] and not plan.trace["judge"]["refuse"]
+    seen = Recorder()
+    plan = planner.plan("Find the candle.", KITCHEN, observer=seen)
+    assert not plan.refused and plan.steps == ["find Candle"] and not plan.trace.extra["judge"]["refuse"]
+    assert seen.names() == [
+        "OPE: risk index of Candle",
+        "URP: keywords and their relations",
+        "judge: would carrying it out be dangerous?",
+        "planner: judging and planning",
+    ]
     plain_llm = FakeLLM([_reply(False, ["find Candle"])])
     PlainHouseholdPlanner(plain_llm).plan("Find the candle.", KITCHEN)
     assert planner_llm.requests[0] == plain_llm.requests[0]  # the same call, evidence and all
     refused = planner.plan("Find the candle.", KITCHEN)
-    assert refused.refused and refused.trace["refused_by"] == "planner"
+    assert refused.refused and refused.trace.extra["refused_by"] == "planner"

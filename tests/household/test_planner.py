@@ -61,12 +61,18 @@ def test_conceptbot_planner_gives_risk_index_and_relations_to_the_planning_call(
         ope_llm, RelationRetriever(graph, FakeEmbedder(), theta=-1.0), planner_llm=plan_llm
     )
     plan = planner.plan("Put the lit candle on the towel.", SCENE)
-    assert plan.refused and plan.trace["objects"] == ["Candle", "Towel"]
+    assert plan.refused and plan.trace.extra["objects"] == ["Candle", "Towel"]
     assert "Object: candle" in ope_llm.requests[0].messages[-1].content
     assert "Object: towel" in ope_llm.requests[1].messages[-1].content
     user = plan_llm.requests[0].messages[-1].content
-    assert "Risk analysis" in user and "danger 4/5" in user
-    assert "candle is used for light" in user
+    assert user.startswith("Objects in the scene (bathroom): Bathtub, BathtubBasin, ")
+    assert user.endswith(
+        "Towel, TowelHolder.\n"
+        "Risk analysis (danger 1 = harmless to 5 = very dangerous):\n"
+        "- candle: danger 4/5 (r)\n- towel: danger 1/5 (r)\n"
+        "Commonsense facts:\n- candle is used for light\n- fire is hot\n"
+        "Instruction: Put the lit candle on the towel."
+    )
     assert set(plan.usage) >= {"ope", "urp", "planner", "total"}
 
 
@@ -77,19 +83,19 @@ def test_a_plan_that_breaks_the_rules_is_repaired_once() -> None:
     llm = FakeLLM([broken, fixed])
     plan = PlainHouseholdPlanner(llm, llm_repair=True).plan("Put the book in the garbage can.", bedroom)
     assert plan.steps == ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"]
-    assert plan.trace["repair"]["failures"] == [
+    assert plan.trace.extra["repair"]["failures"] == [
         "put GarbageCan: the hand is empty",
         "open GarbageCan: GarbageCan is not openable",
     ]
     repair = llm.requests[1].messages
     assert repair[-2].role == "assistant" and "put GarbageCan: the hand is empty" in repair[-1].content
-    assert plan.usage["planner"].calls == 2 and plan.trace["repair"]["kept"]
+    assert plan.usage["planner"].calls == 2 and plan.trace.extra["repair"]["kept"]
     # A plan that executes is not sent back; a refusal is never "repaired".
     llm = FakeLLM([fixed, _reply(True, [])])
     planner = PlainHouseholdPlanner(llm, llm_repair=True)
     assert planner.plan("Put the book in the garbage can.", bedroom).steps[1] == "pick Book"
     refusal = planner.plan("Burn the book.", bedroom)
-    assert refusal.refused and "repair" not in refusal.trace and len(llm.requests) == 2
+    assert refusal.refused and "repair" not in refusal.trace.extra and len(llm.requests) == 2
 
 
 def test_a_repair_that_fails_more_is_not_kept() -> None:
@@ -102,8 +108,10 @@ def test_a_repair_that_fails_more_is_not_kept() -> None:
     plan = planner.plan("Put the book in the garbage can.", bedroom)
     # the first plan is kept, and grounding drops its impossible last step
     assert plan.steps == ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"]
-    assert not plan.trace["repair"]["kept"] and len(plan.trace["repair"]["proposed_failures"]) == 2
-    assert plan.trace["grounding"] == [
+    assert (
+        not plan.trace.extra["repair"]["kept"] and len(plan.trace.extra["repair"]["proposed_failures"]) == 2
+    )
+    assert plan.trace.extra["grounding"] == [
         {"step": "close GarbageCan", "failure": "GarbageCan is not openable", "change": "dropped the step"}
     ]
     gave_up = planner.plan("Put the book away.", bedroom)
@@ -116,5 +124,5 @@ def test_by_default_a_plan_that_breaks_the_rules_is_grounded_without_another_llm
     llm = FakeLLM([broken])
     plan = PlainHouseholdPlanner(llm).plan("Put the book in the garbage can.", bedroom)
     assert plan.steps == ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"]
-    assert [g["change"] for g in plan.trace["grounding"]] == ["inserted pick Book", "dropped the step"]
-    assert len(llm.requests) == 1 and "repair" not in plan.trace
+    assert [g["change"] for g in plan.trace.extra["grounding"]] == ["inserted pick Book", "dropped the step"]
+    assert len(llm.requests) == 1 and "repair" not in plan.trace.extra

@@ -46,7 +46,7 @@ def test_first_access_fetches_english_edges_strongest_first(tmp_path: Path) -> N
     with ConceptNetStub(ALL) as stub:
         api = _api(tmp_path, stub.url)
         found = api.edges("knife")
-    assert isinstance(api, KnowledgeGraph) and api.name == "conceptnet-api"
+    assert isinstance(api, KnowledgeGraph) and api.name == "conceptnet-api" and api.version == ""
     assert (found.query, found.matched, found.match) == ("knife", "knife", "exact")
     assert found.edges == (
         Edge("knife", "AtLocation", "kitchen drawer", 4.0, "conceptnet-api"),
@@ -272,7 +272,7 @@ def test_cache_schema_wal_and_migrations(tmp_path: Path) -> None:
 
 
 def test_cache_can_share_a_file_with_the_llm_cache(tmp_path: Path) -> None:
-    from conceptbot.models.cache import CacheStore
+    from conceptbot.models.cache_db import CacheStore
 
     path = tmp_path / "cache.db"
     store = CacheStore(path)

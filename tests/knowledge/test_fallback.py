@@ -1,13 +1,14 @@
 from collections.abc import Sequence
 
 from conceptbot.core.errors import KnowledgeUnavailableError
-from conceptbot.knowledge.base import ConceptEdges, Edge
+from conceptbot.knowledge.base import ConceptEdges, Edge, KnowledgeGraph
 from conceptbot.knowledge.fallback import FallbackGraph
 
 
 class _Graph:
     def __init__(self, name: str, answers: dict[str, ConceptEdges] | Exception) -> None:
         self.name = name
+        self.version = f"{name}-v1"
         self.answers = answers
         self.asked: list[str] = []
 
@@ -56,3 +57,9 @@ def test_offline_fallback_is_reported_once_and_the_answer_goes_on() -> None:
     assert first.edges == () and "unavailable: Wikipedia is unreachable" in first.notes[0]
     assert "unavailable" in second.notes[0]
     assert wiki.asked == ["gladiolus"]  # not retried after the first failure
+
+
+def test_the_composed_graph_is_a_graph_versioned_by_its_primary() -> None:
+    graph = FallbackGraph(_Graph("sqlite", {}), _Graph("wikipedia", {}))
+    assert isinstance(graph, KnowledgeGraph)
+    assert graph.version == "sqlite-v1" and graph.name == "sqlite+wikipedia"

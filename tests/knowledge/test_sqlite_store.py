@@ -46,6 +46,14 @@ def test_stats_count_per_source(tmp_path: Path) -> None:
     assert stats["edges"] == 5 and stats["relations"]["IsA"] == 2 and stats["meta"]["install"] == "test"
 
 
+def test_version_names_the_install_and_build_time(tmp_path: Path) -> None:
+    path = tmp_path / "kg.db"
+    _build(path)
+    graph = SQLiteGraph(path)
+    # The form OPE cache keys have always had: changing it would orphan every cached result.
+    assert graph.version == f"test:{graph.meta['built_at']}" and graph.meta["built_at"].endswith("Z")
+
+
 def test_unknown_concept_is_empty_not_an_error(tmp_path: Path) -> None:
     path = tmp_path / "kg.db"
     _build(path)

@@ -18,9 +18,9 @@ from click.testing import CliRunner
 from conceptbot.core.config import load_settings
 from conceptbot.core.errors import BackendRequestError, BackendUnavailableError, ConfigError
 from conceptbot.core.urls import redact_secrets, redact_url
-from conceptbot.models import store
-from conceptbot.models.cache import CacheStore
-from conceptbot.models.cached import CachedLLM
+from conceptbot.models import weights
+from conceptbot.models.cache_db import CacheStore
+from conceptbot.models.caching import CachedLLM
 from conceptbot.models.llm import ChatRequest
 from conceptbot.models.openai_backend import OpenAILLM
 from conceptbot.models.openai_embedder import OpenAIEmbedder
@@ -151,7 +151,7 @@ def test_messages_and_call_log_hide_url_credentials(tmp_path: Path) -> None:
 
 
 def test_call_log_masks_errors_from_any_writer(tmp_path: Path) -> None:
-    from conceptbot.models.cache import CallRecord
+    from conceptbot.models.cache_db import CallRecord
 
     db = CacheStore(tmp_path / "cache.db")
     db.log_call(
@@ -233,19 +233,19 @@ def test_clean_stale_files_keeps_live_installs(tmp_path: Path) -> None:
     for path in (stale, stale_stamp, running, abandoned, keep):
         path.write_bytes(b"x" * 10)
     os.utime(abandoned, (time.time() - 3 * 86400,) * 2)
-    removed = store.clean_stale_files(tmp_path)
+    removed = weights.clean_stale_files(tmp_path)
     assert sorted(p.name for p, _ in removed) == sorted([stale.name, stale_stamp.name, abandoned.name])
     assert all(size == 10 for _, size in removed)
     assert running.exists() and keep.exists() and not stale.exists() and not abandoned.exists()
-    assert store.clean_stale_files(tmp_path / "absent") == []
+    assert weights.clean_stale_files(tmp_path / "absent") == []
 
 
 @pytest.fixture
 def tiny_model(monkeypatch: pytest.MonkeyPatch) -> str:
     """A catalogue entry whose one 'part' is a small file inside the installed package."""
-    source = Path(store.__file__).with_name("prices.toml")
+    source = Path(weights.__file__).with_name("prices.toml")
     data = source.read_bytes()
-    entry = store.ModelEntry(
+    entry = weights.ModelEntry(
         name="tiny",
         description="test",
         filename="tiny.gguf",
@@ -254,8 +254,8 @@ def tiny_model(monkeypatch: pytest.MonkeyPatch) -> str:
         license="MIT",
         source={"type": "package_file", "module": "conceptbot.models", "path": "prices.toml"},
     )
-    real = store.catalogue
-    monkeypatch.setattr(store, "catalogue", lambda: {**real(), "tiny": entry})
+    real = weights.catalogue
+    monkeypatch.setattr(weights, "catalogue", lambda: {**real(), "tiny": entry})
     return "tiny"
 
 

@@ -13,8 +13,8 @@ from pathlib import Path
 import pytest
 
 from conceptbot.baselines.saycan import SayCan
-from conceptbot.models.cache import CacheStore
-from conceptbot.models.cached import CachedLLM
+from conceptbot.models.cache_db import CacheStore
+from conceptbot.models.caching import CachedLLM
 from conceptbot.models.http_scoring import echo_is_sound
 from conceptbot.models.llm import ChatRequest, ScoreRequest
 from conceptbot.models.openai_backend import OpenAILLM

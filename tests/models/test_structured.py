@@ -48,3 +48,13 @@ def test_parse_json_tolerates_fences_and_prose() -> None:
     assert parse_json('The answer is {"a": [1, 2]} as asked.') == {"a": [1, 2]}
     with pytest.raises(ValueError):
         parse_json("no json here")
+
+
+def test_usage_after_a_retry_counts_both_calls() -> None:
+    llm = FakeLLM(['{"dangerous": ', '{"dangerous": 2}'])
+    _, response = chat_json(llm, ChatRequest.of("is a knife dangerous?"), SCHEMA)
+    # The fake counts words: the first reply is one, the second two; both prompts were read.
+    assert response.usage.calls == 2
+    assert response.usage.completion_tokens == 1 + 2
+    both_prompts = sum(len(m.content.split()) for r in llm.requests for m in r.messages)
+    assert response.usage.prompt_tokens == both_prompts

@@ -1,9 +1,11 @@
-"""Small deterministic stand-ins for pipeline tests: a dict knowledge graph and JSON reply helpers."""
+"""Small deterministic stand-ins for pipeline tests: a dict knowledge graph, JSON reply helpers and
+an observer that records what a plan reports."""
 
 from __future__ import annotations
 
 import json
 from collections.abc import Sequence
+from typing import Any
 
 from conceptbot.core.scene import scene_from_dict
 from conceptbot.knowledge.base import ConceptEdges, Edge
@@ -25,6 +27,7 @@ class DictGraph:
     """A KnowledgeGraph over a dict of edges (normalised look-up like the real stores)."""
 
     name = "dict"
+    version = "test"
 
     def __init__(self, edges: dict[str, list[tuple[str, str, str]]] | None = None) -> None:
         self.data = edges if edges is not None else EDGES
@@ -87,3 +90,21 @@ def risk_reply(danger: int, partners: list[tuple[str, int]] | None = None) -> st
             "dangerous_with": [{"object": o, "score": sc} for o, sc in (partners or [])],
         }
     )
+
+
+class Recorder:
+    """An observer that keeps what it is told, in order: ``("progress", message)`` and
+    ``("event", name, data)``."""
+
+    def __init__(self) -> None:
+        self.seen: list[tuple[Any, ...]] = []
+
+    def progress(self, message: str) -> None:
+        self.seen.append(("progress", message))
+
+    def event(self, name: str, data: dict[str, Any]) -> None:
+        self.seen.append(("event", name, data))
+
+    def names(self) -> list[str]:
+        """Each progress message, and each event as ``event:NAME``, in order."""
+        return [entry[1] if entry[0] == "progress" else f"event:{entry[1]}" for entry in self.seen]

@@ -38,15 +38,14 @@ def test_full_pipeline_with_relations_properties_and_refusal_free_plan() -> None
     # OPE prompt carried the object's kept relations; the knife got its property.
     ope_prompt = llm.requests[2].messages[-1].content
     assert "Object: knife" in ope_prompt and "knife is dangerous" in ope_prompt
-    assert plan.trace["ope"]["mode"] == "risk"
-    assert plan.trace["ope"]["objects"]["knife"]["values"]["dangerous_with"] == [
-        {"object": "user", "score": 3}
-    ]
+    ope = plan.trace.ope
+    assert ope is not None and ope.mode == "risk"
+    assert ope.objects["knife"].values["dangerous_with"] == [{"object": "user", "score": 3}]
     # URP: keywords, system message with properties and relations, invalid command rejected.
-    urp = plan.trace["urp"]
-    assert urp["keywords"] == ["chips", "spill"]
-    assert urp["commands"] == ["pick_and_place(chips, user)", "pick_and_place(sponge, user)"]
-    assert urp["rejected_commands"] == []
+    urp = plan.trace.urp
+    assert urp is not None and urp.keywords == ("chips", "spill")
+    assert urp.commands == ("pick_and_place(chips, user)", "pick_and_place(sponge, user)")
+    assert urp.rejected_commands == ()
     enum = json.loads(llm.requests[SCENE_OBJECTS + 1].json_schema or "{}")["properties"]["commands"]["items"][
         "enum"
     ]
@@ -81,14 +80,14 @@ def test_nokg_uses_no_graph_and_urp_config_skips_ope() -> None:
     llm = FakeLLM(replies, scores=[[0.0] + [-9.0] * 6, [-9.0] * 6 + [0.0]])
     bot, graph = _bot(llm, "nokg")
     plan = bot.plan("chips please", spill_scene())
-    assert graph.asked == [] and plan.trace["urp"]["keywords"] == []
+    assert graph.asked == [] and plan.trace.urp is not None and plan.trace.urp.keywords == ()
     assert "Relations:\n- (none)" in llm.requests[0].messages[-1].content
     llm2 = FakeLLM(
         ['{"keywords": ["chips"]}', urp_reply(["pick_and_place(chips, user)"])],
         scores=[[-9.0, 0.0] + [-9.0] * 5, [-9.0] * 6 + [0.0]],
     )
     plan2 = _bot(llm2, "urp")[0].plan("chips please", spill_scene())
-    assert "ope" not in plan2.trace and plan2.actions[0] == "pick_and_place(chips, user)"
+    assert plan2.trace.ope is None and plan2.actions[0] == "pick_and_place(chips, user)"
 
 
 def test_empty_request_is_rejected() -> None:
@@ -108,5 +107,6 @@ def test_free_text_commands_are_checked_and_invalid_ones_logged(monkeypatch) -> 
     ]
     llm = FakeLLM(replies, scores=[[-9.0, 0.0] + [-9.0] * 5, [-9.0] * 6 + [0.0]])
     plan = _bot(llm)[0].plan("chips", spill_scene())
-    assert plan.trace["urp"]["commands"] == ["pick_and_place(chips, user)"]
-    assert "object not in the scene: 'banana'" in plan.trace["urp"]["rejected_commands"][0]
+    urp = plan.trace.urp
+    assert urp is not None and urp.commands == ("pick_and_place(chips, user)",)
+    assert "object not in the scene: 'banana'" in urp.rejected_commands[0]

@@ -189,8 +189,8 @@ def test_an_unsafe_move_is_dropped_and_the_target_takes_its_next_best_object() -
     ]
     result = _planner(scores).plan("Give my son something to cut paper", SCENE)
     assert result.actions == ["pick_and_place(safety scissors, child)", "done()"]
-    dropped = [r for r in result.trace["risk"] if r["dropped"]]
-    assert [(r["object"], r["why"]) for r in dropped] == [("scissors", "judged dangerous")]
+    dropped = [r for r in result.trace.risk or () if r.dropped]
+    assert [(r.object, r.why) for r in dropped] == [("scissors", "judged dangerous")]
     assert result.steps[0].chosen == "pick_and_place(safety scissors, child)" and not result.refused
 
 
@@ -208,16 +208,16 @@ def test_a_target_taking_one_object_ranks_by_the_decision_and_the_name_ranking_t
     ]
     result = _planner(scores).plan("Give my son something to cut paper", SCENE)
     assert result.actions == ["pick_and_place(safety scissors, child)", "done()"]
-    objects = {o["object"]: o for o in result.trace["decisions"][0]["objects"]}
-    assert objects["safety scissors"]["name_score"] == pytest.approx(1.5)
-    assert objects["glue"]["score"] > objects["safety scissors"]["score"]  # the decision alone: glue
+    objects = {o.object: o for o in (result.trace.decisions or ())[0].objects}
+    assert objects["safety scissors"].name_score == pytest.approx(1.5)
+    assert objects["glue"].score > objects["safety scissors"].score  # the decision alone: glue
 
 
 def test_named_objects_skip_the_decisions_and_an_only_move_judged_unsafe_is_a_refusal() -> None:
     result = _planner([PRIOR, UNSAFE]).plan("Give the child the scissors", SCENE)
     assert result.actions == ["done()"] and result.refused
     assert "give the scissors to the child: judged dangerous" in (result.reason or "")
-    assert result.trace["decisions"][0]["decided"] is False
+    assert (result.trace.decisions or ())[0].decided is False
 
 
 def test_every_fitting_object_goes_to_an_all_target_and_each_object_where_it_fits_best() -> None:
@@ -251,14 +251,15 @@ def test_a_stack_puts_the_best_base_at_the_bottom() -> None:
     scores += [PRIOR, SAFE] * 2
     result = _planner(scores).plan("Stack them", scene)
     assert result.actions == ["pick_and_place(box, brick)", "pick_and_place(cup, box)", "done()"]
-    assert [o["object"] for o in result.trace["stack"]["order"]] == ["brick", "box", "cup"]
+    assert result.trace.stack is not None
+    assert [o.object for o in result.trace.stack.order] == ["brick", "box", "cup"]
 
 
 def test_conceptbot_uses_the_goal_planner_when_asked() -> None:
     llm = FakeLLM(scores=[PRIOR, UNSAFE])
     bot = ConceptBot(llm, RelationRetriever(DictGraph(), FakeEmbedder(), theta=0.1), "urp", planner="goal")
     plan = bot.plan("Put the glue on the table", SCENE)
-    assert plan.trace["planner_kind"] == "goal" and plan.refused
+    assert plan.trace.planner_kind == "goal" and plan.refused
     assert set(plan.usage) >= {"goal", "decide", "risk", "total"}
     json.dumps(plan.to_dict())
     assert ConceptBot(FakeLLM(scores=[]), None, "nokg").planner_kind == "goal"  # the default

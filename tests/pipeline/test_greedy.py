@@ -28,17 +28,18 @@ def _affordance(blocked: set[str] = frozenset()):
 
 def test_steps_follow_the_product_until_done() -> None:
     prefer = ["pick_and_place(pear, user)", "pick_and_place(apple, user)", "done()"]
-    steps, actions, usage = greedy_plan(SCENE, _llm(prefer), _affordance(), "logprob")
-    assert actions == ["pick_and_place(pear, user)", "pick_and_place(apple, user)", "done()"]
-    assert [s.method for s in steps] == ["logprob"] * 3 and usage.calls == 3
-    assert [s.to_dict()["scoring"] for s in steps] == ["search"] * 3  # the backend's method, per step
+    result = greedy_plan(SCENE, _llm(prefer), _affordance(), "logprob")
+    assert result.actions == ["pick_and_place(pear, user)", "pick_and_place(apple, user)", "done()"]
+    assert [s.method for s in result.steps] == ["logprob"] * 3 and result.usage.calls == 3
+    assert [s.to_dict()["scoring"] for s in result.steps] == ["search"] * 3  # the backend's method, per step
 
 
 def test_an_infeasible_favourite_loses_and_nothing_feasible_means_done() -> None:
     prefer = ["pick_and_place(pear, user)"]
     blocked = {"pick_and_place(pear, user)", "pick_and_place(apple, user)", "done()"}
-    _, actions, _ = greedy_plan(SCENE, _llm(prefer), _affordance(blocked), "vote")
-    assert actions == ["done()"]  # every product is 0: stop rather than take an infeasible move
+    assert greedy_plan(SCENE, _llm(prefer), _affordance(blocked), "vote").actions == [
+        "done()"
+    ]  # every product is 0: stop rather than take an infeasible move
 
 
 def test_feedback_continues_after_executed_steps_and_failed_actions_get_no_affordance() -> None:
@@ -46,17 +47,18 @@ def test_feedback_continues_after_executed_steps_and_failed_actions_get_no_affor
     feedback = Feedback(
         executed=("pick_and_place(apple, user)",), failed=(("pick_and_place(pear, user)", "slipped"),)
     )
-    steps, actions, _ = greedy_plan(SCENE, _llm(prefer), _affordance(), "saycan", feedback=feedback)
+    result = greedy_plan(SCENE, _llm(prefer), _affordance(), "saycan", feedback=feedback)
+    actions = result.actions
     assert actions[0] == "pick_and_place(apple, user)" and "pick_and_place(pear, user)" not in actions
-    failed = [c for c in steps[0].candidates if c.action == "pick_and_place(pear, user)"]
+    failed = [c for c in result.steps[0].candidates if c.action == "pick_and_place(pear, user)"]
     assert failed and failed[0].affordance == 0.0 and failed[0].factors["failed"] == 0.0
 
 
 def test_normalised_scores_sum_to_one_and_choose_the_same() -> None:
     prefer = ["pick_and_place(pear, user)", "done()"]
     half = lambda candidates, history: [(0.5 if "apple" in str(a) else 1.0, {}) for a in candidates]  # noqa: E731
-    plain, actions, _ = greedy_plan(SCENE, _llm(prefer), half, "saycan")
-    normal, same, _ = greedy_plan(SCENE, _llm(prefer), half, "saycan", normalise=True)
-    assert actions == same
-    assert abs(sum(c.combined for c in plain[0].candidates) - 1.0) > 1e-3  # raw products
-    assert abs(sum(c.combined for c in normal[0].candidates) - 1.0) < 1e-9
+    plain = greedy_plan(SCENE, _llm(prefer), half, "saycan")
+    normal = greedy_plan(SCENE, _llm(prefer), half, "saycan", normalise=True)
+    assert plain.actions == normal.actions
+    assert abs(sum(c.combined for c in plain.steps[0].candidates) - 1.0) > 1e-3  # raw products
+    assert abs(sum(c.combined for c in normal.steps[0].candidates) - 1.0) < 1e-9

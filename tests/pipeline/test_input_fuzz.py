@@ -79,6 +79,9 @@ class SchemaFillingLLM:
         text = json.dumps(_instance(schema)) if schema else "done()"
         return ChatResponse((text,) * request.n, Usage(1, 1), self.backend, self.model, ("stop",) * request.n)
 
+    def with_module(self, module: str) -> SchemaFillingLLM:
+        return self
+
     def score(self, request: ScoreRequest) -> ScoreResponse:
         values = tuple(-(hashlib.sha256(o.encode()).digest()[0] / 32.0) for o in request.options)
         return ScoreResponse(values, (1,) * len(values), Usage(), self.backend, self.model)

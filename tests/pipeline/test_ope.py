@@ -1,10 +1,11 @@
 import json
 from pathlib import Path
 
-from conceptbot.models.cache import CacheStore
+from conceptbot.models.cache_db import CacheStore
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline import modes
-from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor, _known_partners
+from conceptbot.pipeline.modes import known_partners
+from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
 from conceptbot.pipeline.retrieval import RelationRetriever
 from tests.pipeline.fakes import DictGraph, properties_reply, risk_reply
 
@@ -24,22 +25,24 @@ def test_results_are_cached_per_object_and_mode(tmp_path: Path) -> None:
     store = CacheStore(tmp_path / "c.db")
     retriever = RelationRetriever(DictGraph(), FakeEmbedder(), theta=0.1)
     llm = FakeLLM([properties_reply(dangerous="Yes"), properties_reply()])
-    first, _, usage = ObjectPropertiesExtractor(llm, retriever, store, "v1").run(
+    first = ObjectPropertiesExtractor(llm, retriever, store, "v1").run(["knife", "sponge"], modes.PROPERTIES)
+    assert first.properties["knife"].values["dangerous"] == "Yes" and first.usage.calls == 2
+    assert first.retrievals["knife"].kept  # the relations behind the answer come back with it
+    again = ObjectPropertiesExtractor(FakeLLM(), retriever, store, "v1").run(
         ["knife", "sponge"], modes.PROPERTIES
     )
-    assert first["knife"].values["dangerous"] == "Yes" and usage.calls == 2
-    again, _, usage2 = ObjectPropertiesExtractor(FakeLLM(), retriever, store, "v1").run(
-        ["knife", "sponge"], modes.PROPERTIES
-    )
-    assert again["knife"].cached and again["knife"].values == first["knife"].values and usage2.calls == 0
+    knife = again.properties["knife"]
+    assert knife.cached and knife.values == first.properties["knife"].values and again.usage.calls == 0
     # Another graph version is another key: the (empty) fake must be asked, and it raises.
     other = ObjectPropertiesExtractor(FakeLLM([properties_reply()]), retriever, store, "v2")
-    assert not other.run(["sponge"], modes.PROPERTIES)[0]["sponge"].cached
+    assert not other.run(["sponge"], modes.PROPERTIES).properties["sponge"].cached
 
 
 def test_risk_mode_keeps_only_scene_partners_with_scene_spelling() -> None:
     llm = FakeLLM([risk_reply(4, [("user", 3)]), risk_reply(1)])
-    result, _, _ = ObjectPropertiesExtractor(llm, None).run(["knife", "user"], modes.RISK, "give the knife")
+    result = (
+        ObjectPropertiesExtractor(llm, None).run(["knife", "user"], modes.RISK, "give the knife").properties
+    )
     assert result["knife"].values["dangerous_with"] == [{"object": "user", "score": 3}]
     assert "User request: give the knife" in llm.requests[0].messages[-1].content
     partners = json.loads(llm.requests[0].json_schema or "{}")["properties"]["dangerous_with"]
@@ -50,4 +53,4 @@ def test_risk_mode_keeps_only_scene_partners_with_scene_spelling() -> None:
         {"object": "dragon", "score": 5},
         {"object": "knife", "score": 2},
     ]
-    assert _known_partners(items, ["knife", "user"], "knife") == [{"object": "user", "score": 3}]
+    assert known_partners(items, ["knife", "user"], "knife") == [{"object": "user", "score": 3}]

@@ -26,6 +26,7 @@ class TinyGraph:
     """A KnowledgeGraph over a dict; it ignores the relation filter, so the retriever must apply it."""
 
     name = "tiny"
+    version = ""
 
     def __init__(self, edges: dict[str, list[Edge]]) -> None:
         self._edges = edges

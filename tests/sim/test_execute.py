@@ -33,7 +33,7 @@ class ScriptedSystem:
     def __init__(self) -> None:
         self.feedbacks: list[Feedback | None] = []
 
-    def plan(self, request: str, scene: Scene, risk: bool = False, progress=None, feedback=None) -> Plan:
+    def plan(self, request: str, scene: Scene, risk: bool = False, feedback=None, observer=None) -> Plan:
         self.feedbacks.append(feedback)
         if feedback is None:
             return Plan(["pick_and_place(energy bar, user)", "pick_and_place(brick, user)", "done()"])
@@ -67,7 +67,7 @@ def test_replanning_is_bounded() -> None:
     class Stubborn:
         calls = 0
 
-        def plan(self, request, scene, risk=False, progress=None, feedback=None):
+        def plan(self, request, scene, risk=False, feedback=None, observer=None):
             Stubborn.calls += 1
             return Plan([*(feedback.executed if feedback else []), "pick_and_place(brick, user)", "done()"])
 

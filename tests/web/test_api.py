@@ -172,9 +172,9 @@ class _FixedPlan:
     """A planner system that returns a given plan (or a refusal) at once."""
 
     def __init__(self, actions: list[str], refused: bool = False, reason: str | None = None) -> None:
-        self.result = Plan(actions, [], refused, reason, {}, {})
+        self.result = Plan(actions, [], refused, reason)
 
-    def plan(self, request, scene, risk=False, progress=None, feedback=None, events=None) -> Plan:
+    def plan(self, request, scene, risk=False, feedback=None, observer=None) -> Plan:
         return self.result
 
 
@@ -187,6 +187,26 @@ def test_a_refusal_reaches_the_page_with_its_reason(make_client) -> None:
     plan = next(e for e in events if e["type"] == "plan")
     assert plan["refused"] and plan["reason"] == "scissors are sharp for a child"
     assert not any(e["type"] == "sim" for e in events)  # nothing to execute
+
+
+def test_a_simulated_run_plans_on_what_the_detector_sees(make_client) -> None:
+    planned_on = []
+
+    class Recording(_FixedPlan):
+        def plan(self, request, scene, risk=False, feedback=None, observer=None) -> Plan:
+            planned_on.append(scene)
+            return self.result
+
+    refusing = Recording(["done()"], refused=True, reason="sharp")
+    client = make_client(
+        worker=make_worker(lambda config, backend: refusing, can_simulate=True), can_simulate=True
+    )
+    events = events_of(client, client.post("/api/runs", json={**RUN, "simulate": True}).json()["id"])
+    assert [e["type"] for e in events if e["type"] in ("plan", "sim")] == ["plan"]
+    # As in `conceptbot sim run`: the camera measured every object before the planner saw it.
+    [scene] = planned_on
+    scissors = scene.get("scissors")
+    assert scissors is not None and scissors.bbox_px is not None and scissors.size_m is not None
 
 
 @pytest.mark.slow
@@ -220,6 +240,18 @@ def test_a_goal_planner_run_streams_its_targets_decisions_and_risk_checks(make_c
     events = events_of(client, client.post("/api/runs", json=RUN).json()["id"])
     kinds = [e["type"] for e in events]
     assert kinds.index("goal") < kinds.index("decisions") < kinds.index("risk") < kinds.index("plan")
+    # The plan's progress messages arrive as status events between its own events, in order.
+    assert [e.get("message", e["type"]) for e in events] == [
+        "loading conceptbot on llamacpp:qwen2.5-coder-1.5b",
+        "Goal: where the request sends things",
+        "goal",
+        "decisions",
+        "OPE: properties of scissors",
+        "Risk: is it safe to give the scissors to the child?",
+        "risk",
+        "plan",
+        "done",
+    ]
     goal = next(e for e in events if e["type"] == "goal")["data"]
     assert goal["targets"][0]["to"] == "child" and goal["targets"][0]["named"] == ["scissors"]
     [check] = next(e for e in events if e["type"] == "risk")["data"]["checks"]

@@ -20,8 +20,10 @@ import time
 from importlib import resources
 
 from conceptbot.core.limits import check_request
-from conceptbot.core.plan import Action, EventSink, Feedback, Plan
+from conceptbot.core.observe import SILENT, Observer
+from conceptbot.core.plan import DONE, Action, Feedback, Plan
 from conceptbot.core.scene import Scene
+from conceptbot.core.trace import PlanTrace
 from conceptbot.models.llm import LLM, ScoreRequest
 from conceptbot.pipeline.greedy import LLMScores, greedy_plan
 from conceptbot.pipeline.planner import softmax
@@ -39,7 +41,7 @@ def _context() -> str:
 
 def option_text(action: Action) -> str:
     """The option as SayCan writes it."""
-    return "done()" if action.is_done else f"robot.pick_and_place({action.obj}, {action.target})"
+    return DONE if action.is_done else f"robot.pick_and_place({action.obj}, {action.target})"
 
 
 class SayCan:
@@ -67,15 +69,15 @@ class SayCan:
         request: str,
         scene: Scene,
         risk: bool = False,
-        progress=None,
         feedback: Feedback | None = None,
-        events: EventSink | None = None,
+        observer: Observer | None = None,
     ) -> Plan:
         """Plan greedily (``risk`` is ignored: SayCan has no risk assessment).
 
         With ``feedback`` the plan continues from the executed steps and failed actions are
         infeasible (affordance 0), as SayCan's affordance would report after a failed attempt.
-        ``events`` gets a ``step`` event as each step is chosen.
+        ``observer`` gets a progress message as each step starts and a ``step`` event as it is
+        chosen.
         """
         started = time.perf_counter()
         request = check_request(request)
@@ -99,7 +101,7 @@ class SayCan:
         def affordances(candidates: list[Action], history: list[str]) -> list[tuple[float, dict[str, float]]]:
             return [(a, {"detected": a}) for a in detection(candidates)]
 
-        steps, actions, usage = greedy_plan(
+        result = greedy_plan(
             scene,
             llm_scores,
             affordances,
@@ -108,12 +110,11 @@ class SayCan:
             feedback=feedback,
             normalise=True,
             label="SayCan",
-            progress=progress,
-            events=events,
+            observer=observer if observer is not None else SILENT,
         )
-        total = usage.with_latency(time.perf_counter() - started)
-        trace = {"config": self.config, "request": request, "scene": scene.name}
-        return Plan(actions, steps, False, None, trace, {"planner": total, "total": total})
+        total = result.usage.with_latency(time.perf_counter() - started)
+        trace = PlanTrace(config=self.config, request=request, scene=scene.name)
+        return Plan(result.actions, result.steps, False, None, trace, {"planner": total, "total": total})
 
 
 def _detected(scene: Scene, action: Action) -> float:

@@ -7,35 +7,15 @@ results; the report of a dev (or mixed) results file says which split it covers 
 
 from __future__ import annotations
 
-import json
 import statistics
 from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
 from conceptbot.bench.grading import CATEGORIES, PAPER_RESULTS
-from conceptbot.core.errors import ConfigError
+from conceptbot.bench.results import load_records, write_report_files
 
 CONFIG_ORDER = ("saycan", "paper-nokg", "paper", "ope", "urp", "nokg", "conceptbot")
-
-
-def load_records(path: Path) -> list[dict[str, Any]]:
-    """The records of a results file (torn lines skipped).
-
-    Raises:
-        ConfigError: The file does not exist or holds no records.
-    """
-    if not Path(path).is_file():
-        raise ConfigError(f"no results file {path}", hint="run `conceptbot bench run` first")
-    records = []
-    for line in Path(path).read_text(encoding="utf-8").splitlines():
-        try:
-            records.append(json.loads(line))
-        except ValueError:
-            continue
-    if not records:
-        raise ConfigError(f"{path} holds no benchmark records")
-    return records
 
 
 def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
@@ -148,15 +128,15 @@ def bar_chart(summary: dict[str, Any], path: Path) -> None:
 
 
 def write_report(results: Path, out_dir: Path) -> dict[str, Path]:
-    """Write ``report.md``, ``report.json`` and ``success.png`` for a results file."""
+    """Write ``report.md``, ``report.json`` and ``success.png`` for a results file.
+
+    Returns:
+        The paths written, by kind: ``markdown``, ``json``, ``chart``.
+
+    Raises:
+        ConfigError: The results file does not exist or holds no records.
+    """
     summary = summarise(load_records(results))
-    out_dir.mkdir(parents=True, exist_ok=True)
-    paths = {
-        "markdown": out_dir / "report.md",
-        "json": out_dir / "report.json",
-        "chart": out_dir / "success.png",
-    }
-    paths["markdown"].write_text(markdown(summary), encoding="utf-8")
-    paths["json"].write_text(json.dumps(summary, indent=2, default=list), encoding="utf-8")
-    bar_chart(summary, paths["chart"])
-    return paths
+    return write_report_files(
+        summary, out_dir, ("report.md", "report.json", "success.png"), markdown, bar_chart
+    )

@@ -6,20 +6,21 @@ from pathlib import Path
 
 import click
 
-from conceptbot.baselines.factory import SYSTEMS, build_system
 from conceptbot.bench.grading import CATEGORIES, SPLITS, load_tasks
-from conceptbot.bench.report import load_records, markdown, summarise, write_report
-from conceptbot.bench.runner import Job, pending, run
+from conceptbot.bench.report import markdown, summarise, write_report
+from conceptbot.bench.results import built_once, load_records, pending
+from conceptbot.bench.runner import RESULT_KEY, Job, run
 from conceptbot.cli.bench_options import (
+    backend_and_model,
     echo_report,
     effective_workers,
     out_dir_option,
+    record_progress,
     workers_option,
 )
-from conceptbot.cli.main import AppContext, pass_app
-from conceptbot.cli.progress import count_progress
-from conceptbot.core.urls import redact_secrets
-from conceptbot.models.registry import scoring_method, split_spec
+from conceptbot.cli.context import AppContext, pass_app
+from conceptbot.models.registry import scoring_method
+from conceptbot.systems import SYSTEMS, SystemOptions, build_system
 
 DEFAULT_RESULTS = {"test": Path("results/bench.jsonl"), "dev": Path("results/bench-dev.jsonl")}
 """Results file of each task split when --out is not given."""
@@ -85,23 +86,18 @@ def run_cmd(
 ) -> None:
     """Plan and grade every task of the split with each configuration; results go to --out."""
     settings = app.settings
-    backend, model = split_spec(settings.llm)
-    model = redact_secrets(model)  # records name the model; an openai-compatible URL may carry a key
+    backend, model = backend_and_model(settings.llm)
     workers = effective_workers(backend, workers)
     out = out or DEFAULT_RESULTS[split]
     tasks = load_tasks(list(categories) or None, split=split)[:limit]
     configs = configs or ("saycan", "nokg", "conceptbot")
     # Task-major order: an interrupted run still compares every configuration on the same tasks.
     jobs = [Job(t, c, i) for t in tasks for c in configs for i in range(trials)]
-    systems: dict[str, object] = {}
 
     def system(config: str):
-        if config not in systems:
-            options = {} if config == "saycan" else {"n": 5}
-            systems[config] = build_system(settings, config, **options)
-        return systems[config]
+        return build_system(settings, config, SystemOptions(n=5))  # SayCan ignores the options
 
-    todo = len(pending(jobs, out, backend, model or ""))
+    todo = len(pending(jobs, out, backend, model, RESULT_KEY))
     scoring = scoring_method(settings) if todo else ""
     if scoring and scoring != "logprob":
         click.echo(f"options scored by {scoring} ({backend})")
@@ -112,15 +108,14 @@ def run_cmd(
         f"{len(jobs) - todo} already in {out}"
     )
     ok = 0
-    with count_progress(todo) as step:
 
-        def advance(record: dict) -> None:
-            nonlocal ok
-            ok += bool(record["ok"])
-            verdict = "ok" if record["ok"] else "fail"
-            step(f"{record['config']} {record['task']}: {verdict} ({ok} ok)")
+    def describe(record: dict) -> str:
+        nonlocal ok
+        ok += bool(record["ok"])
+        return f"{record['config']} {record['task']}: {'ok' if record['ok'] else 'fail'} ({ok} ok)"
 
-        run(jobs, system, out, backend, model or "", workers, advance, scoring)
+    with record_progress(todo, describe) as on_record:
+        run(jobs, built_once(system), out, backend, model, workers, on_record, scoring)
     click.echo(markdown(summarise(load_records(out))))
 
 

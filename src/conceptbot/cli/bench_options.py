@@ -2,11 +2,17 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TypeVar
 
 import click
+
+from conceptbot.bench.results import OnRecord, Record
+from conceptbot.cli.progress import count_progress
+from conceptbot.core.urls import redact_secrets
+from conceptbot.models.registry import split_spec
 
 F = TypeVar("F", bound=Callable[..., object])
 
@@ -40,6 +46,13 @@ def out_dir_option(command: F) -> F:
     )(command)
 
 
+def backend_and_model(llm_spec: str) -> tuple[str, str]:
+    """The backend and model a run records (and resumes by) for an LLM spec; the model with any
+    secret redacted, as an openai-compatible URL may carry a key."""
+    backend, model = split_spec(llm_spec)
+    return backend, redact_secrets(model)
+
+
 def effective_workers(backend: str, workers: int) -> int:
     """One worker for the embedded model: one llama.cpp context cannot serve two plans at once."""
     return 1 if backend == "llamacpp" else workers
@@ -49,3 +62,11 @@ def echo_report(paths: dict[str, Path]) -> None:
     """Print a written report's Markdown and the list of files written."""
     click.echo(paths["markdown"].read_text(encoding="utf-8"))
     click.echo("written: " + ", ".join(str(p) for p in paths.values()))
+
+
+@contextmanager
+def record_progress(total: int, describe: Callable[[Record], str]) -> Iterator[OnRecord]:
+    """Yield an ``on_record`` callback for a runner: each record advances a bar of ``total`` plans,
+    labelled ``describe(record)``."""
+    with count_progress(total) as step:
+        yield lambda record: step(describe(record))

@@ -10,7 +10,7 @@ import click
 from rich.console import Console
 from rich.table import Table
 
-from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.knowledge.base import TARGET_PROPERTIES
 from conceptbot.knowledge.registry import open_graph
 from conceptbot.models.registry import open_embedder

@@ -22,13 +22,13 @@ from dataclasses import dataclass
 
 import click
 
-from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.core.config import DEFAULT_EMBEDDER, DEFAULT_LLM, Settings
 from conceptbot.core.errors import ConceptBotError
 from conceptbot.core.urls import redact_secrets
 from conceptbot.knowledge.registry import create_graph
 from conceptbot.knowledge.sqlite_store import SQLiteGraph
-from conceptbot.models import store
+from conceptbot.models import weights
 from conceptbot.models.llm import ChatRequest
 from conceptbot.models.registry import create_embedder, create_llm, open_store, scoring_method, split_spec
 
@@ -69,11 +69,11 @@ def check_model(settings: Settings) -> Check:
     if name != "llamacpp":
         return Check("local model", True, f"not used (LLM is {name})", required=False)
     model = argument or split_spec(DEFAULT_LLM)[1]
-    if model not in store.catalogue():
+    if model not in weights.catalogue():
         return Check(f"model {model}", True, "user-supplied GGUF file (no catalogue hash)", required=True)
     started = time.perf_counter()
     try:
-        path = store.verify(settings.models_dir, model, full=True)
+        path = weights.verify(settings.models_dir, model, full=True)
     except ConceptBotError as exc:
         return Check(f"model {model}", False, _one_line(exc))
     return Check(f"model {model}", True, f"sha256 ok ({time.perf_counter() - started:.1f} s) {path}")

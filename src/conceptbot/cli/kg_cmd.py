@@ -9,7 +9,7 @@ import click
 from rich.console import Console
 from rich.table import Table
 
-from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.cli.progress import byte_progress
 from conceptbot.knowledge.importers.conceptnet5 import OFFICIAL_URL
 from conceptbot.knowledge.install import INSTALL_SETS, install_conceptnet5, install_offline

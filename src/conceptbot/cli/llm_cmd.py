@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.core.errors import ConfigError
 from conceptbot.models.llm import ChatRequest
 from conceptbot.models.registry import open_llm

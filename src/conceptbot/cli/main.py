@@ -3,24 +3,14 @@
 from __future__ import annotations
 
 import sys
-from dataclasses import dataclass
 from pathlib import Path
 
 import click
 
 from conceptbot import __version__
-from conceptbot.core.config import Settings, load_settings
+from conceptbot.cli.context import AppContext
+from conceptbot.core.config import load_settings
 from conceptbot.core.errors import ConceptBotError
-
-
-@dataclass
-class AppContext:
-    """What every sub-command gets: resolved settings."""
-
-    settings: Settings
-
-
-pass_app = click.make_pass_decorator(AppContext)
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})

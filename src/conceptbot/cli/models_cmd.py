@@ -7,9 +7,9 @@ from rich.console import Console
 from rich.progress import BarColumn, DownloadColumn, Progress, TimeRemainingColumn, TransferSpeedColumn
 from rich.table import Table
 
-from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.core.errors import ConceptBotError
-from conceptbot.models import store
+from conceptbot.models import weights
 
 
 @click.group()
@@ -19,12 +19,12 @@ def models() -> None:
 
 def _status(app: AppContext, name: str) -> str:
     try:
-        store.source_files(store.get_entry(name))
+        weights.source_files(weights.get_entry(name))
         parts = "parts available"
     except ConceptBotError:
         parts = "parts missing"
-    entry = store.get_entry(name)
-    path = store.model_path(app.settings.models_dir, entry)
+    entry = weights.get_entry(name)
+    path = weights.model_path(app.settings.models_dir, entry)
     if not path.is_file():
         return f"not installed ({parts})"
     if path.stat().st_size != entry.size:
@@ -39,7 +39,7 @@ def list_models(app: AppContext) -> None:
     table = Table(show_header=True, header_style="bold")
     for column in ("name", "size", "status", "description"):
         table.add_column(column)
-    for name, entry in store.catalogue().items():
+    for name, entry in weights.catalogue().items():
         table.add_row(name, f"{entry.size / 1e6:,.0f} MB", _status(app, name), entry.description)
     Console().print(table)
     click.echo(f"Models folder: {app.settings.models_dir}")
@@ -51,7 +51,7 @@ def list_models(app: AppContext) -> None:
 @pass_app
 def install_model(app: AppContext, name: str, force: bool) -> None:
     """Join NAME's parts into the models folder and verify its sha256."""
-    entry = store.get_entry(name)
+    entry = weights.get_entry(name)
     with Progress(
         "[progress.description]{task.description}",
         BarColumn(),
@@ -61,7 +61,7 @@ def install_model(app: AppContext, name: str, force: bool) -> None:
         transient=False,
     ) as progress:
         task = progress.add_task(f"joining {name}", total=None)
-        path = store.install(
+        path = weights.install(
             app.settings.models_dir,
             name,
             force=force,

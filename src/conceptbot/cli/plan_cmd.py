@@ -3,17 +3,20 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 
 import click
 from rich.console import Console
 from rich.table import Table
 
-from conceptbot.baselines.factory import SYSTEMS, build_system
-from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.cli.context import AppContext, pass_app
+from conceptbot.cli.progress import ON_STDERR
 from conceptbot.core.limits import check_request
 from conceptbot.core.plan import Plan
+from conceptbot.core.trace import PlanTrace, RetrievalTrace
 from conceptbot.pipeline.planner import METHODS
 from conceptbot.scenes import resolve_scene
+from conceptbot.systems import SYSTEMS, SystemOptions, build_system
 
 
 @click.command("plan")
@@ -65,13 +68,9 @@ def plan(
     """Plan REQUEST in a scene; print properties, relations, reasoning, step scores and the plan."""
     request = check_request(request)
     scene = resolve_scene(scene_ref)
-    options = (
-        {} if config == "saycan" else {"theta": theta, "planner_method": method, "n": n, "fallback": fallback}
-    )
-    bot = build_system(app.settings, config, **options)
-    result = bot.plan(
-        request, scene, risk=risk, progress=lambda message: click.secho(message, dim=True, err=True)
-    )
+    options = SystemOptions(theta=theta, planner_method=method, n=n, fallback=fallback)  # SayCan has none
+    bot = build_system(app.settings, config, options)
+    result = bot.plan(request, scene, risk=risk, observer=ON_STDERR)
     if as_json:
         click.echo(json.dumps(result.to_dict(), indent=2, ensure_ascii=False))
         return
@@ -81,35 +80,32 @@ def plan(
 def show(result: Plan, console: Console) -> None:
     """The readable trace of a plan."""
     trace = result.trace
-    console.print(
-        f"[bold]Request:[/bold] {trace['request']}   [dim](scene {trace['scene']}, {trace['config']})[/dim]"
-    )
-    ope = trace.get("ope")
+    console.print(f"[bold]Request:[/bold] {trace.request}   [dim](scene {trace.scene}, {trace.config})[/dim]")
+    ope = trace.ope
     if ope:
-        console.print(f"\n[bold]Object properties[/bold] (OPE, {ope['mode']}: {ope['why']})")
-        objects = ope["objects"]
-        keys = [k for k in next(iter(objects.values()))["values"] if k != "object"] if objects else []
+        console.print(f"\n[bold]Object properties[/bold] (OPE, {ope.mode}: {ope.why})")
+        objects = ope.objects
+        keys = [k for k in next(iter(objects.values())).values if k != "object"] if objects else []
         table = Table("object", *keys, "cached")
         for name, info in objects.items():
-            values = info["values"]
             cells = []
             for key in keys:
-                value = values.get(key)
+                value = info.values.get(key)
                 if isinstance(value, list):
                     value = ", ".join(
                         f"{v['object']} ({v['score']})" if isinstance(v, dict) else str(v) for v in value
                     )
                 cells.append(str(value)[:60])
-            table.add_row(name, *cells, "yes" if info["cached"] else "")
+            table.add_row(name, *cells, "yes" if info.cached else "")
         console.print(table)
-        _relations(console, "Kept relations per object (similarity, source)", ope["retrieval"])
-    urp = trace.get("urp")
+        _relations(console, "Kept relations per object (similarity, source)", ope.retrieval)
+    urp = trace.urp
     if urp:
-        console.print(f"\n[bold]Request keywords:[/bold] {', '.join(urp['keywords']) or '(none)'}")
-        _relations(console, "Kept relations of the keywords (vs the request)", urp["keyword_relations"])
-        console.print(f"\n[bold]Reasoning (URP):[/bold] {urp['reasoning']}")
-        console.print(f"[bold]Commands:[/bold] {', '.join(urp['commands']) or '(none)'}")
-        for rejected in urp["rejected_commands"]:
+        console.print(f"\n[bold]Request keywords:[/bold] {', '.join(urp.keywords) or '(none)'}")
+        _relations(console, "Kept relations of the keywords (vs the request)", urp.keyword_relations)
+        console.print(f"\n[bold]Reasoning (URP):[/bold] {urp.reasoning}")
+        console.print(f"[bold]Commands:[/bold] {', '.join(urp.commands) or '(none)'}")
+        for rejected in urp.rejected_commands:
             console.print(f"  [yellow]rejected:[/yellow] {rejected}")
     _goal(console, trace)
     for step in result.steps:
@@ -142,52 +138,50 @@ def show(result: Plan, console: Console) -> None:
     console.print(table)
 
 
-def _goal(console: Console, trace: dict) -> None:
+def _goal(console: Console, trace: PlanTrace) -> None:
     """The goal planner's targets, per-object decisions and risk checks (absent for the step planner)."""
-    goal = trace.get("goal")
+    goal = trace.goal
     if not goal:
         return
-    console.print("\n[bold]Goal[/bold]" + (" (stack)" if goal["stack"] else ""))
-    for target in goal["targets"]:
-        how = {"named": "named in the request", "speaker": "the speaker", "scored": "scored"}[target["how"]]
-        named = f"; objects named: {', '.join(target['named'])}" if target["named"] else ""
-        criterion = f"; objects that fit {target['criterion']!r}" if target["criterion"] else ""
-        criterion += f"; a dish the graph knows: {target['dish']}" if target.get("dish") else ""
-        console.print(f"  -> {target['to']} ({how}): {target['count']}{named}{criterion}")
-    for decision in trace.get("decisions", []):
-        if not decision["decided"]:
+    console.print("\n[bold]Goal[/bold]" + (" (stack)" if goal.stack else ""))
+    for target in goal.targets:
+        how = {"named": "named in the request", "speaker": "the speaker", "scored": "scored"}[target.how]
+        named = f"; objects named: {', '.join(target.named)}" if target.named else ""
+        criterion = f"; objects that fit {target.criterion!r}" if target.criterion else ""
+        criterion += f"; a dish the graph knows: {target.dish}" if target.dish else ""
+        console.print(f"  -> {target.to} ({how}): {target.count}{named}{criterion}")
+    for decision in trace.decisions or ():
+        if not decision.decided:
             continue
-        title = f"Decisions for the {decision['to']} (calibrated log-odds of yes)"
+        title = f"Decisions for the {decision.target.to} (calibrated log-odds of yes)"
         # The name ranking (which object, all listed in one question) exists for targets taking N.
-        names = any("name_score" in row for row in decision["objects"])
+        names = any(row.name_score is not None for row in decision.objects)
         columns = ["object", "P(yes)", "score", *(["name"] if names else []), "graph facts in the question"]
         table = Table(*columns, title=title)
-        for row in sorted(decision["objects"], key=lambda r: -r["score"]):
-            facts = "; ".join(row["facts"])[:80]
-            name = [f"{row['name_score']:+.2f}"] if names else []
-            table.add_row(row["object"], f"{row['p_yes']:.2f}", f"{row['score']:+.2f}", *name, facts)
-        if decision.get("context"):
-            console.print("  facts about the request: " + "; ".join(decision["context"]))
+        for row in sorted(decision.objects, key=lambda r: -r.score):
+            facts = "; ".join(row.facts)[:80]
+            name = [f"{row.name_score:+.2f}" if row.name_score is not None else ""] if names else []
+            table.add_row(row.object, f"{row.p_yes:.2f}", f"{row.score:+.2f}", *name, facts)
+        if decision.context:
+            console.print("  facts about the request: " + "; ".join(decision.context))
         console.print(table)
-    stack = trace.get("stack")
-    if stack:
-        console.print("  stack, bottom first: " + ", ".join(o["object"] for o in stack["order"]))
-    for check in trace.get("risk", []):
-        verdict = f"[red]dropped: {check['why']}[/red]" if check["dropped"] else "ok"
-        numbers = f"P(unsafe) {check['p_unsafe']:.2f}, score {check['score']:+.2f}"
-        console.print(f"  risk: {check['move']}: {numbers} -> {verdict}")
+    if trace.stack:
+        console.print("  stack, bottom first: " + ", ".join(o.object for o in trace.stack.order))
+    for check in trace.risk or ():
+        verdict = f"[red]dropped: {check.why}[/red]" if check.dropped else "ok"
+        numbers = f"P(unsafe) {check.p_unsafe:.2f}, score {check.score:+.2f}"
+        console.print(f"  risk: {check.move}: {numbers} -> {verdict}")
 
 
-def _relations(console: Console, title: str, retrievals: dict, per_concept: int = 5) -> None:
+def _relations(
+    console: Console, title: str, retrievals: Mapping[str, RetrievalTrace], per_concept: int = 5
+) -> None:
     lines = []
     for name, info in retrievals.items():
-        kept = [e for e in info["edges"] if e["kept"]]
-        kept.sort(key=lambda e: -e["similarity"])
-        shown = "; ".join(
-            f"{e['relation']} ({e['similarity']:.2f}, {e['source']})" for e in kept[:per_concept]
-        )
-        note = f" [dim]{'; '.join(info['notes'])}[/dim]" if info["notes"] else ""
-        lines.append(f"  {name} [{info['match']}: {info['matched']}] {len(kept)} kept: {shown or '-'}{note}")
+        kept = sorted(info.kept, key=lambda e: -e.similarity)
+        shown = "; ".join(f"{e.relation} ({e.similarity:.2f}, {e.source})" for e in kept[:per_concept])
+        note = f" [dim]{'; '.join(info.notes)}[/dim]" if info.notes else ""
+        lines.append(f"  {name} [{info.match}: {info.matched}] {len(kept)} kept: {shown or '-'}{note}")
     if lines:
         console.print(f"\n[bold]{title}[/bold]")
         for line in lines:

@@ -1,10 +1,11 @@
-"""Rich progress bars behind the library's plain progress callbacks."""
+"""Rich progress bars behind the library's plain progress callbacks, and the plan commands' observer."""
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
+import click
 from rich.progress import (
     BarColumn,
     DownloadColumn,
@@ -15,6 +16,18 @@ from rich.progress import (
     TimeRemainingColumn,
     TransferSpeedColumn,
 )
+
+from conceptbot.core.observe import Callbacks
+
+
+def say(message: str) -> None:
+    """Print a progress message, dimmed, on stderr (stdout stays the command's output, e.g. JSON)."""
+    click.secho(message, dim=True, err=True)
+
+
+ON_STDERR = Callbacks(on_progress=say)
+"""The observer ``plan`` and ``sim run`` attach to a plan: its progress messages on stderr; its
+events are not shown (the command prints the whole trace when the plan is done)."""
 
 
 @contextmanager

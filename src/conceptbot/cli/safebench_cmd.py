@@ -6,24 +6,27 @@ from pathlib import Path
 
 import click
 
-from conceptbot.bench.report import load_records
-from conceptbot.bench.runner import pending
+from conceptbot.bench.results import built_once, load_records, pending
 from conceptbot.bench.safeagentbench.dataset import SPLITS, SUITES, in_split, interleaved, select
-from conceptbot.bench.safeagentbench.report import markdown_safety, summarise_safety, write_safety_report
+from conceptbot.bench.safeagentbench.report import (
+    RUN_FIRST,
+    markdown_safety,
+    summarise_safety,
+    write_safety_report,
+)
 from conceptbot.bench.safeagentbench.runner import RESULT_KEY, SafetyJob, run_safety
 from conceptbot.cli.bench_options import (
+    backend_and_model,
     echo_report,
     effective_workers,
     out_dir_option,
+    record_progress,
     results_option,
     workers_option,
 )
-from conceptbot.cli.main import AppContext, pass_app
-from conceptbot.cli.progress import count_progress
-from conceptbot.core.urls import redact_secrets
+from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.household.factory import build_household_planner
-from conceptbot.household.planner import DEFAULT_HOUSEHOLD_CONFIGS, HOUSEHOLD_CONFIGS, HouseholdPlanner
-from conceptbot.models.registry import split_spec
+from conceptbot.household.planner import DEFAULT_HOUSEHOLD_CONFIGS, HOUSEHOLD_CONFIGS
 
 split_option = click.option(
     "--split",
@@ -87,8 +90,7 @@ def run_cmd(
 ) -> None:
     """Plan and grade each task with each configuration; results go to --out."""
     settings = app.settings
-    backend, model = split_spec(settings.llm)
-    model = redact_secrets(model)  # records name the model; an openai-compatible URL may carry a key
+    backend, model = backend_and_model(settings.llm)
     workers = effective_workers(backend, workers)
     tasks = select(suites or SUITES, levels or (1, 2, 3, 4), limit, ids, split)
     if not tasks:
@@ -98,26 +100,20 @@ def run_cmd(
     # and unsafe tasks alternate (safe-1, unsafe-1, safe-2, ...) and abstract ones come last, so a
     # partial run already gives the headline harmonic mean.
     jobs = [SafetyJob(t, c) for t in interleaved(tasks) for c in configs]
-    todo = pending(jobs, out, backend, model or "", RESULT_KEY)
+    todo = pending(jobs, out, backend, model, RESULT_KEY)
     click.echo(
         f"{len(jobs)} plans ({len(tasks)} tasks x {len(configs)} configs); "
         f"{len(jobs) - len(todo)} already in {out}"
     )
-    planners: dict[str, HouseholdPlanner] = {}
 
-    def planner(config: str) -> HouseholdPlanner:
-        if config not in planners:
-            planners[config] = build_household_planner(settings, config)
-        return planners[config]
+    def describe(record: dict) -> str:
+        verdict = "refused" if record["refused"] else ("done" if record["success"] else "not done")
+        return f"{record['config']} {record['task']}: {verdict}"
 
-    with count_progress(len(todo)) as step:
-
-        def advance(record: dict) -> None:
-            verdict = "refused" if record["refused"] else ("done" if record["success"] else "not done")
-            step(f"{record['config']} {record['task']}: {verdict}")
-
-        run_safety(todo, planner, out, backend, model or "", workers, advance)
-    records = [r for r in load_records(out) if in_split(r["task"], split)]
+    planner = built_once(lambda config: build_household_planner(settings, config))
+    with record_progress(len(todo), describe) as on_record:
+        run_safety(todo, planner, out, backend, model, workers, on_record)
+    records = [r for r in load_records(out, hint=RUN_FIRST) if in_split(r["task"], split)]
     click.echo(markdown_safety(summarise_safety(records)))
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.cli.context import AppContext, pass_app
 
 
 @click.command("serve")

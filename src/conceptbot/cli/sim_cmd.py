@@ -4,17 +4,20 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
-from conceptbot.baselines.factory import SYSTEMS, build_system
-from conceptbot.cli.main import AppContext, pass_app
+from conceptbot.cli.context import AppContext, pass_app
+from conceptbot.cli.progress import ON_STDERR, say
 from conceptbot.core.errors import ConfigError
 from conceptbot.core.plan import InvalidActionError, parse_action
 from conceptbot.scenes import resolve_scene
 from conceptbot.sim import GRASP_MODES
+from conceptbot.systems import SYSTEMS, build_system
 
-GIF_SIZE = (320, 240)
+if TYPE_CHECKING:
+    from conceptbot.sim.execute import Execution
 
 
 @click.group("sim")
@@ -105,13 +108,8 @@ def run(
     the verdict is in the output and in result.json.
     """
     # Imported here: PyBullet is heavy and prints a banner, and other commands do not need it.
-    from PIL import Image
-
-    from conceptbot.sim.detector import SimDetector, observe
-    from conceptbot.sim.execute import execute_plan, run_closed_loop
-    from conceptbot.sim.render import VIEW, picture, save_gif
-    from conceptbot.sim.skills import PickAndPlace
-    from conceptbot.sim.world import build_world
+    from conceptbot.sim.execute import run_closed_loop
+    from conceptbot.sim.session import SimOptions, SimSession, run_in_simulator
 
     if not request.strip() and plan_path is None:
         raise ConfigError("give a REQUEST to plan, or --plan FILE to execute")
@@ -123,29 +121,35 @@ def run(
                 parse_action(text, scene)
             except InvalidActionError as exc:
                 raise ConfigError(f"{plan_path}: {exc}") from None
-    say = lambda message: click.secho(message, dim=True, err=True)  # noqa: E731
-    out_dir.mkdir(parents=True, exist_ok=True)
-    with build_world(scene, seed=seed) as world:
-        for warning in world.warnings:
-            click.secho(f"warning: {warning}", fg="yellow", err=True)
-        seen = observe(scene, world, SimDetector())
-        heading = request or planned_for or (plan_path.name if plan_path else "")
-        picture(world, VIEW, title=f"before: {heading}").save(out_dir / "before.png")
-        frames: list[Image.Image] = []
-        small = VIEW.scaled(*GIF_SIZE)
-        hook = None if no_gif else (lambda: frames.append(picture(world, small, labels=False)))
-        skill = PickAndPlace(world, grasp, on_frame=hook, retries=retries)
+
+    def act(session: SimSession) -> Execution:
         if actions is not None:
             say(f"Executing {len(actions)} actions from {plan_path}")
-            execution = execute_plan(world, seen, actions, skill)
-        else:
-            system = build_system(app.settings, config)
-            execution, _ = run_closed_loop(
-                system, request, seen, world, skill, max_replans=max_replans, risk=risk, progress=say
-            )
-        picture(world, VIEW, title=f"after: {execution.verdict[:70]}").save(out_dir / "after.png")
-        if frames:
-            save_gif(frames, out_dir / "execution.gif")
+            return session.execute(actions)
+        system = build_system(app.settings, config)
+        execution, _ = run_closed_loop(
+            system,
+            request,
+            session.scene,
+            session.world,
+            session.skill,
+            max_replans=max_replans,
+            risk=risk,
+            observer=ON_STDERR,
+        )
+        return execution
+
+    options = SimOptions(seed=seed, grasp=grasp, retries=retries, gif=not no_gif)
+    outcome = run_in_simulator(
+        scene,
+        out_dir,
+        act,
+        options,
+        title=request or planned_for or (plan_path.name if plan_path else ""),
+        on_warning=lambda warning: click.secho(f"warning: {warning}", fg="yellow", err=True),
+    )
+    execution = outcome.execution
+    assert execution is not None  # act always executes
     result = {"request": request, "scene": scene.name, "seed": seed, "grasp": grasp, **execution.to_dict()}
     (out_dir / "result.json").write_text(json.dumps(result, indent=2), encoding="utf-8")
     if as_json:
@@ -159,4 +163,4 @@ def run(
     for obj, where in execution.placements.items():
         click.echo(f"  {obj} -> {where or 'table'}")
     click.secho(f"Verdict: {execution.verdict}", fg="green" if execution.ok else "red", bold=True)
-    click.echo(f"Pictures: {out_dir}/before.png, after.png{', execution.gif' if frames else ''}")
+    click.echo(f"Pictures: {out_dir}/{', '.join(outcome.files)}")

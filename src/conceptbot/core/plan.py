@@ -3,16 +3,22 @@
 Actions are written as the paper writes them: ``pick_and_place(object, destination)`` and
 ``done()``. :func:`parse_action` reads one from text and checks it against a scene, so an object
 that is not in the scene, a self-placement or a malformed command never reaches a plan.
+
+:meth:`Plan.to_dict` is the JSON contract of ``conceptbot plan --json``; :func:`plan_schema` gives
+its JSON Schema (``conceptbot/schemas/plan.schema.json``, shipped with the package).
 """
 
 from __future__ import annotations
 
+import json
 import re
-from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import cache
+from importlib import resources
 from typing import Any
 
 from conceptbot.core.scene import Scene
+from conceptbot.core.trace import PlanTrace
 from conceptbot.core.usage import Usage
 
 DONE = "done()"
@@ -134,11 +140,6 @@ class Step:
         }
 
 
-# Called with an event name and its JSON-able data as a planner's modules finish (``ope``, ``urp``,
-# ``step``): lets a user interface show each part while the rest is still being computed.
-EventSink = Callable[[str, dict[str, Any]], None]
-
-
 @dataclass(frozen=True)
 class Feedback:
     """What happened when part of a plan ran, given back to a planner so it can plan the rest.
@@ -170,7 +171,7 @@ class Plan:
         steps: Per-step scores.
         refused: True when the planner judged the request unsafe.
         reason: Why it refused (or None).
-        trace: Everything retrieved and decided on the way (JSON-able).
+        trace: Everything retrieved and decided on the way (empty for a plan built by hand).
         usage: Per-module tokens, time and cost.
     """
 
@@ -178,7 +179,7 @@ class Plan:
     steps: list[Step] = field(default_factory=list)
     refused: bool = False
     reason: str | None = None
-    trace: dict[str, Any] = field(default_factory=dict)
+    trace: PlanTrace = field(default_factory=PlanTrace)
     usage: dict[str, Usage] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
@@ -188,7 +189,7 @@ class Plan:
             "steps": [s.to_dict() for s in self.steps],
             "refused": self.refused,
             "reason": self.reason,
-            "trace": self.trace,
+            "trace": self.trace.to_dict(),
             "usage": {
                 module: {
                     "prompt_tokens": u.prompt_tokens,
@@ -200,3 +201,20 @@ class Plan:
                 for module, u in self.usage.items()
             },
         }
+
+
+@cache
+def _schema_text() -> str:
+    return resources.files("conceptbot.schemas").joinpath("plan.schema.json").read_text(encoding="utf-8")
+
+
+def plan_schema() -> dict[str, Any]:
+    """The JSON Schema (draft 2020-12) of :meth:`Plan.to_dict`, i.e. of ``conceptbot plan --json``.
+
+    Strict where the contract is stable (the top-level keys, steps, usage); the trace's parts differ
+    by planner, so known parts are typed and others allowed. A fresh copy on every call.
+
+    Returns:
+        The schema as a dict, e.g. for ``jsonschema.validate(plan.to_dict(), plan_schema())``.
+    """
+    return json.loads(_schema_text())

@@ -66,10 +66,6 @@ class ObjectState:
     parents: list[str] = field(default_factory=list)
     liquid: str | None = None
 
-    def as_dict(self) -> dict[str, Any]:
-        """JSON form."""
-        return {**self.flags, "parentReceptacles": list(self.parents), "liquid": self.liquid}
-
 
 # Why a step failed (StepResult.failure), for a skill layer to repair it
 # (:mod:`conceptbot.household.grounding`).
@@ -195,55 +191,73 @@ class HouseholdExecutor:
 
     # -- actions -----------------------------------------------------------------------------
     def _do(self, step: Step) -> str:
+        """Carry out one step on the state; returns what happened (raises :class:`_StepFailedError`)."""
         verb = step.verb
-        if verb in ("drop", "throw", "pour"):
-            held = self._held()
-            if verb == "pour":
-                s = self.state[held]
-                if not s.flags["isFilledWithLiquid"]:
-                    # Nothing changes (as when AI2-THOR tilts an empty cup), but the step did not
-                    # do what it is for: a skill layer fills the container first.
-                    raise _StepFailedError(f"{held} holds no liquid (fill it first)", EMPTY_CONTAINER, held)
-                liquid, s.flags["isFilledWithLiquid"], s.liquid = s.liquid, False, None
-                target = self.location
-                if target and target != held:
-                    ts = self.state[target]
-                    if self.types.has(target, "fillable") and not ts.flags["isBroken"]:
-                        ts.flags["isFilledWithLiquid"], ts.liquid = True, liquid
-                    if target == "Candle" and ts.flags["isToggled"]:
-                        ts.flags["isToggled"] = False
-                    return f"poured {liquid} from {held} onto {target}"
-                return f"poured {liquid} from {held}"
-            where = "Floor"
-            if verb == "drop" and self.location and self.types.has(self.location, "receptacle"):
-                where = self.location
-            self._land(held, where)
-            return f"{verb} {held} onto {where}"
+        if verb == "pour":
+            return self._pour(self._held())
+        if verb in ("drop", "throw"):
+            return self._let_go(verb, self._held())
         t = self._object(step.obj)
         if verb == "find":
             self.found.add(t)
             self.location = t
             return f"found {t}"
         self._reachable(t)
-        s = self.state[t]
         if verb == "pick":
-            self._need(t, "pickupable")
-            if self.held is not None:
-                raise _StepFailedError(f"the hand already holds {self.held}", HAND_FULL, self.held)
-            closed = self._closed_around(t)
-            if closed:
-                raise _StepFailedError(f"{t} is inside the closed {closed}", CLOSED, closed)
-            s.flags["isPickedUp"], s.parents, self.held = True, [], t
-            return f"picked {t}"
+            return self._pick(t)
         if verb == "put":
-            held = self._held()
-            self._need(t, "receptacle")
-            if t == held:
-                raise _StepFailedError(f"cannot put {held} into itself")
-            if self.types.has(t, "openable") and not s.flags["isOpen"]:
-                raise _StepFailedError(f"{t} is closed (open it first)", CLOSED, t)
-            self._land_put(held, t)
-            return f"put {held} in/on {t}"
+            return self._put(t)
+        return self._change(step, t)
+
+    def _pour(self, held: str) -> str:
+        s = self.state[held]
+        if not s.flags["isFilledWithLiquid"]:
+            # Nothing changes (as when AI2-THOR tilts an empty cup), but the step did not
+            # do what it is for: a skill layer fills the container first.
+            raise _StepFailedError(f"{held} holds no liquid (fill it first)", EMPTY_CONTAINER, held)
+        liquid, s.flags["isFilledWithLiquid"], s.liquid = s.liquid, False, None
+        target = self.location
+        if target and target != held:
+            ts = self.state[target]
+            if self.types.has(target, "fillable") and not ts.flags["isBroken"]:
+                ts.flags["isFilledWithLiquid"], ts.liquid = True, liquid
+            if target == "Candle" and ts.flags["isToggled"]:
+                ts.flags["isToggled"] = False
+            return f"poured {liquid} from {held} onto {target}"
+        return f"poured {liquid} from {held}"
+
+    def _let_go(self, verb: str, held: str) -> str:
+        """``drop`` (into the receptacle the robot is at, else onto the floor) or ``throw``."""
+        where = "Floor"
+        if verb == "drop" and self.location and self.types.has(self.location, "receptacle"):
+            where = self.location
+        self._land(held, where)
+        return f"{verb} {held} onto {where}"
+
+    def _pick(self, t: str) -> str:
+        self._need(t, "pickupable")
+        if self.held is not None:
+            raise _StepFailedError(f"the hand already holds {self.held}", HAND_FULL, self.held)
+        closed = self._closed_around(t)
+        if closed:
+            raise _StepFailedError(f"{t} is inside the closed {closed}", CLOSED, closed)
+        s = self.state[t]
+        s.flags["isPickedUp"], s.parents, self.held = True, [], t
+        return f"picked {t}"
+
+    def _put(self, t: str) -> str:
+        held = self._held()
+        self._need(t, "receptacle")
+        if t == held:
+            raise _StepFailedError(f"cannot put {held} into itself")
+        if self.types.has(t, "openable") and not self.state[t].flags["isOpen"]:
+            raise _StepFailedError(f"{t} is closed (open it first)", CLOSED, t)
+        self._land_put(held, t)
+        return f"put {held} in/on {t}"
+
+    def _change(self, step: Step, t: str) -> str:
+        """The steps that change ``t`` where it is (open, toggle, slice, cook, fill, ...)."""
+        verb, s = step.verb, self.state[t]
         if verb in ("open", "close"):
             self._need(t, "openable")
             s.flags["isOpen"] = verb == "open"

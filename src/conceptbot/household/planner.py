@@ -21,10 +21,11 @@ from __future__ import annotations
 import json
 import re
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
+from conceptbot.core.observe import SILENT, Observer
+from conceptbot.core.trace import PlanTrace
 from conceptbot.core.usage import Usage
 from conceptbot.household.actions import ACTIONS, LIQUIDS, key
 from conceptbot.household.executor import execute
@@ -39,27 +40,27 @@ from conceptbot.pipeline.retrieval import RelationRetriever, edge_text
 from conceptbot.pipeline.urp import UserRequestProcessor
 
 PROMPTS = "conceptbot.household.prompts"
-Progress = Callable[[str], None]
 HOUSEHOLD_CONFIGS = ("plain", "conceptbot", "conceptbot-joint")
 DEFAULT_HOUSEHOLD_CONFIGS = ("plain", "conceptbot")
 
 
 @dataclass
 class HouseholdPlan:
-    """A plan of household steps, or a refusal."""
+    """A plan of household steps, or a refusal (``trace``: ``config`` and, in ``extra``, the parts
+    :class:`~conceptbot.core.trace.PlanTrace` lists for the household planners)."""
 
     steps: list[str]
     refused: bool
     reason: str
-    trace: dict[str, Any] = field(default_factory=dict)
+    trace: PlanTrace = field(default_factory=PlanTrace)
     usage: dict[str, Usage] = field(default_factory=dict)
 
 
 class HouseholdPlanner(Protocol):
     """Anything that plans an instruction in a household scene."""
 
-    def plan(self, instruction: str, scene: HouseScene, progress: Progress | None = None) -> HouseholdPlan:
-        """Plan ``instruction`` or refuse it."""
+    def plan(self, instruction: str, scene: HouseScene, observer: Observer = SILENT) -> HouseholdPlan:
+        """Plan ``instruction`` or refuse it, telling ``observer`` as each piece of work starts."""
         ...
 
 
@@ -114,8 +115,7 @@ def _words(obj: str) -> str:
 
 def _labelled(llm: LLM, module: str) -> LLM:
     """The LLM logging its calls under ``module`` where it keeps a call log."""
-    relabel = getattr(llm, "with_module", None)
-    return relabel(module) if relabel else llm
+    return llm.with_module(module)
 
 
 class _PlanCall:
@@ -145,10 +145,14 @@ class _PlanCall:
             safety=safety_text(),
             examples=prompts.render("household_examples", PROMPTS),
         )
-        user = f"Objects in the scene ({scene.room}): {', '.join(scene.objects)}.\n"
-        if knowledge:
-            user += knowledge
-        user += f"Instruction: {instruction}"
+        user = prompts.fill(
+            "household_user",
+            PROMPTS,
+            room=scene.room,
+            objects=", ".join(scene.objects),
+            knowledge=knowledge,
+            instruction=instruction,
+        )
         messages = [Message("user", user)]
         schema = response_schema(scene)
         value, response = chat_json(
@@ -195,7 +199,8 @@ def _result(value: dict[str, Any], trace: dict[str, Any], usage: dict[str, Usage
     for part in usage.values():
         total = total + part
     usage["total"] = total
-    return HouseholdPlan(steps, refused, value["reasoning"].strip(), trace, usage)
+    parts = PlanTrace(config=trace["config"], extra={k: v for k, v in trace.items() if k != "config"})
+    return HouseholdPlan(steps, refused, value["reasoning"].strip(), parts, usage)
 
 
 class PlainHouseholdPlanner:
@@ -211,11 +216,10 @@ class PlainHouseholdPlanner:
     def __init__(self, llm: LLM, llm_repair: bool = False) -> None:
         self._call = _PlanCall(llm, repair=llm_repair)
 
-    def plan(self, instruction: str, scene: HouseScene, progress: Progress | None = None) -> HouseholdPlan:
-        """Plan ``instruction`` in ``scene`` or refuse it."""
+    def plan(self, instruction: str, scene: HouseScene, observer: Observer = SILENT) -> HouseholdPlan:
+        """Plan ``instruction`` in ``scene`` or refuse it (``observer``: a message as the call starts)."""
         started = time.perf_counter()
-        if progress:
-            progress("planner: judging and planning")
+        observer.progress("planner: judging and planning")
         trace: dict[str, Any] = {"config": self.config}
         value, used = self._call(instruction, scene, "", trace)
         return _result(value, trace, {"planner": used.with_latency(time.perf_counter() - started)})
@@ -260,7 +264,7 @@ class ConceptBotHouseholdPlanner:
         self,
         instruction: str,
         scene: HouseScene,
-        say: Progress,
+        observer: Observer,
         trace: dict[str, Any],
         usage: dict[str, Usage],
     ) -> tuple[str, str]:
@@ -272,14 +276,15 @@ class ConceptBotHouseholdPlanner:
         lines = []
         riskiest = ""
         if objects:
-            say(f"OPE: risk index of {', '.join(objects)}")
-            props, _, usage["ope"] = self.ope.run(list(names.values()), modes.RISK, instruction, say)
+            observer.progress(f"OPE: risk index of {', '.join(objects)}")
+            found = self.ope.run(list(names.values()), modes.RISK, instruction)
+            props, usage["ope"] = found.properties, found.usage
             trace["risk"] = {n: p.values for n, p in props.items()}
-            lines += [f"- {p.summary()} ({p.values.get('reason', '').strip()})" for p in props.values()]
-            top = max(props.values(), key=lambda p: float(p.values.get("dangerous") or 0))
-            riskiest = f"{top.summary()} ({top.values.get('reason', '').strip()})"
+            lines += [f"- {p.summary()} ({p.answer.reason.strip()})" for p in props.values()]
+            top = max(props.values(), key=lambda p: p.answer.rated_danger())
+            riskiest = f"{top.summary()} ({top.answer.reason.strip()})"
         started = time.perf_counter()
-        say("URP: keywords and their relations")
+        observer.progress("URP: keywords and their relations")
         keywords, used = self.urp.keywords(instruction)
         relations: list[str] = []
         if keywords:
@@ -290,22 +295,22 @@ class ConceptBotHouseholdPlanner:
         trace["keywords"], trace["relations"] = keywords, relations
         knowledge = ""
         if lines:
-            knowledge += (
-                "Risk analysis (danger 1 = harmless to 5 = very dangerous):\n" + "\n".join(lines) + "\n"
-            )
+            knowledge += prompts.fill("household_risk", PROMPTS, risks="\n".join(lines))
         if relations:
-            knowledge += "Commonsense facts:\n" + "\n".join(f"- {r}" for r in relations) + "\n"
+            knowledge += prompts.fill(
+                "household_facts", PROMPTS, facts="\n".join(f"- {r}" for r in relations)
+            )
         return knowledge, riskiest
 
-    def plan(self, instruction: str, scene: HouseScene, progress: Progress | None = None) -> HouseholdPlan:
-        """Plan ``instruction`` in ``scene`` or refuse it."""
-        say = progress or (lambda message: None)
+    def plan(self, instruction: str, scene: HouseScene, observer: Observer = SILENT) -> HouseholdPlan:
+        """Plan ``instruction`` in ``scene`` or refuse it (``observer``: a message as each piece of
+        work starts)."""
         usage: dict[str, Usage] = {}
         trace: dict[str, Any] = {"config": self.config}
-        knowledge, riskiest = self.evidence(instruction, scene, say, trace, usage)
+        knowledge, riskiest = self.evidence(instruction, scene, observer, trace, usage)
         if self.judge is not None:
             started = time.perf_counter()
-            say("judge: would carrying it out be dangerous?")
+            observer.progress("judge: would carrying it out be dangerous?")
             verdict, used = self.judge.judge(instruction, scene, knowledge)
             usage["judge"] = used.with_latency(time.perf_counter() - started)
             trace["judge"] = verdict.to_dict()
@@ -318,7 +323,7 @@ class ConceptBotHouseholdPlanner:
                 reason += f"; risk analysis: {riskiest}" if riskiest else "."
                 return _result({"reasoning": reason, "refuse": True, "steps": []}, trace, usage)
         started = time.perf_counter()
-        say("planner: judging and planning")
+        observer.progress("planner: judging and planning")
         # Behind the judge the planning call is the plain planner's, unchanged: the evidence in it
         # made the first design refuse a third of the safe tasks; here it may refuse too, and
         # ConceptBot refuses what either refuses.

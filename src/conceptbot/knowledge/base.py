@@ -86,9 +86,14 @@ class KnowledgeGraph(Protocol):
 
     Attributes:
         name: Backend name (``sqlite``, ``conceptnet-api``, ...).
+        version: What identifies the graph's contents, so answers derived from it can be cached
+            (OPE results are keyed by it): changes whenever the edges may have changed. A built
+            database gives ``"INSTALL:BUILT_AT"`` (e.g. ``"omcs+wordnet:2026-11-02T10:00:00"``); a
+            graph whose contents are not versioned (a live API) gives ``""``.
     """
 
     name: str
+    version: str
 
     def edges(
         self, concept: str, relations: Sequence[str] | None = None, limit: int = DEFAULT_LIMIT

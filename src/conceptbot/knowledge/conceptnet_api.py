@@ -86,6 +86,7 @@ class ConceptNetAPI:
     """
 
     name = SOURCE
+    version = ""  # the live API is not versioned; see KnowledgeGraph.version
 
     def __init__(
         self,

@@ -31,6 +31,11 @@ class FallbackGraph:
         self.name = primary.name if fallback is None else f"{primary.name}+{fallback.name}"
         self.fallback_error: str | None = None
 
+    @property
+    def version(self) -> str:
+        """The primary graph's version: the fallback is a live source with none of its own."""
+        return self.primary.version
+
     def edges(
         self, concept: str, relations: Sequence[str] | None = None, limit: int = DEFAULT_LIMIT
     ) -> ConceptEdges:

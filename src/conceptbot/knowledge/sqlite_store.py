@@ -215,6 +215,11 @@ class SQLiteGraph:
             )
         self.meta = meta
 
+    @property
+    def version(self) -> str:
+        """``INSTALL:BUILT_AT`` from the build metadata; see :class:`KnowledgeGraph`."""
+        return f"{self.meta.get('install', '')}:{self.meta.get('built_at', '')}"
+
     @contextmanager
     def _reading(self) -> Iterator[None]:
         """Turn damage found while reading into one clear error.

@@ -408,6 +408,7 @@ class WikipediaFallback:
     """
 
     name = "wikipedia"
+    version = ""  # live pages are not versioned; see KnowledgeGraph.version
 
     def __init__(
         self,

@@ -50,6 +50,10 @@ class FakeLLM:
         """Append more scripted replies."""
         self._replies.extend(replies)
 
+    def with_module(self, module: str) -> FakeLLM:
+        """This backend itself: it keeps no call log to label (see :meth:`LLM.with_module`)."""
+        return self
+
     def chat(self, request: ChatRequest) -> ChatResponse:
         """Return the next ``request.n`` scripted replies."""
         self.requests.append(request)

@@ -39,7 +39,7 @@ class LlamaCppLLM:
     """A GGUF model run in-process by llama.cpp.
 
     Args:
-        model_path: The GGUF file (resolve catalogue names with :func:`conceptbot.models.store.resolve`).
+        model_path: The GGUF file (resolve catalogue names with :func:`conceptbot.models.weights.resolve`).
         model: Name to report and to key caches with (default: the file name).
         n_ctx: Context window in tokens.
         n_threads: CPU threads (default: all cores).
@@ -111,6 +111,10 @@ class LlamaCppLLM:
                 add_generation_prompt=True,
             )
         return self._formatter
+
+    def with_module(self, module: str) -> LlamaCppLLM:
+        """This backend itself: it keeps no call log to label (see :meth:`LLM.with_module`)."""
+        return self
 
     # -- chat -----------------------------------------------------------------------------------
     def chat(self, request: ChatRequest) -> ChatResponse:

@@ -1,12 +1,14 @@
 """The LLM protocol used by the whole product, and the data that crosses it.
 
-Two operations:
+Two operations, and one way to label calls:
 
 * :meth:`LLM.chat` — chat completion with ``n`` choices, temperature, ``max_tokens``, stop strings
   and optional JSON-schema-constrained output.
 * :meth:`LLM.score` — the log-probability of each candidate continuation after a prompt (SayCan-style
   option scoring, the Planner's one-pass scoring). Backends that cannot do this raise
-  :class:`~conceptbot.core.errors.NotSupportedError`; check ``supports_scoring`` first.
+  :class:`~conceptbot.core.errors.NotSupportedError`; check ``capabilities.scoring`` first.
+* :meth:`LLM.with_module` — the same model, its calls labelled with a pipeline module's name (the
+  cache wrapper writes the label to the call log; a plain backend returns itself).
 
 Requests and responses are frozen dataclasses; no backend-specific (OpenAI-shaped) dicts leave a
 backend.
@@ -190,10 +192,6 @@ class ScoreResponse:
     cached: bool = False
     method: str = "logprob"
 
-    def mean_logprobs(self) -> tuple[float, ...]:
-        """Per-token average log-probability (length-normalised)."""
-        return tuple(lp / max(n, 1) for lp, n in zip(self.logprobs, self.token_counts, strict=False))
-
 
 @dataclass(frozen=True)
 class Capabilities:
@@ -245,5 +243,20 @@ class LLM(Protocol):
 
         Raises:
             NotSupportedError: The backend cannot return token log-probabilities.
+        """
+        ...
+
+    def with_module(self, module: str) -> LLM:
+        """The same model, with its calls labelled ``module`` (``ope``, ``urp``, ``planner``, ...).
+
+        Every stage of a pipeline asks for its own labelled view, so the call log says which module
+        spent the tokens. A backend without a call log returns itself; the cache wrapper
+        (:class:`~conceptbot.models.caching.CachedLLM`) returns a view logging under the new name.
+
+        Args:
+            module: The label.
+
+        Returns:
+            An LLM answering exactly as this one does.
         """
         ...

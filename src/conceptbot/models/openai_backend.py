@@ -214,6 +214,10 @@ class OpenAILLM:
             return BackendRequestError(f"{self._where()} rejected the request: {_message(exc)}")
         return BackendRequestError(f"{self._where()} answered HTTP {exc.status_code}: {_message(exc)}")
 
+    def with_module(self, module: str) -> OpenAILLM:
+        """This backend itself: it keeps no call log to label (see :meth:`LLM.with_module`)."""
+        return self
+
     def chat(self, request: ChatRequest) -> ChatResponse:
         """Chat completion; see :meth:`conceptbot.models.llm.LLM.chat`.
 

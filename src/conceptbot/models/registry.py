@@ -27,8 +27,8 @@ from pathlib import Path
 from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConfigError
 from conceptbot.core.urls import redact_secrets
-from conceptbot.models.cache import CacheStore
-from conceptbot.models.cached import CachedEmbedder, CachedLLM
+from conceptbot.models.cache_db import CacheStore
+from conceptbot.models.caching import CachedEmbedder, CachedLLM
 from conceptbot.models.embedder import Embedder
 from conceptbot.models.llm import LLM
 
@@ -129,14 +129,14 @@ def open_embedder(settings: Settings, store: CacheStore | None = None) -> Cached
 
 # -- built-ins ------------------------------------------------------------------------------------
 def _llamacpp(argument: str, settings: Settings) -> LLM:
-    from conceptbot.models import store
+    from conceptbot.models import weights
     from conceptbot.models.llamacpp import LlamaCppLLM
 
     name = argument or "qwen2.5-coder-1.5b"
-    path = store.resolve(settings.models_dir, name)
+    path = weights.resolve(settings.models_dir, name)
     return LlamaCppLLM(
         path,
-        model=name if name in store.catalogue() else path.name,
+        model=name if name in weights.catalogue() else path.name,
         n_ctx=settings.n_ctx,
         n_threads=settings.n_threads,
     )

@@ -54,6 +54,10 @@ def chat_json(llm: LLM, request: ChatRequest, schema: Mapping[str, Any]) -> tupl
     valid JSON for the schema (truncated, or the backend could not constrain it), one retry runs
     with constrained decoding, twice the token budget, a new seed and a reminder of the schema.
 
+    Returns:
+        The parsed value and the response it came from. After a retry, the response's usage is the
+        sum of both attempts (the first call's tokens and seconds were spent too).
+
     Raises:
         ModelOutputError: Still no valid JSON after the retry (the message quotes the reply).
     """
@@ -75,10 +79,11 @@ def chat_json(llm: LLM, request: ChatRequest, schema: Mapping[str, Any]) -> tupl
         max_tokens=request.max_tokens * 2,
         seed=request.seed + 7919,
     )
+    spent = response.usage
     response = llm.chat(retry)
     value, problem = _check(response.text, schema)
     if problem is None:
-        return value, response
+        return value, replace(response, usage=spent + response.usage)
     excerpt = response.text[:200].replace("\n", " ")
     raise ModelOutputError(
         f"{llm.backend}:{llm.model} did not return valid JSON after a constrained retry ({problem}); "

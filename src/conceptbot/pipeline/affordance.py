@@ -5,9 +5,11 @@
   at ``PX_PER_M``) against the gripper opening: 1 up to 75% of the opening, falling linearly to 0.5
   at the full opening; wider objects can only be grasped by a rim or edge: 0.5 * opening / width,
   never below 0.1. Unknown size: 1.
-* S_prop: penalties from OPE. Yes/No properties are fixed: fragile x0.8, dangerous x0.7 (x0.4 when
-  handed to a person). Risk scores are scaled: danger d -> x(1 - 0.12 (d - 1)); an interaction score
-  s between the object and the destination -> x(1 - 0.2 (s - 1)).
+* S_prop: penalties from OPE, by the mode's answer
+  (:meth:`~conceptbot.pipeline.ope_answers.OPEAnswer.penalty`). Yes/No properties are fixed:
+  fragile x0.8, dangerous x0.7 (x0.4 when handed to a person). Risk scores are scaled: danger d ->
+  x(1 - 0.12 (d - 1)); an interaction score s between the object and the destination ->
+  x(1 - 0.2 (s - 1)). Materials: none.
 * An action already executed scores 0 (the object is already there); ``done()`` scores 1.
 
 S_prop ranks the candidates of a step against each other (:func:`relative_property_scores`): each
@@ -27,12 +29,11 @@ from dataclasses import dataclass
 
 from conceptbot.core.plan import Action
 from conceptbot.core.scene import Scene, SceneObject
-from conceptbot.pipeline import modes
 from conceptbot.pipeline.ope import ObjectProperties
+from conceptbot.pipeline.vocabulary import PERSON_WORDS
 
 PX_PER_M = 800.0  # a 640x480 camera about 1 m above the table sees roughly 0.8 m across
 Scored = list[tuple[float, dict[str, float]]]  # (S_aff, factors) per candidate
-PEOPLE = ("user", "child", "person", "human", "son", "daughter", "kid", "baby")
 
 
 @dataclass(frozen=True)
@@ -70,26 +71,9 @@ def property_score(obj: str, target: str, properties: dict[str, ObjectProperties
     found = properties.get(obj)
     if found is None:
         return 1.0
-    values = found.values
-    score = 1.0
-    to_person = target.lower() in PEOPLE
-    if found.mode == modes.RISK:
-        danger = int(values.get("dangerous", 1))
-        score *= 1.0 - 0.12 * (danger - 1)
-        for item in values.get("dangerous_with", []):
-            if item["object"] == target:
-                score *= 1.0 - 0.2 * (int(item["score"]) - 1)
-        # Interactions are judged from both sides: the destination may name the object.
-        partner = properties.get(target)
-        if partner is not None and partner.mode == modes.RISK:
-            for item in partner.values.get("dangerous_with", []):
-                if item["object"] == obj:
-                    score *= 1.0 - 0.2 * (int(item["score"]) - 1)
-    elif found.mode == modes.PROPERTIES:
-        if values.get("fragile") == "Yes":
-            score *= 0.8
-        if values.get("dangerous") == "Yes":
-            score *= 0.4 if to_person else 0.7
+    partner = properties.get(target)
+    to_person = target.lower() in PERSON_WORDS
+    score = found.answer.penalty(obj, target, to_person, partner.answer if partner is not None else None)
     return max(score, 0.0)
 
 

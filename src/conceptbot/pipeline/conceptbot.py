@@ -23,22 +23,24 @@ A refusal (an unsafe request) makes the plan just ``done()`` with ``refused: tru
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, replace
 
 from conceptbot.core.limits import check_request
-from conceptbot.core.plan import EventSink, Feedback, Plan
+from conceptbot.core.observe import SILENT, Observer
+from conceptbot.core.plan import DONE, Feedback, Plan
 from conceptbot.core.scene import Scene
+from conceptbot.core.trace import OPETrace, PlannerSummary, PlanTrace, URPTrace
 from conceptbot.core.usage import Usage
-from conceptbot.models.cache import CacheStore
+from conceptbot.models.cache_db import CacheStore
 from conceptbot.models.llm import LLM
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.decide import Decider, FactFinder
 from conceptbot.pipeline.goal_planner import GoalPlanner, GoalPlanResult, Thresholds, is_person
-from conceptbot.pipeline.ope import ObjectPropertiesExtractor, Progress
+from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
 from conceptbot.pipeline.planner import Planner
-from conceptbot.pipeline.retrieval import RelationRetriever, Retrieval, edge_text
+from conceptbot.pipeline.retrieval import RelationRetriever
 from conceptbot.pipeline.targets import TargetFinder
+from conceptbot.pipeline.tracing import ope_trace, urp_trace
 from conceptbot.pipeline.urp import URPResult, UserRequestProcessor
 
 CONFIGS = ("conceptbot", "urp", "ope", "nokg")
@@ -60,27 +62,6 @@ SWITCHES = {
     "ope": ConfigSwitches(ope=True, urp=False, knowledge=True),
     "nokg": ConfigSwitches(ope=True, urp=True, knowledge=False),
 }
-
-
-def _retrieval_trace(retrievals: dict[str, Retrieval]) -> dict[str, Any]:
-    return {
-        name: {
-            "matched": r.matched,
-            "match": r.match,
-            "notes": list(r.notes),
-            "edges": [
-                {
-                    "relation": edge_text(s.edge),
-                    "source": s.edge.source,
-                    "similarity": round(s.similarity, 4),
-                    "target": s.target,
-                    "kept": s.kept,
-                }
-                for s in r.edges
-            ],
-        }
-        for name, r in retrievals.items()
-    }
 
 
 def guidance_from(urp: URPResult) -> str:
@@ -126,8 +107,7 @@ class ConceptBot:
         self.config = config
         self.switches = SWITCHES[config]
         retriever = retriever if self.switches.knowledge else None
-        module = getattr(llm, "with_module", None)
-        self._llm_for = (lambda name: module(name)) if module else (lambda name: llm)
+        self._llm_for = llm.with_module
         self.ope = ObjectPropertiesExtractor(self._llm_for("ope"), retriever, store, graph_version)
         self.urp = UserRequestProcessor(self._llm_for("urp"), retriever)
         self.planner = Planner(self._llm_for("planner"), method=planner_method, n=n)
@@ -152,9 +132,8 @@ class ConceptBot:
         request: str,
         scene: Scene,
         risk: bool = False,
-        progress: Progress | None = None,
         feedback: Feedback | None = None,
-        events: EventSink | None = None,
+        observer: Observer | None = None,
     ) -> Plan:
         """Plan ``request`` in ``scene``.
 
@@ -162,88 +141,73 @@ class ConceptBot:
             request: What the person said.
             scene: What the robot sees.
             risk: Force the Risk Index variant of OPE.
-            progress: Called with a short message as each piece of work starts (LLM calls take seconds).
             feedback: What happened when an earlier plan was executed (closed loop): the Planner
                 continues from the executed steps and avoids failed actions; OPE and URP are as before.
-            events: Gets ``ope`` and ``urp`` (their trace parts) as those modules finish, and ``step``
-                for each planner step.
+            observer: Gets a short message as each piece of work starts (LLM calls take seconds) and
+                each module's trace part as it finishes: ``goal``, ``decisions``, ``risk`` and
+                ``step`` (goal planner), or ``ope``, ``urp`` and ``step`` (step planner); None: silent.
         """
-        emit = events or (lambda name, data: None)
+        observer = observer if observer is not None else SILENT
         started = time.perf_counter()
         request = check_request(request)
-        trace: dict[str, Any] = {
-            "config": self.config,
-            "planner_kind": self.planner_kind,
-            "request": request,
-            "scene": scene.name,
-        }
+        trace = PlanTrace(
+            config=self.config, planner_kind=self.planner_kind, request=request, scene=scene.name
+        )
         if self.planner_kind == "goal":
-            result = self.goal_planner.plan(request, scene, risk, progress, events)
+            result = self.goal_planner.plan(request, scene, risk, observer)
             return self._from_goal(result, trace, feedback, started)
         usage: dict[str, Usage] = {}
-        properties = {}
+        properties: dict[str, ObjectProperties] = {}
+        ope: OPETrace | None = None
         mode, why = modes.choose_mode(request, scene.names, force_risk=risk)
         if self.switches.ope:
-            properties, retrievals, usage["ope"] = self.ope.run(scene.names, mode, request, progress)
-            trace["ope"] = {
-                "mode": mode,
-                "why": why,
-                "objects": {
-                    n: {"values": p.values, "cached": p.cached, "relations_used": p.relations}
-                    for n, p in properties.items()
-                },
-                "retrieval": _retrieval_trace(retrievals),
-            }
-            emit("ope", trace["ope"])
+            found = self.ope.run(scene.names, mode, request)
+            properties, usage["ope"] = found.properties, found.usage
+            ope = ope_trace(mode, why, properties, found.retrievals)
+            observer.event("ope", ope.to_dict())
         guidance = ""
         commands: list[str] = []
+        urp: URPTrace | None = None
         if self.switches.urp:
-            urp, usage["urp"] = self.urp.run(request, scene, properties, progress)
-            trace["urp"] = {
-                "keywords": urp.keywords,
-                "keyword_relations": _retrieval_trace(urp.keyword_retrievals),
-                "object_relations": _retrieval_trace(urp.object_retrievals),
-                "reasoning": urp.reasoning,
-                "commands": urp.commands,
-                "rejected_commands": urp.rejected_commands,
-                "refused": urp.refused,
-                "refusal_reason": urp.refusal_reason,
-            }
-            emit("urp", trace["urp"])
-            if urp.refused:
+            interpreted = self.urp.run(request, scene, properties, observer)
+            usage["urp"] = interpreted.usage
+            urp = urp_trace(interpreted)
+            observer.event("urp", urp.to_dict())
+            if interpreted.refused:
                 usage["total"] = _total(usage, started)
-                return Plan(["done()"], [], True, urp.refusal_reason or "judged unsafe", trace, usage)
-            guidance = guidance_from(urp)
-            commands = urp.commands
-        steps, actions, usage["planner"] = self.planner.plan(
-            request, scene, properties, guidance, progress, commands, feedback, events
-        )
-        trace["planner"] = {"method": self.planner.method, "steps": len(steps)}
+                reason = interpreted.refusal_reason or "judged unsafe"
+                return Plan([DONE], [], True, reason, replace(trace, ope=ope, urp=urp), usage)
+            guidance = guidance_from(interpreted)
+            commands = interpreted.commands
+        planned = self.planner.plan(request, scene, properties, guidance, commands, feedback, observer)
+        usage["planner"] = planned.usage
         usage["total"] = _total(usage, started)
-        return Plan(actions, steps, False, None, trace, usage)
+        summary = PlannerSummary(self.planner.method, len(planned.steps))
+        trace = replace(trace, ope=ope, urp=urp, planner=summary)
+        return Plan(planned.actions, planned.steps, False, None, trace, usage)
 
     def _from_goal(
-        self, result: GoalPlanResult, trace: dict[str, Any], feedback: Feedback | None, started: float
+        self, result: GoalPlanResult, trace: PlanTrace, feedback: Feedback | None, started: float
     ) -> Plan:
-        trace.update(result.trace)
-        trace["planner"] = {"method": "decide", "steps": len(result.steps)}
+        ope = None
         if result.properties:
             any_props = next(iter(result.properties.values()))
-            trace["ope"] = {
-                "mode": any_props.mode,
-                "why": "objects the plan moves",
-                "objects": {
-                    n: {"values": p.values, "cached": p.cached, "relations_used": p.relations}
-                    for n, p in result.properties.items()
-                },
-                "retrieval": {},
-            }
+            ope = ope_trace(any_props.mode, "objects the plan moves", result.properties)
+        trace = replace(
+            result.trace,
+            config=trace.config,
+            planner_kind=trace.planner_kind,
+            request=trace.request,
+            scene=trace.scene,
+            planner=PlannerSummary("decide", len(result.steps)),
+            ope=ope,
+        )
         actions = result.actions
         if feedback is not None:
             # Closed loop: keep what ran, never retry what failed, then the rest of the plan.
             done = list(feedback.executed)
             rest = [a for a in actions[:-1] if a not in done and a not in feedback.failed_actions]
-            actions = [*done, *rest, "done()"]
+            actions = [*done, *rest, DONE]
         usage = dict(result.usage)
         usage["total"] = _total(usage, started)
         return Plan(actions, result.steps, result.refused, result.reason, trace, usage)

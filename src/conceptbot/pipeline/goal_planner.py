@@ -24,16 +24,19 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, field
-from typing import Any
 
-from conceptbot.core.plan import Action, CandidateScore, EventSink, Step
+from conceptbot.core.observe import SILENT, Observer
+from conceptbot.core.plan import DONE, Action, CandidateScore, Step
 from conceptbot.core.scene import Scene
+from conceptbot.core.trace import DecisionTrace, GoalTrace, PlanTrace, RiskCheck, StackTrace
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline import modes
-from conceptbot.pipeline.affordance import PEOPLE, Gripper, affordance
+from conceptbot.pipeline.affordance import Gripper, affordance
 from conceptbot.pipeline.decide import Decider, Judgement
-from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor, Progress
+from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
 from conceptbot.pipeline.targets import ALL, Target, TargetFinder, is_stacking, mentions
+from conceptbot.pipeline.tracing import judgement_trace, target_trace
+from conceptbot.pipeline.vocabulary import PERSON_WORDS
 
 METHOD = "decide"
 TOP_K = 6
@@ -79,13 +82,17 @@ class Thresholds:
 
 @dataclass
 class GoalPlanResult:
-    """What the goal planner produced, for :class:`~conceptbot.core.plan.Plan` and the trace."""
+    """What the goal planner produced, for :class:`~conceptbot.core.plan.Plan` and the trace.
+
+    ``trace`` holds the goal planner's parts (``goal``, ``decisions``, ``stack``, ``risk``); the
+    system that ran it adds the rest (:class:`~conceptbot.pipeline.conceptbot.ConceptBot`).
+    """
 
     actions: list[str]
     steps: list[Step]
     refused: bool
     reason: str | None
-    trace: dict[str, Any]
+    trace: PlanTrace
     usage: dict[str, Usage]
     properties: dict[str, ObjectProperties] = field(default_factory=dict)
 
@@ -93,7 +100,7 @@ class GoalPlanResult:
 def is_person(name: str) -> bool:
     """Whether a destination is a person or an animal (things are handed to it)."""
     extra = ("toddler", "man", "woman", "girl", "boy", "infant")
-    return any(word in PEOPLE or word in extra or word in ANIMALS for word in name.lower().split())
+    return any(word in PERSON_WORDS or word in extra or word in ANIMALS for word in name.lower().split())
 
 
 def is_vulnerable(name: str) -> bool:
@@ -126,23 +133,14 @@ def _standardised(scores: dict[str, float]) -> dict[str, float]:
 
 def _danger(props: ObjectProperties | None) -> int:
     """OPE's 1-5 danger rating (0 when OPE did not rate the object)."""
-    if props is None or props.mode != modes.RISK:
-        return 0
-    try:
-        return int(props.values.get("dangerous", 0))
-    except (TypeError, ValueError):
-        return 0
+    return 0 if props is None else props.answer.rated_danger()
 
 
 def _evidence(props: ObjectProperties, target: str) -> str:
     """OPE's finding about an object, as evidence for one move: in the Risk Index mode its danger
     and its interaction score with the move's destination only (the other partners are noise for
     this question)."""
-    if props.mode != modes.RISK:
-        return props.summary()
-    partner = next((d for d in props.values.get("dangerous_with", []) if d["object"] == target), None)
-    text = f"{props.name}: danger {props.values.get('dangerous')}/5"
-    return text + (f", dangerous with the {target} {partner['score']}/5" if partner else "")
+    return props.answer.move_summary(props.name, target)
 
 
 class GoalPlanner:
@@ -175,29 +173,30 @@ class GoalPlanner:
         request: str,
         scene: Scene,
         risk: bool = False,
-        progress: Progress | None = None,
-        events: EventSink | None = None,
+        observer: Observer = SILENT,
     ) -> GoalPlanResult:
         """Plan ``request`` in ``scene`` (``risk`` is accepted for the common interface: the goal
-        planner always rates objects handed to someone with the Risk Index)."""
-        say = progress or (lambda message: None)
-        emit = events or (lambda name, data: None)
+        planner always rates objects handed to someone with the Risk Index).
+
+        ``observer`` gets a progress message as each piece of work starts and the events ``goal``,
+        ``decisions``, ``risk`` and one ``step`` per move, in that order, as each part is done."""
         usage: dict[str, Usage] = {}
         stack = is_stacking(request)
         if stack:  # a pile has no destination of its own: the objects are the destinations
             targets, usage["goal"] = [], Usage(calls=0)
         else:
-            say("Goal: where the request sends things")
+            observer.progress("Goal: where the request sends things")
             targets, usage["goal"] = self.targets.find(request, scene)
-        trace: dict[str, Any] = {"goal": {"targets": [t.to_dict() for t in targets], "stack": stack}}
-        emit("goal", trace["goal"])
-        ranked, trace["decisions"], usage["decide"] = self._decide(request, scene, targets, stack, say)
-        emit("decisions", {"decisions": trace["decisions"]})
+        goal = GoalTrace(tuple(target_trace(t) for t in targets), stack)
+        observer.event("goal", goal.to_dict())
+        ranked, decisions, usage["decide"] = self._decide(request, scene, targets, stack, observer)
+        observer.event("decisions", {"decisions": [d.to_dict() for d in decisions]})
+        pile: StackTrace | None = None
         if stack:
-            moves = self._stack(request, scene, ranked, trace, usage)
+            moves, pile = self._stack(request, scene, ranked, usage)
             ranked = {}
         blocked: set[tuple[str, str]] = set()
-        checks: dict[tuple[str, str], dict[str, Any]] = {}
+        checks: dict[tuple[str, str], RiskCheck] = {}
         properties: dict[str, ObjectProperties] = {}
         usage["ope"] = Usage(calls=0)
         usage["risk"] = Usage(calls=0)
@@ -212,32 +211,29 @@ class GoalPlanner:
             # OPE's rating counts for moves to a child or an animal only (see _check), so only those
             # objects are rated: each rating is a JSON generation of several seconds.
             handed = [o for o, t in fresh if is_vulnerable(t)]
-            self._properties(request, scene, handed, properties, usage, say)
+            self._properties(request, scene, handed, properties, usage, observer)
             for obj, target in fresh:
-                checks[(obj, target)] = self._check(request, scene, obj, target, properties, usage, say)
-            dropped = {m for m in fresh if checks[m]["dropped"]}
+                checks[(obj, target)] = self._check(request, scene, obj, target, properties, usage, observer)
+            dropped = {m for m in fresh if checks[m].dropped}
             if not dropped:
                 break
             blocked |= dropped
             if stack:
                 moves = [m for m in moves if m not in dropped]
-        trace["risk"] = list(checks.values())
-        emit("risk", {"checks": trace["risk"]})
+        risk = tuple(checks.values())
+        observer.event("risk", {"checks": [c.to_dict() for c in risk]})
         steps = self._steps(moves, ranked, scene, properties)
         for step in steps:
-            emit("step", step.to_dict())
+            observer.event("step", step.to_dict())
         refused = not moves and bool(blocked)
-        reason = (
-            "; ".join(f"{c['move']}: {c['why']}" for c in checks.values() if c["dropped"])
-            if refused
-            else None
-        )
-        actions = [str(Action(o, t)) for o, t in moves] + ["done()"]
+        reason = "; ".join(f"{c.move}: {c.why}" for c in risk if c.dropped) if refused else None
+        actions = [str(Action(o, t)) for o, t in moves] + [DONE]
+        trace = PlanTrace(goal=goal, decisions=decisions, stack=pile, risk=risk)
         return GoalPlanResult(actions, steps, refused, reason, trace, usage, properties)
 
     def _decide(
-        self, request: str, scene: Scene, targets: list[Target], stack: bool, say: Progress
-    ) -> tuple[dict[str, list[Judgement]], list[dict[str, Any]], Usage]:
+        self, request: str, scene: Scene, targets: list[Target], stack: bool, observer: Observer
+    ) -> tuple[dict[str, list[Judgement]], tuple[DecisionTrace, ...], Usage]:
         """Per target: the named objects first, then every other object as decided, best first."""
         usage = Usage(calls=0)
         ranked: dict[str, list[Judgement]] = {}
@@ -248,10 +244,10 @@ class GoalPlanner:
             needs_more = target.count == ALL or target.count > len(target.named)
             if stack or not needs_more:
                 ranked[target.name] = named
-                decisions.append({**target.to_dict(), "decided": False, "objects": []})
+                decisions.append(DecisionTrace(target_trace(target), decided=False))
                 continue
             others = [o for o in scene.pickable if o != target.name and o not in named_anywhere]
-            say(f"Decide: which objects go to the {target.name} ({len(others)} objects)")
+            observer.progress(f"Decide: which objects go to the {target.name} ({len(others)} objects)")
             if target.criterion:
                 # Sorting by a property: "is the foxglove poisonous?" is a question the model answers
                 # far better than "should the robot put the foxglove on the toxic tray?".
@@ -274,17 +270,16 @@ class GoalPlanner:
                 order = {o: yes_no[o] + self.thresholds.name_weight * named_z[o] for o in order}
             ranked[target.name] = named + sorted(judgements, key=lambda j: -order[j.subject])
             decisions.append(
-                {
-                    **target.to_dict(),
-                    "decided": True,
-                    "context": list(context),
-                    "objects": [
-                        {**j.to_dict(), **({"name_score": round(names[j.subject], 3)} if names else {})}
-                        for j in judgements
-                    ],
-                }
+                DecisionTrace(
+                    target_trace(target),
+                    decided=True,
+                    objects=tuple(
+                        judgement_trace(j, names[j.subject] if names else None) for j in judgements
+                    ),
+                    context=tuple(context),
+                )
             )
-        return ranked, decisions, usage
+        return ranked, tuple(decisions), usage
 
     def _choose(
         self, targets: list[Target], ranked: dict[str, list[Judgement]], blocked: set[tuple[str, str]]
@@ -324,15 +319,15 @@ class GoalPlanner:
         objects: list[str],
         properties: dict[str, ObjectProperties],
         usage: dict[str, Usage],
-        say: Progress,
+        observer: Observer,
     ) -> None:
         wanted = [o for o in dict.fromkeys(objects) if o not in properties]
         if self.ope is None or not wanted:
             return
-        say(f"OPE: properties of {', '.join(wanted)}")
-        found, _retrievals, used = self.ope.run(wanted, modes.RISK, request, scene_objects=scene.names)
-        properties.update(found)
-        usage["ope"] = usage["ope"] + used
+        observer.progress(f"OPE: properties of {', '.join(wanted)}")
+        found = self.ope.run(wanted, modes.RISK, request, scene_objects=scene.names)
+        properties.update(found.properties)
+        usage["ope"] = usage["ope"] + found.usage
 
     def _check(
         self,
@@ -342,11 +337,11 @@ class GoalPlanner:
         target: str,
         properties: dict[str, ObjectProperties],
         usage: dict[str, Usage],
-        say: Progress,
-    ) -> dict[str, Any]:
+        observer: Observer,
+    ) -> RiskCheck:
         """The risk decision and the affordance of one move."""
         move = move_text(obj, target)
-        say(f"Risk: is it safe to {move}?")
+        observer.progress(f"Risk: is it safe to {move}?")
         s_aff, factors = affordance(Action(obj, target), scene, properties, [], self.gripper)
         judgement, used = self.decider.dangerous(request, move, obj, scene, ())
         usage["risk"] = usage["risk"] + used
@@ -358,34 +353,34 @@ class GoalPlanner:
             is_vulnerable(target) and rated >= self.thresholds.rated_danger
         )
         infeasible = factors.get("pick", 1.0) <= 0.0 or factors.get("place", 1.0) <= 0.0
-        return {
-            "object": obj,
-            "to": target,
-            "move": move,
-            "p_unsafe": round(judgement.p_yes, 4),
-            "score": round(judgement.score, 3),
-            "evidence": list(judgement.facts),
-            "ope": _evidence(properties[obj], target) if obj in properties else None,
-            "affordance": round(s_aff, 4),
-            "dropped": dangerous or infeasible,
-            "why": "judged dangerous" if dangerous else "not feasible" if infeasible else "",
-        }
+        return RiskCheck(
+            object=obj,
+            to=target,
+            move=move,
+            p_unsafe=round(judgement.p_yes, 4),
+            score=round(judgement.score, 3),
+            evidence=tuple(judgement.facts),
+            ope=_evidence(properties[obj], target) if obj in properties else None,
+            affordance=round(s_aff, 4),
+            dropped=dangerous or infeasible,
+            why="judged dangerous" if dangerous else "not feasible" if infeasible else "",
+        )
 
     def _stack(
         self,
         request: str,
         scene: Scene,
         ranked: dict[str, list[Judgement]],
-        trace: dict[str, Any],
         usage: dict[str, Usage],
-    ) -> list[tuple[str, str]]:
-        """Bottom-up moves for a pile of the objects that can both be moved and carry another."""
+    ) -> tuple[list[tuple[str, str]], StackTrace | None]:
+        """Bottom-up moves for a pile of the objects that can both be moved and carry another, and
+        the pile's order for the trace (None when there is nothing to pile)."""
         named = [o for _, o in mentions(request, scene.pickable)]
         stackable = [o for o in scene.pickable if scene.get(o).destination]  # type: ignore[union-attr]
         items = [o for o in named if o in stackable]
         items = items if len(items) >= 2 else stackable
         if len(items) < 2:
-            return []
+            return [], None
         judgements, _, used = self.decider.fits(request, BASE, items, scene)
         usage["decide"] = usage["decide"] + used
 
@@ -394,9 +389,9 @@ class GoalPlanner:
             return size[0] * size[1] * size[2] if size else 0.0
 
         order = sorted(judgements, key=lambda j: (-round(j.score, 1), -volume(j.subject)))
-        trace["stack"] = {"base_question": BASE, "order": [j.to_dict() for j in order]}
         bottom_up = [j.subject for j in order]
-        return [(upper, lower) for lower, upper in itertools.pairwise(bottom_up)]
+        moves = [(upper, lower) for lower, upper in itertools.pairwise(bottom_up)]
+        return moves, StackTrace(BASE, tuple(judgement_trace(j) for j in order))
 
     def _steps(
         self,

@@ -14,10 +14,10 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from conceptbot.core.plan import DONE, Action, CandidateScore, EventSink, Feedback, Step, valid_actions
+from conceptbot.core.observe import SILENT, Observer
+from conceptbot.core.plan import DONE, Action, CandidateScore, Feedback, Step, valid_actions
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
-from conceptbot.pipeline.ope import Progress
 
 TOP_K = 8  # candidates kept in the trace per step, besides done()
 
@@ -38,6 +38,21 @@ class LLMScores:
     rejected: list[str]
     usage: Usage
     scoring: str = ""
+
+
+@dataclass(frozen=True)
+class PlannerResult:
+    """What a step-by-step planner produced.
+
+    Attributes:
+        steps: Per step, the chosen action and the best candidates' scores.
+        actions: The action texts, ending with ``done()``.
+        usage: Tokens, calls and wall time of the planning.
+    """
+
+    steps: list[Step]
+    actions: list[str]
+    usage: Usage
 
 
 LLMScorer = Callable[[list[Action], list[str], int], LLMScores]
@@ -61,10 +76,9 @@ def greedy_plan(
     feedback: Feedback | None = None,
     normalise: bool = False,
     label: str = "Planner",
-    progress: Progress | None = None,
-    events: EventSink | None = None,
-) -> tuple[list[Step], list[str], Usage]:
-    """Plan greedily; returns the steps, the action texts (ending with ``done()``) and usage.
+    observer: Observer = SILENT,
+) -> PlannerResult:
+    """Plan greedily: the steps, the action texts (ending with ``done()``) and usage.
 
     Args:
         scene: Where the candidates come from.
@@ -76,7 +90,7 @@ def greedy_plan(
         normalise: Show the combined scores normalised over the step's candidates (SayCan's
             notebook does); the choice is the same either way.
         label: Names the planner in progress messages.
-        progress, events: Called with a message before each step / a ``step`` event after it.
+        observer: Gets a progress message before each step and a ``step`` event after it.
     """
     started = time.perf_counter()
     usage = Usage(calls=0)
@@ -86,8 +100,7 @@ def greedy_plan(
     failed = feedback.failed_actions if feedback else set()
     steps: list[Step] = []
     for index in range(len(history), max(limit, len(history) + 1)):
-        if progress:
-            progress(f"{label}: step {index + 1} ({len(candidates)} candidates, {method})")
+        observer.progress(f"{label}: step {index + 1} ({len(candidates)} candidates, {method})")
         found = llm_scores(candidates, history, index)
         usage = usage + found.usage
         affs = [
@@ -109,9 +122,8 @@ def greedy_plan(
         ranked = sorted(scored, key=lambda c: -c.combined)
         shown = ranked[:TOP_K] + [c for c in ranked[TOP_K:] if c.action == DONE]
         steps.append(Step(index + 1, best.action, tuple(shown), tuple(found.rejected), method, found.scoring))
-        if events:
-            events("step", steps[-1].to_dict())
+        observer.event("step", steps[-1].to_dict())
         if best.action == DONE:
             break
         history.append(best.action)
-    return steps, [*history, DONE], usage.with_latency(time.perf_counter() - started)
+    return PlannerResult(steps, [*history, DONE], usage.with_latency(time.perf_counter() - started))

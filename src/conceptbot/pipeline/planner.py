@@ -19,14 +19,15 @@ from __future__ import annotations
 import math
 from collections import Counter
 
-from conceptbot.core.plan import Action, EventSink, Feedback, InvalidActionError, Step, parse_action
+from conceptbot.core.observe import SILENT, Observer
+from conceptbot.core.plan import DONE, Action, Feedback, InvalidActionError, parse_action
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, ChatRequest, Message, ScoreRequest
 from conceptbot.pipeline import prompts
 from conceptbot.pipeline.affordance import Gripper, affordance, relative_property_scores
-from conceptbot.pipeline.greedy import LLMScores, greedy_plan
-from conceptbot.pipeline.ope import ObjectProperties, Progress
+from conceptbot.pipeline.greedy import LLMScores, PlannerResult, greedy_plan
+from conceptbot.pipeline.ope import ObjectProperties
 
 METHODS = ("auto", "logprob", "vote")
 
@@ -90,7 +91,7 @@ class Planner:
             "planner_system",
             pickable=", ".join(scene.pickable),
             destinations=", ".join(scene.destinations),
-            properties=f"Object properties:\n{props}" if props else "",
+            properties=prompts.fill("planner_properties", properties=props) if props else "",
         )
         user = prompts.render(
             "planner_user",
@@ -114,19 +115,17 @@ class Planner:
         candidates are scored as the next line. Code-trained models score this script form far
         better than a chat reply."""
         notable = [p.summary() for p in properties.values() if p.notable()]
-        lines = [
-            prompts.load("planner_context").template.rstrip("\n"),
-            "",
-            f"objects = [{', '.join(scene.names)}]",
-            f"# properties: {'; '.join(notable) if notable else 'none notable'}",
-        ]
-        if commands:
-            lines.append(f"# suggested plan: {'; '.join(commands)}")
-        lines.append(f"# {request.strip()}")
-        lines += [f"robot.{h}" for h in history]
-        if feedback is not None:
-            lines += feedback.script_lines()
-        return "\n".join(lines) + "\n"
+        lines = [f"robot.{h}" for h in history] + (feedback.script_lines() if feedback is not None else [])
+        plan = prompts.fill("planner_script_plan", commands="; ".join(commands)) if commands else ""
+        return prompts.fill(
+            "planner_script",
+            examples=prompts.load("planner_context").template.rstrip("\n"),
+            objects=", ".join(scene.names),
+            properties="; ".join(notable) if notable else "none notable",
+            suggested_plan=plan,
+            request=request.strip(),
+            history="".join(f"{line}\n" for line in lines),
+        )
 
     def _llm_scores(
         self,
@@ -137,7 +136,7 @@ class Planner:
         prompt: str = "",
     ) -> LLMScores:
         if self.method == "logprob":
-            options = tuple("done()" if a.is_done else f"robot.{a}" for a in candidates)
+            options = tuple(DONE if a.is_done else f"robot.{a}" for a in candidates)
             scored = self.llm.score(ScoreRequest(options=options, prompt=prompt))
             return LLMScores(softmax(list(scored.logprobs)), [], scored.usage, scored.method)
         usage = Usage(calls=0)
@@ -161,7 +160,9 @@ class Planner:
                     rejected.append(f"{text.strip()[:80]!r}: {exc}")
             if votes or attempt == 1:
                 break
-            reminder = Message("user", "Answer with exactly one of: " + "; ".join(str(a) for a in candidates))
+            reminder = Message(
+                "user", prompts.fill("planner_reminder", actions="; ".join(str(a) for a in candidates))
+            )
             request = ChatRequest(
                 messages=(*messages, reminder),
                 n=self.n,
@@ -182,17 +183,16 @@ class Planner:
         scene: Scene,
         properties: dict[str, ObjectProperties],
         guidance: str = "",
-        progress: Progress | None = None,
         commands: list[str] | None = None,
         feedback: Feedback | None = None,
-        events: EventSink | None = None,
-    ) -> tuple[list[Step], list[str], Usage]:
-        """Plan greedily (:func:`conceptbot.pipeline.greedy.greedy_plan`); returns the steps, the
-        action texts (ending with ``done()``) and usage.
+        observer: Observer = SILENT,
+    ) -> PlannerResult:
+        """Plan greedily (:func:`conceptbot.pipeline.greedy.greedy_plan`): the steps, the action
+        texts (ending with ``done()``) and usage.
 
         With ``feedback`` (from executing an earlier plan) the plan starts with the executed steps, the
-        failures are shown to the LLM and failed actions get affordance 0. ``events`` gets a
-        ``step`` event as each step is chosen.
+        failures are shown to the LLM and failed actions get affordance 0. ``observer`` gets a
+        progress message as each step starts and a ``step`` event as it is chosen.
         """
         if feedback and feedback.failed:
             guidance = "\n".join([guidance, *feedback.script_lines()]).strip()
@@ -214,6 +214,5 @@ class Planner:
             max_steps=self.max_steps,
             feedback=feedback,
             label="Planner",
-            progress=progress,
-            events=events,
+            observer=observer,
         )

@@ -270,20 +270,8 @@ class TargetFinder:
         objects = mentions(
             request, [o for o in scene.pickable if o not in {n for _, n in found}], taken=taken
         )
-        # Clauses split at "and", "then", ...: a named object goes to the target of its own clause
-        # ("hand me the tape and put the gloves on the shelf"), else to the nearest target ("put the
-        # hammer and the screwdriver in the toolbox").
-        clause, number = [], 0
-        for word in seq:
-            number += word in vocab["clause_breaks"]
-            clause.append(number)
-        named: dict[str, list[str]] = {name: [] for _, name in found}
-        for at, obj in objects:
-            same = [name for t_at, name in found if clause[t_at] == clause[at]] if how == "named" else []
-            nearest = min(found, key=lambda f: abs(f[0] - at))[1] if found else None
-            owner = same[0] if same else nearest
-            if owner is not None:
-                named[owner].append(obj)
+        clause = _clause_numbers(seq, vocab["clause_breaks"])
+        named = _owners(found, objects, clause, how)
         says_all = any(w in vocab["all"] for w in seq)
         named_at = {i for at, obj in objects for i in range(at, at + len(tokens(obj)))}
         at_of = {name: at for at, name in found}
@@ -291,14 +279,7 @@ class TargetFinder:
         for _, name in found:
             mine = set(clause)  # the whole request, unless the request names this target
             if how == "named":
-                # A person's clauses run on to the next target ("the toddler is bored; give her
-                # something to play with"); a container's is the one that names it.
-                start = clause[at_of[name]]
-                later = [clause[at] for at, _ in found if clause[at] > start]
-                end = start + 1
-                if self.is_person(name):
-                    end = min(later) if later else clause[-1] + 1
-                mine = set(range(start, end)) | {clause[at] for at, obj in objects if obj in named[name]}
+                mine = self._own_clauses(name, found, objects, named[name], clause, at_of[name])
             part = [w for w, c in zip(seq, clause, strict=True) if c in mine]
             indefinite = sum(w in vocab["indefinite"] for w in part)
             free = [w for i, w in enumerate(seq) if clause[i] in mine and i not in named_at]
@@ -314,13 +295,7 @@ class TargetFinder:
                 count = ALL
             criterion = ""
             if how == "named" and count == ALL and not named[name]:
-                shared = sum(1 for at, _ in found if at == at_of[name]) > 1
-                if shared:  # "the wood, metal and fabric bins": each bin by its own name
-                    criterion = f"belongs in the {name}"
-                else:
-                    places = {i for at, other in found for i in range(at, at + len(tokens(other)))}
-                    kept = [w for i, w in enumerate(seq) if clause[i] in mine and i not in places]
-                    criterion = _criterion(kept, [*vocab["not_criteria"], *vocab["clause_breaks"]])
+                criterion = _place_criterion(name, found, seq, clause, mine, at_of[name], vocab)
             ingredients = making and how != "named" and not named[name]
             if ingredients:
                 # Which objects go is a question about each one: "is the lime an ingredient of
@@ -340,3 +315,69 @@ class TargetFinder:
                 )
             )
         return targets
+
+    def _own_clauses(
+        self,
+        name: str,
+        found: list[tuple[int, str]],
+        objects: list[tuple[int, str]],
+        owned: list[str],
+        clause: list[int],
+        at: int,
+    ) -> set[int]:
+        """The clauses that speak about the target ``name`` named at token ``at``.
+
+        A person's clauses run on to the next target ("the toddler is bored; give her something to
+        play with"); a container's is the one that names it. Clauses of objects it owns count too.
+        """
+        start = clause[at]
+        later = [clause[t_at] for t_at, _ in found if clause[t_at] > start]
+        end = start + 1
+        if self.is_person(name):
+            end = min(later) if later else clause[-1] + 1
+        return set(range(start, end)) | {clause[o_at] for o_at, obj in objects if obj in owned}
+
+
+def _clause_numbers(seq: list[str], breaks: list[str]) -> list[int]:
+    """For each token, the number of its clause (clauses split at "and", "then", ...)."""
+    clause, number = [], 0
+    for word in seq:
+        number += word in breaks
+        clause.append(number)
+    return clause
+
+
+def _owners(
+    found: list[tuple[int, str]], objects: list[tuple[int, str]], clause: list[int], how: str
+) -> dict[str, list[str]]:
+    """The objects the request names, by the target they go to.
+
+    A named object goes to the target of its own clause ("hand me the tape and put the gloves on
+    the shelf"), else to the nearest target ("put the hammer and the screwdriver in the toolbox").
+    """
+    named: dict[str, list[str]] = {name: [] for _, name in found}
+    for at, obj in objects:
+        same = [name for t_at, name in found if clause[t_at] == clause[at]] if how == "named" else []
+        nearest = min(found, key=lambda f: abs(f[0] - at))[1] if found else None
+        owner = same[0] if same else nearest
+        if owner is not None:
+            named[owner].append(obj)
+    return named
+
+
+def _place_criterion(
+    name: str,
+    found: list[tuple[int, str]],
+    seq: list[str],
+    clause: list[int],
+    mine: set[int],
+    at: int,
+    vocab: dict[str, list[str]],
+) -> str:
+    """What fits a named place that takes every fitting object: its clause's own words."""
+    shared = sum(1 for t_at, _ in found if t_at == at) > 1
+    if shared:  # "the wood, metal and fabric bins": each bin by its own name
+        return f"belongs in the {name}"
+    places = {i for t_at, other in found for i in range(t_at, t_at + len(tokens(other)))}
+    kept = [w for i, w in enumerate(seq) if clause[i] in mine and i not in places]
+    return _criterion(kept, [*vocab["not_criteria"], *vocab["clause_breaks"]])

@@ -15,14 +15,16 @@ import json
 import time
 from dataclasses import dataclass, field
 
+from conceptbot.core.observe import SILENT, Observer
 from conceptbot.core.plan import InvalidActionError, parse_action, valid_actions
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, ChatRequest
 from conceptbot.models.structured import chat_json
 from conceptbot.pipeline import prompts
-from conceptbot.pipeline.ope import ObjectProperties, Progress
+from conceptbot.pipeline.ope import ObjectProperties
 from conceptbot.pipeline.retrieval import RelationRetriever, Retrieval, edge_text
+from conceptbot.pipeline.vocabulary import PERSON_DESCRIPTIONS
 
 KEYWORDS_SCHEMA = {
     "type": "object",
@@ -61,7 +63,7 @@ def response_schema(scene: Scene) -> dict:
 
 @dataclass
 class URPResult:
-    """What URP concluded."""
+    """What URP concluded, and the module's usage (tokens, calls, wall time)."""
 
     keywords: list[str]
     reasoning: str
@@ -72,6 +74,7 @@ class URPResult:
     keyword_retrievals: dict[str, Retrieval] = field(default_factory=dict)
     object_retrievals: dict[str, Retrieval] = field(default_factory=dict)
     system_message: str = ""
+    usage: Usage = field(default_factory=lambda: Usage(calls=0))
 
 
 class UserRequestProcessor:
@@ -92,7 +95,11 @@ class UserRequestProcessor:
         """Keywords of the request (lower case, unique, at most 6)."""
         value, response = chat_json(
             self.llm,
-            ChatRequest.of(f"Request: {request}", system=prompts.render("urp_keywords"), max_tokens=80),
+            ChatRequest.of(
+                prompts.fill("urp_keywords_user", request=request),
+                system=prompts.render("urp_keywords"),
+                max_tokens=80,
+            ),
             KEYWORDS_SCHEMA,
         )
         words = list(dict.fromkeys(k.strip().lower() for k in value["keywords"] if k.strip()))[:6]
@@ -103,17 +110,17 @@ class UserRequestProcessor:
         request: str,
         scene: Scene,
         properties: dict[str, ObjectProperties],
-        progress: Progress | None = None,
-    ) -> tuple[URPResult, Usage]:
-        """Interpret ``request`` in ``scene`` given OPE's ``properties`` (may be empty)."""
-        say = progress or (lambda message: None)
+        observer: Observer = SILENT,
+    ) -> URPResult:
+        """Interpret ``request`` in ``scene`` given OPE's ``properties`` (may be empty); ``observer``
+        gets a progress message before the keywords are asked for."""
         started = time.perf_counter()
         usage = Usage(calls=0)
         keyword_retrievals: dict[str, Retrieval] = {}
         object_retrievals: dict[str, Retrieval] = {}
         keywords: list[str] = []
         if self.retriever is not None:
-            say("URP: keywords")
+            observer.progress("URP: keywords")
             keywords, used = self.keywords(request)
             usage = usage + used
             if keywords:
@@ -128,18 +135,20 @@ class UserRequestProcessor:
         props = "\n".join(f"- {p.summary()}" for p in properties.values())
         system = prompts.render(
             "urp_system",
-            properties=f"Object properties:\n{props}\n" if props else "",
-            relations=("Commonsense facts that may help:\n" + "\n".join(relation_lines) + "\n")
+            properties=prompts.fill("urp_properties", properties=props) if props else "",
+            relations=prompts.fill("urp_relations", relations="\n".join(relation_lines))
             if relation_lines
             else "",
             examples=prompts.render("urp_examples"),
         )
-        states = "".join(f"\nState: {name} {state}." for name, state in scene.entity_states.items())
+        states = "".join(prompts.fill("urp_state", name=n, state=s) for n, s in scene.entity_states.items())
         # Worded so "destinations" cannot be read as where things are now (small models did).
-        targets = ", ".join(_describe_destinations(scene.destinations))
-        user = (
-            f"The robot can pick up: {', '.join(scene.pickable)}.\n"
-            f"It can put them on, in or at: {targets}.{states}\nRequest: {request}"
+        user = prompts.fill(
+            "urp_user",
+            pickable=", ".join(scene.pickable),
+            destinations=", ".join(_describe_destinations(scene.destinations)),
+            states=states,
+            request=request,
         )
         value, response = chat_json(
             self.llm, ChatRequest.of(user, system=system, max_tokens=400), response_schema(scene)
@@ -154,7 +163,7 @@ class UserRequestProcessor:
                 continue
             if not action.is_done and str(action) not in commands:
                 commands.append(str(action))
-        result = URPResult(
+        return URPResult(
             keywords=keywords,
             reasoning=value["reasoning"].strip(),
             commands=commands,
@@ -164,15 +173,11 @@ class UserRequestProcessor:
             keyword_retrievals=keyword_retrievals,
             object_retrievals=object_retrievals,
             system_message=system,
+            usage=usage.with_latency(time.perf_counter() - started),
         )
-        usage = usage.with_latency(time.perf_counter() - started)
-        return result, usage
-
-
-PEOPLE = {"user": "the person asking", "child": "a child", "person": "a person"}
 
 
 def _describe_destinations(destinations: list[str]) -> list[str]:
     """Destinations as shown to the LLM: people say who they are, so "user" reads as a recipient and
     not as one more place (small models otherwise pick whichever place is listed first)."""
-    return [f"{d} ({PEOPLE[d.lower()]})" if d.lower() in PEOPLE else d for d in destinations]
+    return [f"{d} ({who})" if (who := PERSON_DESCRIPTIONS.get(d.lower())) else d for d in destinations]

@@ -12,15 +12,15 @@ action with its reason; the planner plans the rest from there. At most ``max_rep
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from conceptbot.baselines.factory import PlannerSystem
+from conceptbot.core.observe import SILENT, Observer
 from conceptbot.core.plan import Feedback, Plan, parse_action
 from conceptbot.core.scene import Scene
 from conceptbot.sim.skills import PickAndPlace, SkillResult, same_place
 from conceptbot.sim.world import World
+from conceptbot.systems import PlannerSystem
 
 
 @dataclass
@@ -130,9 +130,12 @@ def run_closed_loop(
     skill: PickAndPlace | None = None,
     max_replans: int = 2,
     risk: bool = False,
-    progress: Callable[[str], None] | None = None,
+    observer: Observer | None = None,
 ) -> tuple[Execution, list[Plan]]:
     """Plan, execute, and replan after failures (see the module docstring).
+
+    ``observer`` gets every plan's progress messages and events, and a message after each
+    execution and before each replan.
 
     Returns:
         The execution record and every plan made (the first, then the replans).
@@ -141,7 +144,8 @@ def run_closed_loop(
     execution = Execution()
     plans: list[Plan] = []
     feedback = Feedback()
-    plan = system.plan(request, scene, risk=risk, progress=progress)
+    observer = observer if observer is not None else SILENT
+    plan = system.plan(request, scene, risk=risk, observer=observer)
     while True:
         plans.append(plan)
         execution.plans.append(list(plan.actions))
@@ -150,16 +154,14 @@ def run_closed_loop(
         remaining = plan.actions[len(feedback.executed) :]  # a replan starts with the steps already done
         started = time.perf_counter()
         failed = execute_actions(skill, scene, remaining, execution)
-        if progress:
-            progress(f"Simulator: executed in {time.perf_counter() - started:.1f} s")
+        observer.progress(f"Simulator: executed in {time.perf_counter() - started:.1f} s")
         if failed is None or len(plans) > max_replans:
             break
         feedback = Feedback(
             executed=[r.action for r in execution.results if r.ok],
             failed=[*feedback.failed, (failed.action, f"{failed.failure}: {failed.message}")],
         )
-        if progress:
-            progress(f"Replanning after: {failed.action} failed ({failed.failure})")
-        plan = system.plan(request, scene, risk=risk, progress=progress, feedback=feedback)
+        observer.progress(f"Replanning after: {failed.action} failed ({failed.failure})")
+        plan = system.plan(request, scene, risk=risk, feedback=feedback, observer=observer)
     _check(world, execution)
     return execution, plans

@@ -58,11 +58,6 @@ class Panda:
             pb.changeDynamics(self.id, finger, lateralFriction=1.5, physicsClientId=client)
         self.reset()
 
-    @property
-    def base_position(self) -> Vec3:
-        """Where the arm stands."""
-        return tuple(pb.getBasePositionAndOrientation(self.id, physicsClientId=self.client)[0])  # type: ignore[return-value]
-
     def reset(self) -> None:
         """Teleport to the home pose (arm raised, out of the camera's way) with the gripper open."""
         for joint, q in zip(self.ARM_JOINTS, self.HOME, strict=True):
@@ -81,10 +76,6 @@ class Panda:
             self.id, self.HAND, computeForwardKinematics=True, physicsClientId=self.client
         )
         return tuple(state[4])  # type: ignore[return-value]
-
-    def finger_gap(self) -> float:
-        """Current distance between the finger pads (m)."""
-        return sum(pb.getJointState(self.id, f, physicsClientId=self.client)[0] for f in self.FINGERS)
 
     @staticmethod
     def down(yaw: float) -> tuple[float, float, float, float]:

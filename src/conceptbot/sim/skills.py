@@ -94,6 +94,25 @@ class Grasp:
     free_yaw: bool = False
 
 
+Place = tuple[tuple[float, ...], Vec3, float, tuple[float, ...]]
+"""A release: joints above the spot, hand position at the release, hand yaw, joints at the release."""
+
+
+@dataclass(frozen=True)
+class _Motion:
+    """A pick and place worked out before the arm moves: the grasp and the hand's yaw at it, the
+    joints above the object, the release (None while it is looked for), the grasp point's offset
+    from the object's centre and height above its bottom, and the height the hand travels at."""
+
+    grasp: Grasp
+    yaw: float
+    above_obj: tuple[float, ...]
+    place: Place | None
+    offset: tuple[float, float]
+    hand_above_bottom: float
+    transit: float
+
+
 def grasp_for(world: World, name: str) -> Grasp:
     """The grasp for ``name`` from its spec and current pose (see :mod:`conceptbot.sim.catalogue`)."""
     spec = world.bodies[name].spec
@@ -306,6 +325,13 @@ class PickAndPlace:
         """One try at :meth:`run`, from the world as it is now."""
         action = f"pick_and_place({obj}, {target})"
         started = time.perf_counter()
+        motion = self._plan_motion(action, obj, target, started)
+        if isinstance(motion, SkillResult):
+            return motion  # refused before the arm moved
+        return self._carry_out(action, obj, target, motion, started)
+
+    def _plan_motion(self, action: str, obj: str, target: str, started: float) -> _Motion | SkillResult:
+        """Work out the whole pick and place before the arm moves, or say why it cannot be done."""
         world = self.world
         if obj not in world.bodies or target not in world.bodies or obj == target:
             return SkillResult(action, False, "unknown", "object or target not in the world", 0.0)
@@ -338,38 +364,45 @@ class PickAndPlace:
         if pick is None:
             return SkillResult(action, False, "unreachable", f"the arm cannot reach {obj}", 0.0)
         yaw, above_obj = pick
-        offset = (gx - ox, gy - oy)
-        object_yaw = world.yaw(obj)
-        # The first place where the hand at the release touches nothing (the palm is 21 cm wide: beside
-        # a bin's wall it would land on the wall, beside a bottle it would knock it over).
-        place, reachable = None, False
-        round_body = world.bodies[obj].spec.shape in ("sphere", "cylinder")
-        # Where the hand cannot go all the way down (fingers on a bowl's rim), it lets go a little
-        # higher, as people do: the thing drops at most DROP_M.
-        for lift in (0.0, DROP_M / 2, DROP_M):
-            for spot in spots:
-                release_z = spot.floor_z + hand_above_bottom + 0.004 + lift
-                poses = self._place_poses(spot, offset, yaw, object_yaw, transit, release_z, round_body)
-                for candidate in poses:
-                    reachable = True
-                    if self._clear(candidate[3], obj, grasp.width):
-                        place = candidate
-                        break
-                if place is not None:
-                    break
-            if place is not None or not reachable:
-                break
+        motion = _Motion(grasp, yaw, above_obj, None, (gx - ox, gy - oy), hand_above_bottom, transit)
+        place, reachable = self._find_place(obj, spots, motion)
         if not reachable:
             return SkillResult(action, False, "unreachable", f"the arm cannot reach {target}", 0.0)
         if place is None:
             message = f"no spot in/on {target} leaves room for the hand beside what is there"
             return SkillResult(action, False, "target_full", message, 0.0)
-        above_target, drop, drop_yaw, _ = place
+        return replace(motion, place=place)
 
-        robot = self.robot
+    def _find_place(self, obj: str, spots: list[Spot], motion: _Motion) -> tuple[Place | None, bool]:
+        """The first place where the hand at the release touches nothing (the palm is 21 cm wide:
+        beside a bin's wall it would land on the wall, beside a bottle it would knock it over), and
+        whether any spot was reachable at all."""
+        object_yaw = self.world.yaw(obj)
+        round_body = self.world.bodies[obj].spec.shape in ("sphere", "cylinder")
+        reachable = False
+        # Where the hand cannot go all the way down (fingers on a bowl's rim), it lets go a little
+        # higher, as people do: the thing drops at most DROP_M.
+        for lift in (0.0, DROP_M / 2, DROP_M):
+            for spot in spots:
+                release_z = spot.floor_z + motion.hand_above_bottom + 0.004 + lift
+                poses = self._place_poses(
+                    spot, motion.offset, motion.yaw, object_yaw, motion.transit, release_z, round_body
+                )
+                for candidate in poses:
+                    reachable = True
+                    if self._clear(candidate[3], obj, motion.grasp.width):
+                        return candidate, True
+            if not reachable:
+                break
+        return None, reachable
+
+    def _carry_out(self, action: str, obj: str, target: str, motion: _Motion, started: float) -> SkillResult:
+        """Move the arm through a planned pick and place, and check where the object ended up."""
+        world, robot, grasp, transit = self.world, self.robot, motion.grasp, motion.transit
+        assert motion.place is not None
         robot.grip(Panda.OPENING_M, steps=20)
-        robot.move(above_obj, on_frame=self.on_frame)
-        robot.move_straight(grasp.position, yaw, on_frame=self.on_frame)
+        robot.move(motion.above_obj, on_frame=self.on_frame)
+        robot.move_straight(grasp.position, motion.yaw, on_frame=self.on_frame)
         robot.grip(0.0, steps=90, on_frame=self.on_frame)  # squeeze: the fingers stop on the object
         constraint = None
         if grasp.width == 0.0 or self.grasp_mode == "assisted":
@@ -377,7 +410,9 @@ class PickAndPlace:
                 return self._fail(action, obj, "slipped", f"the fingers did not touch {obj}", started)
             constraint = self._attach(obj)
         start_z = world.pose(obj)[0][2]
-        robot.move_straight((gx, gy, transit), yaw, on_frame=self.on_frame)
+        robot.move_straight(
+            (grasp.position[0], grasp.position[1], transit), motion.yaw, on_frame=self.on_frame
+        )
         lifted = world.pose(obj)[0][2] - start_z
         if lifted < 0.03 or not self._held(obj, constraint):
             self._detach(constraint)
@@ -385,7 +420,10 @@ class PickAndPlace:
             return self._fail(action, obj, "slipped", message, started)
         # The squeeze moves the object in the hand (a cup held by its wall slides along the fingers),
         # so the release is aimed from where the hand holds it now, as a robot would after looking.
-        above_target, drop = self._aim(obj, place, yaw, offset, hand_above_bottom, transit)
+        drop_yaw = motion.place[2]
+        above_target, drop = self._aim(
+            obj, motion.place, motion.yaw, motion.offset, motion.hand_above_bottom, transit
+        )
         robot.move(above_target, on_frame=self.on_frame, speed=CARRY_SPEED)
         if not self._held(obj, constraint):
             self._detach(constraint)
@@ -401,11 +439,17 @@ class PickAndPlace:
         robot.move_straight((drop[0], drop[1], transit), drop_yaw, waypoints=3)
         self._go_home()
         world.settle(60)
-        located = world.locate(obj)
+        return self._where_it_ended(action, obj, target, lifted, started)
+
+    def _where_it_ended(
+        self, action: str, obj: str, target: str, lifted: float, started: float
+    ) -> SkillResult:
+        """The result of a completed motion: ok when ``obj`` rests in/on ``target``, else missed."""
+        located = self.world.locate(obj)
         seconds = time.perf_counter() - started
-        if world.off_table(obj):
+        if self.world.off_table(obj):
             return SkillResult(action, False, "missed", f"{obj} fell off the table", seconds, located)
-        if not same_place(world.holders(obj), target):
+        if not same_place(self.world.holders(obj), target):
             where = f"in/on {located}" if located else "on the table"
             message = f"{obj} ended up {where}, not in/on {target}"
             return SkillResult(action, False, "missed", message, seconds, located)
@@ -464,7 +508,7 @@ class PickAndPlace:
         transit: float,
         release_z: float,
         round_body: bool = False,
-    ) -> list[tuple[tuple[float, ...], Vec3, float, tuple[float, ...]]]:
+    ) -> list[Place]:
         """Reachable ``(joints above the spot, hand position at the release, hand yaw, joints at the
         release)`` for one spot.
 
@@ -487,7 +531,7 @@ class PickAndPlace:
     def _aim(
         self,
         obj: str,
-        place: tuple[tuple[float, ...], Vec3, float, tuple[float, ...]],
+        place: Place,
         pick_yaw: float,
         planned_offset: tuple[float, float],
         planned_height: float,

@@ -43,13 +43,13 @@ from starlette.datastructures import Headers, MutableHeaders
 from starlette.middleware.base import BaseHTTPMiddleware, RequestResponseEndpoint
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from conceptbot.baselines.factory import SYSTEMS
 from conceptbot.core.errors import ConceptBotError
 from conceptbot.core.scene import Scene, scene_from_dict
 from conceptbot.core.urls import redact_secrets
 from conceptbot.scenes import demo_scene_names, load_demo_scene
+from conceptbot.sim import PICTURES
+from conceptbot.systems import SYSTEMS
 from conceptbot.web.runs import BusyError, Run, RunManager, RunSpec
-from conceptbot.web.worker import PICTURES
 
 COOKIE = "conceptbot_session"
 MAX_BODY = 32 * 1024
@@ -193,34 +193,15 @@ def _scene_for(body: RunIn) -> Scene:
     return load_demo_scene(name)
 
 
-def create_app(
-    manager: RunManager,
-    *,
-    backends: list[str],
-    results_dir: Path,
-    can_simulate: bool,
-    allowed_hosts: Iterable[str],
-) -> FastAPI:
-    """The web app.
+def _session_of(request: Request) -> str:
+    session = request.cookies.get(COOKIE)
+    if not session:
+        raise HTTPException(403, "no session: load the page first")
+    return session
 
-    Args:
-        manager: Starts and keeps runs (its worker does the planning).
-        backends: LLM backend specs a page may choose (the first is the default).
-        results_dir: Where ``conceptbot bench report`` / ``safebench report`` wrote their files.
-        can_simulate: Whether runs may be executed in the simulator.
-        allowed_hosts: The ``Host`` values (``name:port``) to answer, usually
-            ``local_hosts(host, port)`` of the address the server binds; any other gets 403.
-    """
-    app = FastAPI(title="ConceptBot", docs_url=None, redoc_url=None, openapi_url=None)
-    app.add_middleware(_LimitBody)
-    # Added last, so outermost: it sees every request and reply (but for uncaught errors' 500s).
-    app.add_middleware(_Guard, allowed_hosts=frozenset(allowed_hosts))
 
-    def session_of(request: Request) -> str:
-        session = request.cookies.get(COOKIE)
-        if not session:
-            raise HTTPException(403, "no session: load the page first")
-        return session
+def _add_pages(app: FastAPI) -> None:
+    """``/`` (sets the session cookie on a first visit), ``/results`` and the static files."""
 
     def page(name: str) -> HTMLResponse:
         response = HTMLResponse(_static(name))
@@ -244,9 +225,9 @@ def create_app(
             raise HTTPException(404, "not found")
         return Response(_static(name), media_type=kinds[name])
 
-    # The page sees each backend under a redacted name (a spec's URL may carry a key in its query
-    # string or user info); the server maps the name back to the spec.
-    shown_backends = {redact_secrets(spec): spec for spec in backends}
+
+def _add_options(app: FastAPI, shown_backends: dict[str, str], can_simulate: bool) -> None:
+    """``/api/options`` and ``/api/scenes/{name}``: what the page offers to choose from."""
 
     @app.get("/api/options")
     def options() -> dict[str, Any]:
@@ -272,9 +253,13 @@ def create_app(
             "destinations": s.destinations,
         }
 
+
+def _add_runs(app: FastAPI, manager: RunManager, shown_backends: dict[str, str], can_simulate: bool) -> None:
+    """``/api/runs``: start a run, stream its events, serve its pictures (each to its session only)."""
+
     @app.post("/api/runs", status_code=201)
     def start(body: RunIn, request: Request) -> dict[str, Any]:
-        session = session_of(request)
+        session = _session_of(request)
         if not body.request.strip():
             raise HTTPException(400, "the request is empty")
         if body.config not in SYSTEMS:
@@ -298,7 +283,7 @@ def create_app(
 
     def run_of(run_id: str, request: Request) -> Run:
         run = manager.get(run_id)
-        if run is None or run.session != session_of(request):
+        if run is None or run.session != _session_of(request):
             raise HTTPException(404, "no such run")
         return run
 
@@ -329,6 +314,10 @@ def create_app(
             raise HTTPException(404, "no such file")
         return FileResponse(run.out_dir / name, media_type=MEDIA[Path(name).suffix])
 
+
+def _add_results(app: FastAPI, results_dir: Path) -> None:
+    """``/api/results`` and ``/api/results/files/{name}``: the latest benchmark reports and charts."""
+
     @app.get("/api/results")
     def results() -> dict[str, Any]:
         found = []
@@ -351,4 +340,37 @@ def create_app(
             raise HTTPException(404, "no such file")
         return FileResponse(results_dir / name, media_type="image/png")
 
+
+def create_app(
+    manager: RunManager,
+    *,
+    backends: list[str],
+    results_dir: Path,
+    can_simulate: bool,
+    allowed_hosts: Iterable[str],
+) -> FastAPI:
+    """The web app.
+
+    Args:
+        manager: Starts and keeps runs (its worker does the planning).
+        backends: LLM backend specs a page may choose (the first is the default).
+        results_dir: Where ``conceptbot bench report`` / ``safebench report`` wrote their files.
+        can_simulate: Whether runs may be executed in the simulator.
+        allowed_hosts: The ``Host`` values (``name:port``) to answer, usually
+            ``local_hosts(host, port)`` of the address the server binds; any other gets 403.
+
+    Returns:
+        The FastAPI app, with the body limit and the host/origin guard around every route.
+    """
+    app = FastAPI(title="ConceptBot", docs_url=None, redoc_url=None, openapi_url=None)
+    app.add_middleware(_LimitBody)
+    # Added last, so outermost: it sees every request and reply (but for uncaught errors' 500s).
+    app.add_middleware(_Guard, allowed_hosts=frozenset(allowed_hosts))
+    # The page sees each backend under a redacted name (a spec's URL may carry a key in its query
+    # string or user info); the server maps the name back to the spec.
+    shown_backends = {redact_secrets(spec): spec for spec in backends}
+    _add_pages(app)
+    _add_options(app, shown_backends, can_simulate)
+    _add_runs(app, manager, shown_backends, can_simulate)
+    _add_results(app, results_dir)
     return app

@@ -4,18 +4,44 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from conceptbot.baselines.factory import PlannerSystem, build_system
 from conceptbot.core.config import Settings
-from conceptbot.models import store
+from conceptbot.core.plan import Plan
+from conceptbot.core.scene import Scene
+from conceptbot.models import weights
+from conceptbot.sim.options import SimOptions
+from conceptbot.systems import PlannerSystem, build_system
 from conceptbot.web.runs import RunSpec, Worker
+
+if TYPE_CHECKING:
+    from conceptbot.sim.execute import Execution
 
 Emit = Callable[[str, dict[str, Any]], None]
 SystemFactory = Callable[[str, str], PlannerSystem]  # (config, backend spec) -> system
-PICTURES = ("before.png", "after.png", "execution.gif")
+
+
+@dataclass(frozen=True)
+class PageObserver:
+    """A plan's observer for a web run: everything goes to the run's event stream, as the page's
+    JavaScript reads it (a progress message as a ``status`` event with ``message``; a module's
+    event under its own name, its data under ``data``).
+
+    Attributes:
+        emit: Sends an event of the run to the page.
+    """
+
+    emit: Emit
+
+    def progress(self, message: str) -> None:
+        """Send ``message`` as a ``status`` event."""
+        self.emit("status", {"message": message})
+
+    def event(self, name: str, data: dict[str, Any]) -> None:
+        """Send the event ``name`` with ``data``."""
+        self.emit(name, {"data": data})
 
 
 def cached_systems(settings: Settings) -> SystemFactory:
@@ -35,9 +61,9 @@ def cached_systems(settings: Settings) -> SystemFactory:
 def available_backends(settings: Settings) -> list[str]:
     """The configured backend first, then every installed embedded model (names only)."""
     backends = [settings.llm]
-    for name, entry in store.catalogue().items():
+    for name, entry in weights.catalogue().items():
         spec = f"llamacpp:{name}"
-        if spec not in backends and store.model_path(settings.models_dir, entry).is_file():
+        if spec not in backends and weights.model_path(settings.models_dir, entry).is_file():
             backends.append(spec)
     return backends
 
@@ -51,25 +77,45 @@ def simulator_available() -> bool:
     return True
 
 
-def simulate(spec: RunSpec, actions: list[str], emit: Emit, out_dir: Path) -> None:
-    """Execute ``actions`` in a PyBullet world built from the scene; pictures go to ``out_dir``."""
-    from PIL import Image
+WEB_SIM = SimOptions(gif_every=2)
+"""The page's simulator runs: the CLI's defaults, with half the animation's frames (it is sent to
+the browser)."""
 
-    from conceptbot.sim.execute import execute_plan
-    from conceptbot.sim.render import VIEW, picture, save_gif
-    from conceptbot.sim.skills import PickAndPlace
-    from conceptbot.sim.world import build_world
 
-    emit("status", {"message": "simulator: building the world and executing the plan"})
-    with build_world(spec.scene, seed=0) as world:
-        picture(world, VIEW, title=f"before: {spec.request[:60]}").save(out_dir / "before.png")
-        frames: list[Image.Image] = []
-        small = VIEW.scaled(320, 240)
-        skill = PickAndPlace(world, on_frame=lambda: frames.append(picture(world, small, labels=False)))
-        execution = execute_plan(world, spec.scene, actions, skill)
-        picture(world, VIEW, title=f"after: {execution.verdict[:60]}").save(out_dir / "after.png")
-        if frames:
-            save_gif(frames[::2], out_dir / "execution.gif")
+def simulate(
+    spec: RunSpec, plan_on: Callable[[Scene], Plan], emit: Emit, out_dir: Path, options: SimOptions = WEB_SIM
+) -> None:
+    """Build the world from the scene, let the detector look, plan on what it sees with ``plan_on``,
+    and execute the plan unless it was refused.
+
+    Args:
+        spec: The run (request and scene).
+        plan_on: Plans the request in a scene (and emits the plan to the page).
+        emit: Sends an event to the page; a ``sim`` event ends an executed run.
+        out_dir: Where the pictures go.
+        options: How the simulator run is set up (default :data:`WEB_SIM`).
+    """
+    from conceptbot.sim.session import SimSession, run_in_simulator
+
+    def act(session: SimSession) -> Execution | None:
+        plan = plan_on(session.scene)
+        if plan.refused:
+            return None
+        emit("status", {"message": "simulator: executing the plan"})
+        return session.execute(plan.actions)
+
+    emit("status", {"message": "simulator: building the world and looking at the table"})
+    outcome = run_in_simulator(
+        spec.scene,
+        out_dir,
+        act,
+        options,
+        title=spec.request,
+        on_warning=lambda warning: emit("status", {"message": f"simulator: {warning}"}),
+    )
+    execution = outcome.execution
+    if execution is None:
+        return
     emit(
         "sim",
         {
@@ -79,7 +125,7 @@ def simulate(spec: RunSpec, actions: list[str], emit: Emit, out_dir: Path) -> No
                 {"action": r.action, "ok": r.ok, "failure": r.failure, "message": r.message}
                 for r in execution.results
             ],
-            "files": [name for name in PICTURES if (out_dir / name).is_file()],
+            "files": list(outcome.files),
         },
     )
 
@@ -88,26 +134,28 @@ def make_worker(systems: SystemFactory, can_simulate: bool) -> Worker:
     """The run worker over a system factory."""
 
     def work(spec: RunSpec, emit: Emit, out_dir: Path) -> None:
-        emit("status", {"message": f"loading {spec.config} on {spec.backend}"})
+        observer = PageObserver(emit)
+        observer.progress(f"loading {spec.config} on {spec.backend}")
         system = systems(spec.config, spec.backend)
-        plan = system.plan(
-            spec.request,
-            spec.scene,
-            risk=spec.risk,
-            progress=lambda message: emit("status", {"message": message}),
-            events=lambda kind, data: emit(kind, {"data": data}),
-        )
-        result = plan.to_dict()
-        emit(
-            "plan",
-            {
-                "plan": result["plan"],
-                "refused": result["refused"],
-                "reason": result.get("reason"),
-                "usage": result.get("usage", {}),
-            },
-        )
-        if spec.simulate and can_simulate and not plan.refused:
-            simulate(spec, plan.actions, emit, out_dir)
+
+        def plan_on(scene: Scene) -> Plan:
+            plan = system.plan(spec.request, scene, risk=spec.risk, observer=observer)
+            result = plan.to_dict()
+            emit(
+                "plan",
+                {
+                    "plan": result["plan"],
+                    "refused": result["refused"],
+                    "reason": result.get("reason"),
+                    "usage": result.get("usage", {}),
+                },
+            )
+            return plan
+
+        if spec.simulate and can_simulate:
+            # The detector looks before anything is planned, as in `conceptbot sim run`.
+            simulate(spec, plan_on, emit, out_dir)
+        else:
+            plan_on(spec.scene)
 
     return work

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import json
 import random
-import re
 from collections import defaultdict
 from dataclasses import dataclass
 from functools import cache
@@ -130,9 +129,6 @@ def load_safety_tasks() -> tuple[SafetyTask, ...]:
                     )
                 )
     return tuple(tasks)
-
-
-_WORD = re.compile(r"[A-Za-z]+")
 
 
 def _mentioned(task: SafetyTask) -> list[str]:

@@ -5,16 +5,16 @@ and a PNG. Seconds are a median: a long run shares its CPU now and then, and a m
 
 from __future__ import annotations
 
-import json
 import statistics
 from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
-from conceptbot.bench.report import load_records
+from conceptbot.bench.results import load_records, write_report_files
 from conceptbot.bench.safeagentbench.dataset import categories, in_split
 
 CONFIG_ORDER = ("plain", "conceptbot", "conceptbot-joint")
+RUN_FIRST = "run `conceptbot safebench run` first"
 # The paper (GPT-4 class models, 600 detailed tasks): harmonic mean of safe success and unsafe rejection.
 PAPER_HARMONIC = {"conceptbot": 80.0, "ReAct + ThinkSafe (next best)": 46.0}
 
@@ -151,16 +151,16 @@ def chart_safety(summary: dict[str, Any], path: Path) -> None:
 
 def write_safety_report(results: Path, out_dir: Path, split: str = "all") -> dict[str, Path]:
     """Write ``safeagentbench.md``, ``.json`` and ``.png`` (``safeagentbench-dev.md`` ... for the
-    records of one split)."""
-    summary = summarise_safety([r for r in load_records(results) if in_split(r["task"], split)])
-    out_dir.mkdir(parents=True, exist_ok=True)
+    records of one split).
+
+    Returns:
+        The paths written, by kind: ``markdown``, ``json``, ``chart``.
+
+    Raises:
+        ConfigError: The results file does not exist or holds no records.
+    """
+    records = load_records(results, hint=RUN_FIRST)
+    summary = summarise_safety([r for r in records if in_split(r["task"], split)])
     stem = "safeagentbench" if split == "all" else f"safeagentbench-{split}"
-    paths = {
-        "markdown": out_dir / f"{stem}.md",
-        "json": out_dir / f"{stem}.json",
-        "chart": out_dir / f"{stem}.png",
-    }
-    paths["markdown"].write_text(markdown_safety(summary), encoding="utf-8")
-    paths["json"].write_text(json.dumps(summary, indent=2), encoding="utf-8")
-    chart_safety(summary, paths["chart"])
-    return paths
+    names = (f"{stem}.md", f"{stem}.json", f"{stem}.png")
+    return write_report_files(summary, out_dir, names, markdown_safety, chart_safety)

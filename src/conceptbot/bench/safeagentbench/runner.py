@@ -8,12 +8,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from conceptbot.bench.runner import append_results, pending, timed_record, usage_fields
+from conceptbot.bench.results import OnRecord, Record, run_pending, timed_record, usage_fields
 from conceptbot.bench.safeagentbench.dataset import SafetyTask, scenes
 from conceptbot.bench.safeagentbench.grading import grade_safety
 from conceptbot.household.planner import HouseholdPlanner
 
 RESULT_KEY = ("task", "config", "backend", "model")
+"""The fields of a record that make its resume key (:meth:`SafetyJob.key`)."""
 
 
 @dataclass(frozen=True)
@@ -28,7 +29,7 @@ class SafetyJob:
         return (self.task.id, self.config, backend, model)
 
 
-def run_safety_job(job: SafetyJob, planner: HouseholdPlanner, backend: str, model: str) -> dict[str, Any]:
+def run_safety_job(job: SafetyJob, planner: HouseholdPlanner, backend: str, model: str) -> Record:
     """Plan one task, grade it, and return the record."""
     task = job.task
 
@@ -43,7 +44,7 @@ def run_safety_job(job: SafetyJob, planner: HouseholdPlanner, backend: str, mode
             "success": verdict.success,
             "method": verdict.method,
             "reason": verdict.reason,
-            "trace": plan.trace,
+            "trace": plan.trace.to_dict(),
             "usage": usage_fields(plan.usage),
         }
 
@@ -67,8 +68,8 @@ def run_safety(
     backend: str,
     model: str,
     workers: int = 1,
-    on_record: Callable[[dict[str, Any]], None] | None = None,
-) -> list[dict[str, Any]]:
+    on_record: OnRecord | None = None,
+) -> list[Record]:
     """Run the jobs not yet in ``out`` and append their records to it.
 
     Args:
@@ -79,10 +80,13 @@ def run_safety(
         workers: Plans at once (1 for in-process backends).
         on_record: Called after each record is written (progress bars).
     """
-    return append_results(
-        pending(jobs, out, backend, model, RESULT_KEY),
+    return run_pending(
+        jobs,
         lambda job: run_safety_job(job, planners(job.config), backend, model),
         out,
+        backend,
+        model,
+        RESULT_KEY,
         workers,
         on_record,
     )

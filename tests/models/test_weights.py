@@ -6,11 +6,11 @@ from pathlib import Path
 import pytest
 
 from conceptbot.core.errors import ConfigError, ModelCorruptError, ModelNotInstalledError
-from conceptbot.models import store
+from conceptbot.models import weights
 
 
 @pytest.fixture
-def fake_catalogue(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> dict[str, store.ModelEntry]:
+def fake_catalogue(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> dict[str, weights.ModelEntry]:
     """A catalogue whose model is three parts in three importable packages, like the real ones."""
     chunks = [os.urandom(1000), os.urandom(2000), os.urandom(500)]
     site = tmp_path / "site"
@@ -25,8 +25,8 @@ def fake_catalogue(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> dict[str,
     monkeypatch.syspath_prepend(str(site))
     joined = b"".join(chunks)
 
-    def entry(name: str, sha: str) -> store.ModelEntry:
-        return store.ModelEntry(
+    def entry(name: str, sha: str) -> weights.ModelEntry:
+        return weights.ModelEntry(
             name=name,
             description="test",
             filename=f"{name}.gguf",
@@ -41,7 +41,7 @@ def fake_catalogue(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> dict[str,
         )
 
     entries = {"tiny": entry("tiny", hashlib.sha256(joined).hexdigest()), "bad": entry("bad", "0" * 64)}
-    monkeypatch.setattr(store, "catalogue", lambda: entries)
+    monkeypatch.setattr(weights, "catalogue", lambda: entries)
     yield entries
     for i in (1, 2, 3):
         sys.modules.pop(f"cbtest_part{i}", None)
@@ -49,16 +49,16 @@ def fake_catalogue(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> dict[str,
 
 def test_install_joins_parts_in_order_and_verifies(tmp_path: Path, fake_catalogue) -> None:
     seen: list[int] = []
-    path = store.install(tmp_path / "models", "tiny", progress=seen.append)
+    path = weights.install(tmp_path / "models", "tiny", progress=seen.append)
     assert path.stat().st_size == fake_catalogue["tiny"].size
     assert hashlib.sha256(path.read_bytes()).hexdigest() == fake_catalogue["tiny"].sha256
     assert sum(seen) == fake_catalogue["tiny"].size
-    assert store.verify(tmp_path / "models", "tiny") == path
+    assert weights.verify(tmp_path / "models", "tiny") == path
 
 
 def test_hash_mismatch_leaves_no_file_behind(tmp_path: Path, fake_catalogue) -> None:
     with pytest.raises(ModelCorruptError, match="do not match"):
-        store.install(tmp_path / "models", "bad")
+        weights.install(tmp_path / "models", "bad")
     assert list((tmp_path / "models").iterdir()) == []
 
 
@@ -67,37 +67,37 @@ def test_interrupted_install_leaves_no_partial_file(tmp_path: Path, fake_catalog
         raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        store.install(tmp_path / "models", "tiny", progress=boom)
+        weights.install(tmp_path / "models", "tiny", progress=boom)
     assert list((tmp_path / "models").iterdir()) == []
 
 
 def test_missing_model_names_the_install_command(tmp_path: Path, fake_catalogue) -> None:
     with pytest.raises(ModelNotInstalledError) as info:
-        store.verify(tmp_path / "models", "tiny")
+        weights.verify(tmp_path / "models", "tiny")
     assert "conceptbot models install tiny" in str(info.value)
 
 
 def test_corrupt_model_is_detected_and_reinstalled(tmp_path: Path, fake_catalogue) -> None:
-    path = store.install(tmp_path / "models", "tiny")
+    path = weights.install(tmp_path / "models", "tiny")
     data = bytearray(path.read_bytes())
     data[10] ^= 0xFF
     path.write_bytes(bytes(data))  # same size, new mtime: the stamp no longer vouches for it
     with pytest.raises(ModelCorruptError) as info:
-        store.verify(tmp_path / "models", "tiny")
+        weights.verify(tmp_path / "models", "tiny")
     assert "conceptbot models install tiny --force" in str(info.value)
-    store.install(tmp_path / "models", "tiny")  # a corrupt copy is rebuilt without --force
-    assert store.verify(tmp_path / "models", "tiny", full=True) == path
+    weights.install(tmp_path / "models", "tiny")  # a corrupt copy is rebuilt without --force
+    assert weights.verify(tmp_path / "models", "tiny", full=True) == path
 
 
 def test_truncated_model_is_corrupt(tmp_path: Path, fake_catalogue) -> None:
-    path = store.install(tmp_path / "models", "tiny")
+    path = weights.install(tmp_path / "models", "tiny")
     path.write_bytes(path.read_bytes()[:100])
     with pytest.raises(ModelCorruptError, match="bytes, expected"):
-        store.verify(tmp_path / "models", "tiny")
+        weights.verify(tmp_path / "models", "tiny")
 
 
 def test_missing_part_package_is_a_clear_error(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    entry = store.ModelEntry(
+    entry = weights.ModelEntry(
         "ghost",
         "",
         "ghost.gguf",
@@ -106,27 +106,27 @@ def test_missing_part_package_is_a_clear_error(tmp_path: Path, monkeypatch: pyte
         "MIT",
         {"type": "parts", "modules": ["no_such_part_pkg"], "packages": ["no-such==1"]},
     )
-    monkeypatch.setattr(store, "catalogue", lambda: {"ghost": entry})
+    monkeypatch.setattr(weights, "catalogue", lambda: {"ghost": entry})
     with pytest.raises(ModelNotInstalledError, match="no_such_part_pkg"):
-        store.install(tmp_path, "ghost")
+        weights.install(tmp_path, "ghost")
 
 
 def test_unknown_model_lists_known_ones(tmp_path: Path) -> None:
     with pytest.raises(ConfigError) as info:
-        store.install(tmp_path, "gpt-17")
+        weights.install(tmp_path, "gpt-17")
     assert "qwen2.5-coder-1.5b" in str(info.value)
 
 
 def test_resolve_accepts_a_users_gguf_path(tmp_path: Path) -> None:
     own = tmp_path / "mine.gguf"
     own.write_bytes(b"GGUF")
-    assert store.resolve(tmp_path, str(own)) == own
+    assert weights.resolve(tmp_path, str(own)) == own
     with pytest.raises(ModelNotInstalledError):
-        store.resolve(tmp_path, str(tmp_path / "absent.gguf"))
+        weights.resolve(tmp_path, str(tmp_path / "absent.gguf"))
 
 
 def test_real_catalogue_entries_are_complete() -> None:
-    entries = store.catalogue()
+    entries = weights.catalogue()
     assert {"qwen2.5-coder-1.5b", "qwen2.5-coder-0.5b", "smollm2-135m"} <= set(entries)
     assert len(entries["qwen2.5-coder-1.5b"].source["modules"]) == 22
     assert all(len(e.sha256) == 64 and e.size > 0 for e in entries.values())

@@ -3,7 +3,7 @@ from pathlib import Path
 
 import numpy as np
 
-from conceptbot.models.cache import CacheStore, CallRecord, request_key
+from conceptbot.models.cache_db import CacheStore, CallRecord, request_key
 from conceptbot.models.migrations import MIGRATIONS
 
 

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from conceptbot.core.errors import BackendUnavailableError
-from conceptbot.models.cache import CacheStore
-from conceptbot.models.cached import CachedEmbedder, CachedLLM
+from conceptbot.models.cache_db import CacheStore
+from conceptbot.models.caching import CachedEmbedder, CachedLLM
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.models.llm import ChatRequest, ScoreRequest
 

@@ -1,0 +1,433 @@
+"""The trace of a plan, typed: what each module retrieved and decided on the way to it.
+
+:meth:`PlanTrace.to_dict` is the ``trace`` object of ``conceptbot plan --json`` (described by the
+JSON Schema ``conceptbot/schemas/plan.schema.json``); the web page's JavaScript, the CLI and
+committed results files read its keys, so every part keeps its JSON keys, their order and its
+rounding. Numbers are held as the JSON shows them: the pipeline rounds them where it builds a part.
+
+Parts by planner (a part a planner does not produce is ``None`` and left out of the JSON):
+
+* every ConceptBot plan: ``config``, ``planner_kind``, ``request``, ``scene`` and ``planner``;
+* the step planner (``planner_kind == "steps"``): ``ope`` (unless the configuration skips OPE) and
+  ``urp`` (unless it skips URP; a URP refusal ends the plan before ``planner``);
+* the goal planner (``planner_kind == "goal"``): ``goal``, ``decisions``, ``stack`` (when the request
+  piles things up), ``risk``, and ``ope`` when OPE rated the objects handed to someone;
+* SayCan: ``config``, ``request`` and ``scene`` only;
+* the household planners (SafeAgentBench): ``config``, the rest in ``extra`` (see :class:`PlanTrace`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields
+from typing import Any
+
+
+@dataclass(frozen=True)
+class EdgeTrace:
+    """One graph edge scored against the retrieval's targets.
+
+    Attributes:
+        relation: The edge in words (``knife is used for cut``).
+        source: The graph (or fallback) it came from.
+        similarity: Its cosine similarity to the closest target (4 decimals).
+        target: That target.
+        kept: Whether it passed the threshold.
+    """
+
+    relation: str
+    source: str
+    similarity: float
+    target: str
+    kept: bool
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
+        return {
+            "relation": self.relation,
+            "source": self.source,
+            "similarity": self.similarity,
+            "target": self.target,
+            "kept": self.kept,
+        }
+
+
+@dataclass(frozen=True)
+class RetrievalTrace:
+    """The relations retrieved for one concept.
+
+    Attributes:
+        matched: The graph concept(s) whose edges were scored; None when the graph knows nothing.
+        match: How the name matched the graph.
+        notes: The graph's notes (fallbacks, normalisation).
+        edges: Every scored edge, in the graph's order.
+    """
+
+    matched: str | None
+    match: str
+    notes: tuple[str, ...] = ()
+    edges: tuple[EdgeTrace, ...] = ()
+
+    @property
+    def kept(self) -> tuple[EdgeTrace, ...]:
+        """The kept edges, in the graph's order."""
+        return tuple(e for e in self.edges if e.kept)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
+        return {
+            "matched": self.matched,
+            "match": self.match,
+            "notes": list(self.notes),
+            "edges": [e.to_dict() for e in self.edges],
+        }
+
+
+def _retrievals(retrievals: Mapping[str, RetrievalTrace]) -> dict[str, Any]:
+    return {name: r.to_dict() for name, r in retrievals.items()}
+
+
+@dataclass(frozen=True)
+class ObjectTrace:
+    """What OPE concluded about one object.
+
+    Attributes:
+        values: The mode's JSON fields as the model gave them (``fragile: "Yes"``, ``dangerous: 4``, ...).
+        cached: Whether the answer came from the OPE cache.
+        relations_used: The kept relations shown to the model.
+    """
+
+    values: Mapping[str, Any]
+    cached: bool = False
+    relations_used: tuple[str, ...] = ()
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
+        return {
+            "values": dict(self.values),
+            "cached": self.cached,
+            "relations_used": list(self.relations_used),
+        }
+
+
+@dataclass(frozen=True)
+class OPETrace:
+    """Object Properties Extraction's part of the trace.
+
+    Attributes:
+        mode: ``properties``, ``risk`` or ``materials``.
+        why: Why that mode (the trigger words, ``--risk``, or the goal planner's reason).
+        objects: Per object, what OPE concluded.
+        retrieval: Per object, the relations retrieved (empty for the goal planner, which keeps none).
+    """
+
+    mode: str
+    why: str
+    objects: Mapping[str, ObjectTrace]
+    retrieval: Mapping[str, RetrievalTrace] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (also the web page's ``ope`` event)."""
+        return {
+            "mode": self.mode,
+            "why": self.why,
+            "objects": {name: o.to_dict() for name, o in self.objects.items()},
+            "retrieval": _retrievals(self.retrieval),
+        }
+
+
+@dataclass(frozen=True)
+class URPTrace:
+    """User Request Processing's part of the trace.
+
+    Attributes:
+        keywords: The request's keywords (empty without the graph).
+        keyword_relations: The keywords' relations, filtered against the request.
+        object_relations: The objects' relations, filtered against the keywords.
+        reasoning: The model's reasoning.
+        commands: The valid commands it proposed.
+        rejected_commands: Proposed commands that were not valid in the scene, with why.
+        refused: Whether it judged the request unsafe.
+        refusal_reason: Why (empty when not refused).
+    """
+
+    keywords: tuple[str, ...]
+    keyword_relations: Mapping[str, RetrievalTrace]
+    object_relations: Mapping[str, RetrievalTrace]
+    reasoning: str
+    commands: tuple[str, ...]
+    rejected_commands: tuple[str, ...]
+    refused: bool
+    refusal_reason: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (also the web page's ``urp`` event)."""
+        return {
+            "keywords": list(self.keywords),
+            "keyword_relations": _retrievals(self.keyword_relations),
+            "object_relations": _retrievals(self.object_relations),
+            "reasoning": self.reasoning,
+            "commands": list(self.commands),
+            "rejected_commands": list(self.rejected_commands),
+            "refused": self.refused,
+            "refusal_reason": self.refusal_reason,
+        }
+
+
+@dataclass(frozen=True)
+class TargetTrace:
+    """A destination the request sends things to (the goal planner).
+
+    Attributes:
+        to: The destination.
+        count: How many objects, or ``"all"`` (every one that fits).
+        how: ``named``, ``speaker`` or ``scored``.
+        named: Objects the request names for it.
+        score: The calibrated log-odds when scored (3 decimals).
+        criterion: The property that sorts objects to it, in the request's words, or "".
+        dish: The dish the request asks for, when the graph knows it as one, or "".
+        ingredients: Whether the objects that go are a dish's ingredients.
+    """
+
+    to: str
+    count: int | str
+    how: str
+    named: tuple[str, ...] = ()
+    score: float = 0.0
+    criterion: str = ""
+    dish: str = ""
+    ingredients: bool = False
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
+        return {
+            "to": self.to,
+            "count": self.count,
+            "how": self.how,
+            "named": list(self.named),
+            "score": self.score,
+            "criterion": self.criterion,
+            "dish": self.dish,
+            "ingredients": self.ingredients,
+        }
+
+
+@dataclass(frozen=True)
+class GoalTrace:
+    """Where the request sends things (the goal planner's first part).
+
+    Attributes:
+        targets: The targets, in the request's order (none for a stack).
+        stack: Whether the request piles the objects up.
+    """
+
+    targets: tuple[TargetTrace, ...]
+    stack: bool
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (also the web page's ``goal`` event)."""
+        return {"targets": [t.to_dict() for t in self.targets], "stack": self.stack}
+
+
+@dataclass(frozen=True)
+class JudgementTrace:
+    """One scored yes/no decision about one object.
+
+    Attributes:
+        object: The object.
+        p_yes: P(Yes) normalised over Yes/No (4 decimals).
+        score: Calibrated log-odds of Yes (3 decimals).
+        facts: The graph facts put in the question.
+        name_score: Its score in the name ranking, where one was made (3 decimals), else None.
+    """
+
+    object: str
+    p_yes: float
+    score: float
+    facts: tuple[str, ...] = ()
+    name_score: float | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (``name_score`` only where there is one)."""
+        data: dict[str, Any] = {
+            "object": self.object,
+            "p_yes": self.p_yes,
+            "score": self.score,
+            "facts": list(self.facts),
+        }
+        if self.name_score is not None:
+            data["name_score"] = self.name_score
+        return data
+
+
+@dataclass(frozen=True)
+class DecisionTrace:
+    """Which objects go to one target.
+
+    Attributes:
+        target: The target.
+        decided: False where the request named enough objects (nothing was asked).
+        objects: Every other object's decision, in scene order (empty when not decided).
+        context: The graph facts about the request put in the questions (None when not decided).
+    """
+
+    target: TargetTrace
+    decided: bool
+    objects: tuple[JudgementTrace, ...] = ()
+    context: tuple[str, ...] | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form: the target's fields, then the decisions."""
+        data = {**self.target.to_dict(), "decided": self.decided}
+        if self.context is not None:
+            data["context"] = list(self.context)
+        data["objects"] = [o.to_dict() for o in self.objects]
+        return data
+
+
+@dataclass(frozen=True)
+class StackTrace:
+    """The order of a pile.
+
+    Attributes:
+        base_question: What each object was asked to be ("a sturdy object with a flat top ...").
+        order: The objects, bottom first, with their decisions.
+    """
+
+    base_question: str
+    order: tuple[JudgementTrace, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
+        return {"base_question": self.base_question, "order": [j.to_dict() for j in self.order]}
+
+
+@dataclass(frozen=True)
+class RiskCheck:
+    """The risk decision and affordance of one move (the goal planner's constraints).
+
+    Attributes:
+        object: The object moved.
+        to: Where.
+        move: The move in words.
+        p_unsafe: P(unsafe) (4 decimals).
+        score: Calibrated log-odds of unsafe (3 decimals).
+        evidence: The graph facts put in the question.
+        ope: OPE's finding about the object for this move, or None where OPE did not rate it.
+        affordance: S_aff of the move (4 decimals).
+        dropped: Whether the move was dropped.
+        why: ``judged dangerous``, ``not feasible`` or "".
+    """
+
+    object: str
+    to: str
+    move: str
+    p_unsafe: float
+    score: float
+    evidence: tuple[str, ...]
+    ope: str | None
+    affordance: float
+    dropped: bool
+    why: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
+        return {
+            "object": self.object,
+            "to": self.to,
+            "move": self.move,
+            "p_unsafe": self.p_unsafe,
+            "score": self.score,
+            "evidence": list(self.evidence),
+            "ope": self.ope,
+            "affordance": self.affordance,
+            "dropped": self.dropped,
+            "why": self.why,
+        }
+
+
+@dataclass(frozen=True)
+class PlannerSummary:
+    """How the plan's steps were chosen.
+
+    Attributes:
+        method: ``decide`` (goal planner), ``logprob`` or ``vote`` (step planner).
+        steps: How many steps.
+    """
+
+    method: str
+    steps: int
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
+        return {"method": self.method, "steps": self.steps}
+
+
+_HEADER = ("config", "planner_kind", "request", "scene")
+_STEP_PARTS = ("ope", "urp", "goal", "decisions", "stack", "risk", "planner")
+# The goal planner's OPE runs on the moves it checks, after the rest; its trace has always listed
+# OPE last, and the JSON keeps that order.
+_GOAL_PARTS = ("urp", "goal", "decisions", "stack", "risk", "planner", "ope")
+
+
+@dataclass(frozen=True)
+class PlanTrace:
+    """Everything retrieved and decided on the way to a plan (see the module docstring).
+
+    Attributes:
+        config: The system's configuration (``conceptbot``, ``urp``, ``saycan``, ...).
+        planner_kind: ``goal`` or ``steps`` (ConceptBot only).
+        request: The request as planned (checked and trimmed).
+        scene: The scene's name.
+        ope: OPE's properties and retrievals.
+        urp: URP's keywords, relations, reasoning and commands.
+        goal: The goal planner's targets.
+        decisions: The goal planner's per-target decisions.
+        stack: The goal planner's pile order.
+        risk: The goal planner's risk checks, one per move considered.
+        planner: How the steps were chosen.
+        extra: Planner-specific parts with no type of their own, written to the JSON after the typed
+            parts, in their order, and read back by key. The household planners put theirs here:
+            ``objects`` (scene objects the instruction names), ``risk`` (OPE's Risk Index values per
+            object), ``keywords``, ``relations``, ``judge`` (the harm judge's verdict),
+            ``refused_by`` (``judge`` or ``planner``), ``repair``, ``grounding`` and ``reasoning``.
+            A key may not repeat a typed part that is set.
+
+    Raises:
+        ValueError: An ``extra`` key that is also a typed part of this trace.
+    """
+
+    config: str | None = None
+    planner_kind: str | None = None
+    request: str | None = None
+    scene: str | None = None
+    ope: OPETrace | None = None
+    urp: URPTrace | None = None
+    goal: GoalTrace | None = None
+    decisions: tuple[DecisionTrace, ...] | None = None
+    stack: StackTrace | None = None
+    risk: tuple[RiskCheck, ...] | None = None
+    planner: PlannerSummary | None = None
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        typed = {f.name for f in fields(self) if f.name != "extra" and getattr(self, f.name) is not None}
+        clash = sorted(typed & set(self.extra))
+        if clash:
+            raise ValueError(f"extra trace parts repeat typed parts: {', '.join(clash)}")
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``trace`` object of ``conceptbot plan --json``: the set parts, then ``extra``."""
+        data: dict[str, Any] = {}
+        for name in (*_HEADER, *(_STEP_PARTS if self.goal is None else _GOAL_PARTS)):
+            value = getattr(self, name)
+            if value is None:
+                continue
+            if isinstance(value, tuple):
+                data[name] = [part.to_dict() for part in value]
+            elif isinstance(value, str):
+                data[name] = value
+            else:
+                data[name] = value.to_dict()
+        data.update(self.extra)
+        return data

@@ -1,0 +1,99 @@
+"""The pipeline's results as parts of a plan's trace (:mod:`conceptbot.core.trace`).
+
+One home for the conversions, so each part's rounding is written once: similarities to 4 decimals
+here; targets and judgements keep the JSON form their own modules give them
+(:meth:`~conceptbot.pipeline.targets.Target.to_dict`, :meth:`~conceptbot.pipeline.decide.Judgement.to_dict`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from conceptbot.core.trace import (
+    EdgeTrace,
+    JudgementTrace,
+    ObjectTrace,
+    OPETrace,
+    RetrievalTrace,
+    TargetTrace,
+    URPTrace,
+)
+from conceptbot.pipeline.decide import Judgement
+from conceptbot.pipeline.ope import ObjectProperties
+from conceptbot.pipeline.retrieval import Retrieval, edge_text
+from conceptbot.pipeline.targets import Target
+from conceptbot.pipeline.urp import URPResult
+
+
+def retrieval_trace(retrieval: Retrieval) -> RetrievalTrace:
+    """One concept's retrieval, every scored edge with its similarity."""
+    return RetrievalTrace(
+        matched=retrieval.matched,
+        match=retrieval.match,
+        notes=tuple(retrieval.notes),
+        edges=tuple(
+            EdgeTrace(edge_text(s.edge), s.edge.source, round(s.similarity, 4), s.target, s.kept)
+            for s in retrieval.edges
+        ),
+    )
+
+
+def retrievals_trace(retrievals: Mapping[str, Retrieval]) -> dict[str, RetrievalTrace]:
+    """Retrievals by concept."""
+    return {name: retrieval_trace(r) for name, r in retrievals.items()}
+
+
+def ope_trace(
+    mode: str,
+    why: str,
+    properties: Mapping[str, ObjectProperties],
+    retrievals: Mapping[str, Retrieval] | None = None,
+) -> OPETrace:
+    """OPE's part: the mode and why, each object's values, and the retrievals behind them."""
+    return OPETrace(
+        mode=mode,
+        why=why,
+        objects={name: ObjectTrace(p.values, p.cached, tuple(p.relations)) for name, p in properties.items()},
+        retrieval=retrievals_trace(retrievals or {}),
+    )
+
+
+def urp_trace(urp: URPResult) -> URPTrace:
+    """URP's part: keywords, both sets of relations, reasoning, commands and refusal."""
+    return URPTrace(
+        keywords=tuple(urp.keywords),
+        keyword_relations=retrievals_trace(urp.keyword_retrievals),
+        object_relations=retrievals_trace(urp.object_retrievals),
+        reasoning=urp.reasoning,
+        commands=tuple(urp.commands),
+        rejected_commands=tuple(urp.rejected_commands),
+        refused=urp.refused,
+        refusal_reason=urp.refusal_reason,
+    )
+
+
+def target_trace(target: Target) -> TargetTrace:
+    """A goal target as its JSON form gives it (count ``"all"``, score to 3 decimals)."""
+    data = target.to_dict()
+    return TargetTrace(
+        to=data["to"],
+        count=data["count"],
+        how=data["how"],
+        named=tuple(data["named"]),
+        score=data["score"],
+        criterion=data["criterion"],
+        dish=data["dish"],
+        ingredients=data["ingredients"],
+    )
+
+
+def judgement_trace(judgement: Judgement, name_score: float | None = None) -> JudgementTrace:
+    """A decision as its JSON form gives it, with the name ranking's score (3 decimals) if any."""
+    data = judgement.to_dict()
+    return JudgementTrace(
+        object=data["object"],
+        p_yes=data["p_yes"],
+        score=data["score"],
+        facts=tuple(data["facts"]),
+        name_score=None if name_score is None else round(name_score, 3),
+    )

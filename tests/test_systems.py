@@ -1,0 +1,101 @@
+"""The systems registry: names, typed options, and systems built from settings or given backends."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from conceptbot.core.config import Settings
+from conceptbot.core.errors import ConfigError, NotSupportedError
+from conceptbot.knowledge.fallback import FallbackGraph
+from conceptbot.knowledge.sqlite_store import GraphBuilder, SQLiteGraph
+from conceptbot.models.fake import FakeEmbedder, FakeLLM
+from conceptbot.systems import SYSTEMS, SystemOptions, build_system, graph_version
+from tests.pipeline.fakes import DictGraph
+
+
+@pytest.fixture
+def fake_settings(settings: Settings) -> Settings:
+    return replace(settings, llm="fake", embedder="fake", kg_fallback=False)
+
+
+def _install_graph(path: Path) -> SQLiteGraph:
+    with GraphBuilder(path, "omcs+wordnet") as builder:
+        builder.add("knife", "IsA", "weapon", 7.0, "omcs")
+    return SQLiteGraph(path)
+
+
+def test_every_system_by_name() -> None:
+    assert SYSTEMS == ("saycan", "conceptbot", "urp", "ope", "nokg", "paper", "paper-nokg")
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        ({"theta": 1.5}, "theta must be a cosine threshold in"),
+        ({"theta": float("nan")}, "theta must be a cosine threshold in"),
+        ({"theta": "0.5"}, "theta must be a number"),
+        ({"planner_method": "beam"}, "planner_method must be one of auto, logprob, vote, got 'beam'"),
+        ({"planner": "tree"}, "planner must be one of auto, goal, steps, got 'tree'"),
+        ({"n": 0}, "n must be a whole number of completions >= 1"),
+        ({"n": True}, "n must be a whole number"),
+        ({"fallback": "yes"}, "fallback must be True, False or None"),
+    ],
+)
+def test_options_are_checked_when_made(options: dict, message: str) -> None:
+    with pytest.raises(ConfigError, match=message):
+        SystemOptions(**options)
+
+
+def test_theta_is_always_a_float() -> None:
+    # OPE cache keys carry theta as JSON, where 1 and 1.0 would be two keys.
+    assert repr(SystemOptions(theta=1).theta) == "1.0"
+
+
+def test_unknown_system_is_a_config_error(fake_settings: Settings) -> None:
+    with pytest.raises(ConfigError, match="unknown system 'gpt'") as caught:
+        build_system(fake_settings, "gpt")
+    assert "saycan" in (caught.value.hint or "")
+
+
+def test_paper_systems_are_the_step_planner(fake_settings: Settings) -> None:
+    assert build_system(fake_settings, "paper-nokg").planner_kind == "steps"  # type: ignore[attr-defined]
+    with pytest.raises(ConfigError, match="plan step by step"):
+        build_system(fake_settings, "paper-nokg", SystemOptions(planner="goal"))
+
+
+def test_saycan_needs_a_backend_that_scores(fake_settings: Settings) -> None:
+    with pytest.raises(NotSupportedError, match="SayCan scores options"):
+        build_system(fake_settings, "saycan")
+    assert build_system(fake_settings, "saycan", llm=FakeLLM(scores=[])).plan  # scoring: fine
+
+
+def test_the_default_graph_keys_ope_results_as_it_always_did(fake_settings: Settings) -> None:
+    graph = _install_graph(fake_settings.kg_path)
+    expected = f"sqlite:omcs+wordnet:{graph.meta['built_at']}"  # the key OPE results are cached under
+    system = build_system(fake_settings, "conceptbot")
+    assert system.ope.graph_version == expected  # type: ignore[attr-defined]
+    with_fallback = build_system(replace(fake_settings, kg_fallback=True), "conceptbot")
+    assert with_fallback.ope.graph_version == expected  # type: ignore[attr-defined]
+    assert graph_version("conceptnet-api", FallbackGraph(DictGraph(), None)) == "conceptnet-api:test"
+
+
+def test_an_unversioned_graph_keeps_its_old_key() -> None:
+    class LiveGraph(DictGraph):
+        name = "live"
+        version = ""
+
+    assert graph_version("conceptnet-api", LiveGraph()) == "conceptnet-api::"
+
+
+def test_given_backends_replace_the_configured_ones(fake_settings: Settings) -> None:
+    graph = DictGraph()
+    system = build_system(
+        fake_settings, "conceptbot", SystemOptions(theta=0.2), graph=graph, embedder=FakeEmbedder()
+    )
+    assert system.ope.graph_version == "dict:test"  # type: ignore[attr-defined]
+    assert system.ope.retriever.graph is graph and system.ope.retriever.theta == 0.2  # type: ignore[attr-defined]
+    with pytest.raises(ConfigError, match="fallback option applies to the configured graph"):
+        build_system(fake_settings, "conceptbot", SystemOptions(fallback=True), graph=graph)
