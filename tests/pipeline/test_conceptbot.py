@@ -110,3 +110,15 @@ def test_free_text_commands_are_checked_and_invalid_ones_logged(monkeypatch) -> 
     urp = plan.trace.urp
     assert urp is not None and urp.commands == ("pick_and_place(chips, user)",)
     assert "object not in the scene: 'banana'" in urp.rejected_commands[0]
+
+
+def test_the_planner_is_told_urps_reasoning_and_its_numbered_commands() -> None:
+    from conceptbot.pipeline.conceptbot import guidance_from
+    from conceptbot.pipeline.urp import URPResult
+
+    urp = URPResult(["tea"], "Tea is $hot.", ["pick_and_place(cup, user)", "done()"], False, None)
+    assert guidance_from(urp) == (
+        "Analysis: Tea is $hot.\nPlan from the analysis: 1. pick_and_place(cup, user); 2. done();"
+    )
+    nothing = URPResult([], "Nothing fits.", [], False, None)
+    assert guidance_from(nothing) == "Analysis: Nothing fits.\nThe analysis found nothing to move."

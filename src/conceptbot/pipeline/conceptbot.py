@@ -33,7 +33,7 @@ from conceptbot.core.trace import OPETrace, PlannerSummary, PlanTrace, URPTrace
 from conceptbot.core.usage import Usage
 from conceptbot.models.cache_db import CacheStore
 from conceptbot.models.llm import LLM
-from conceptbot.pipeline import modes
+from conceptbot.pipeline import modes, prompts
 from conceptbot.pipeline.decide import Decider, FactFinder
 from conceptbot.pipeline.goal_planner import GoalPlanner, GoalPlanResult, Thresholds, is_person
 from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
@@ -67,9 +67,9 @@ SWITCHES = {
 def guidance_from(urp: URPResult) -> str:
     """What the planner is told about URP's interpretation."""
     if not urp.commands:
-        return f"Analysis: {urp.reasoning}\nThe analysis found nothing to move."
+        return prompts.fill("planner_guidance_none", reasoning=urp.reasoning)
     steps = " ".join(f"{i}. {c};" for i, c in enumerate(urp.commands, 1))
-    return f"Analysis: {urp.reasoning}\nPlan from the analysis: {steps}"
+    return prompts.fill("planner_guidance", reasoning=urp.reasoning, steps=steps)
 
 
 class ConceptBot:
