@@ -7,7 +7,7 @@ instead of going through the CLI or the web page. Everything here is also at the
 
     planner = conceptbot.open_planner()  # the settings of `conceptbot plan`
     result = planner.plan("I would like a hollandaise sauce", conceptbot.load_scene("kitchen"))
-    result.actions    # ['pick_and_place(eggs, user)', ..., 'done()']
+    result.actions    # ['pick_and_place(...)', ..., 'done()']
     result.refused, result.reason, result.trace
     result.to_dict()  # the JSON object `conceptbot plan --json` prints
 
