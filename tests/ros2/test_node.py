@@ -18,7 +18,7 @@ from conceptbot.core.scene import Scene
 from conceptbot.ros2.client import send_request
 from conceptbot.ros2.node import ConceptBotNode, NodeConfig
 from tests.pipeline.fakes import properties_reply, urp_reply
-from tests.ros2.conftest import TINY_SCENE, wait_for
+from tests.ros2.harness import TINY_SCENE, wait_for
 
 # The paper's pipeline without a graph on the fake backend: OPE per object (3), URP, then two
 # voting steps of 5 completions. The fake cannot score options, so the goal planner is not used.
@@ -208,3 +208,27 @@ def _until(done: Callable[[], bool], timeout_s: float = 10.0) -> bool:
 def test_node_config_defaults_match_the_docs() -> None:
     assert NodeConfig() == NodeConfig("conceptbot", "", "kitchen", 4, 0.0)
     assert ConceptBotNode.__init__.__kwdefaults__["name"] == "conceptbot"
+
+
+@pytest.mark.slow
+def test_the_embedded_model_plans_a_request_through_the_node(
+    start_node, smollm2_path: Path, tiny_scene_file: Path
+) -> None:
+    # The goal planner without a graph (no knowledge graph or embedder to install): the real
+    # SmolLM2-135M scores its questions; which plan it makes is its business, the contract is ours.
+    start_node(NodeConfig(system="nokg", llm=f"llamacpp:{smollm2_path}", scene=str(tiny_scene_file)))
+    progress: list[dict[str, Any]] = []
+    result = send_request(
+        {"id": "real", "request": "Bring me an apple"}, timeout_s=600, on_progress=progress.append
+    )
+    assert result["id"] == "real" and result["ok"] is True, result
+    plan = result["plan"]
+    Draft202012Validator(plan_schema()).validate(plan)
+    assert plan["plan"][-1] == "done()"
+    assert set(plan["plan"]) <= {"pick_and_place(apple, user)", "pick_and_place(sponge, user)", "done()"}
+    assert plan["trace"]["planner_kind"] == "goal" and plan["trace"]["goal"]["targets"][0]["named"] == [
+        "apple"
+    ]
+    events = [p["module"] for p in progress if p["kind"] == "event"]
+    assert events[:3] == ["goal", "decisions", "risk"] and events[3:] == ["step"] * len(plan["steps"])
+    assert plan["usage"]["total"]["prompt_tokens"] > 0

@@ -20,6 +20,7 @@ Example (what ``conceptbot ros2 node`` does, :func:`run_node`)::
 from __future__ import annotations
 
 import queue
+import signal
 import threading
 import time
 import traceback
@@ -361,13 +362,15 @@ def run_node(
     """
     context = Context()
     try:
-        # No rclpy signal handler: Ctrl-C raises KeyboardInterrupt in spin, and destroy_node answers
-        # the queued requests while the context is still up.
+        # No rclpy signal handler (it shuts the context down at once): Ctrl-C and SIGTERM raise
+        # KeyboardInterrupt here, and destroy_node answers the queued requests while the context is
+        # still up.
         rclpy.init(
             args=["conceptbot", *ros_args], context=context, signal_handler_options=SignalHandlerOptions.NO
         )
     except RuntimeError as exc:
         raise ConfigError(f"bad ROS arguments: {exc}", hint="e.g. --ros-args -p scene:=kitchen") from None
+    previous = signal.signal(signal.SIGTERM, _interrupt)
     try:
         try:
             node = ConceptBotNode(settings, name=name, defaults=defaults, context=context)
@@ -379,11 +382,24 @@ def run_node(
         executor = SingleThreadedExecutor(context=context)
         executor.add_node(node)
         try:
-            executor.spin()
+            # Python runs signal handlers between bytecodes, not inside rcl's wait: wake every
+            # SPIN_WAKE_S so Ctrl-C gets through.
+            while context.ok():
+                executor.spin_once(timeout_sec=SPIN_WAKE_S)
         except (KeyboardInterrupt, ExternalShutdownException):
             pass
         finally:
             node.destroy_node()
             executor.shutdown()
     finally:
+        signal.signal(signal.SIGTERM, previous)
         context.try_shutdown()
+
+
+SPIN_WAKE_S = 0.5
+"""How often the node's spin loop returns to Python (the longest Ctrl-C waits)."""
+
+
+def _interrupt(signum: int, frame: object) -> None:
+    """SIGTERM (``ros2 launch``, systemd) stops the node like Ctrl-C."""
+    raise KeyboardInterrupt

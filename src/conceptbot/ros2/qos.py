@@ -2,12 +2,12 @@
 
 All three are reliable with a history of :data:`~conceptbot.ros2.protocol.QOS_DEPTH` messages. The
 replies (``~/progress``, ``~/result``) are also *transient local*: the node keeps the last ones for
-a subscriber it discovers late. Discovery is not symmetric: a client can see the node's publisher
+a subscriber it discovers late. Discovery is not symmetric: a client can see the node's subscription
 (and send its request) before the node's publisher has matched the client's subscription, and a
-volatile reply sent in that gap reaches nobody (it happened in about 1 of 15 runs of this package's tests before). A client
-that subscribes transient local gets such replies when the match completes, and also the last
-replies to other requests: it keeps those with its own id. Requests stay volatile, so a node that
-restarts never plans an old request again.
+volatile reply sent in that gap reaches nobody (in about 1 of 15 runs of this package's tests,
+before the replies were made transient local). A client that subscribes transient local gets such
+replies once the match completes, and also the last replies to other requests: it keeps those with
+its own id. Requests stay volatile, so a node that restarts never plans an old request again.
 """
 
 from __future__ import annotations
