@@ -1,7 +1,7 @@
 """The ROS 2 node: plans each request from ``~/request``, reports on ``~/progress`` and ``~/result``.
 
-One worker thread plans, one request at a time (the embedded model runs one plan at a time, and
-a second model in memory would double its 1-2 GB), fed by a bounded queue: a request that finds
+One worker thread plans, one request at a time (the embedded model is one llama.cpp instance
+and runs one plan at a time), fed by a bounded queue: a request that finds
 the queue full is answered ``busy`` at once; queued requests are answered in the order they came.
 Nothing is dropped silently: a malformed request, an unknown object, a planner failure, a plan
 over ``plan_timeout_s`` and a request still queued when the node shuts down each get an error
@@ -40,6 +40,7 @@ from std_msgs.msg import String
 from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConceptBotError, ConfigError
 from conceptbot.core.plan import Plan
+from conceptbot.core.urls import redact_secrets
 from conceptbot.ros2 import qos
 from conceptbot.ros2.protocol import (
     PlanRequest,
@@ -169,7 +170,8 @@ class ConceptBotNode(Node):
         self._worker = threading.Thread(target=self._work, name=f"{name}-planner", daemon=True)
         self._worker.start()
         self.get_logger().info(
-            f"ready: {self.config.system} on {self.config.llm}, default scene {self.default_scene.name}; "
+            f"ready: {self.config.system} on {redact_secrets(self.config.llm)}, "
+            f"default scene {self.default_scene.name}; "
             f"requests on {self.request_sub.topic_name}"
         )
 
@@ -258,14 +260,15 @@ class ConceptBotNode(Node):
             plan = self.planner.plan(request.request, request.scene, observer=_TopicObserver(self, running))
             payload, summary = result_payload(request.id, plan), _summary(plan)
         except ConceptBotError as exc:
-            payload = error_payload(request.id, "planner_error", exc.message, exc.hint)
-            summary = f"planner_error: {exc.message}"
+            # Redacted: a backend's message may quote its URL, and anyone on the domain reads this.
+            message, hint = redact_secrets(exc.message), exc.hint and redact_secrets(exc.hint)
+            payload = error_payload(request.id, "planner_error", message, hint)
+            summary = f"planner_error: {message}"
         except Exception as exc:  # the node stays up; the traceback goes to the log
             self.get_logger().error(f"{request.id}: planning failed:\n{traceback.format_exc()}")
-            payload = error_payload(
-                request.id, "planner_error", f"unexpected error: {exc!r}", "see the node's log"
-            )
-            summary = f"planner_error: {exc!r}"
+            message = redact_secrets(f"unexpected error: {exc!r}")
+            payload = error_payload(request.id, "planner_error", message, "see the node's log")
+            summary = f"planner_error: {message}"
         finally:
             if timer is not None:
                 timer.cancel()
