@@ -41,6 +41,23 @@ def test_node_refuses_stray_arguments() -> None:
     assert result.exit_code == 2 and "ROS arguments follow --ros-args" in result.output
 
 
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--name", "my-node"], "bad node name 'my-node'"),
+        (["--ros-args", "-p", "queue_size"], "bad ROS arguments"),
+    ],
+)
+def test_bad_node_names_and_ros_arguments_are_one_error_line(
+    args: list[str], message: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setattr(sys, "argv", ["conceptbot", "ros2", "node", *args])
+    with pytest.raises(SystemExit) as caught:
+        main()
+    err = capsys.readouterr().err
+    assert caught.value.code == 2 and message in err and "Traceback" not in err
+
+
 class Mover:
     """Plans moving the first pickable object to the first destination, and says so; a request
     that mentions a unicorn fails."""

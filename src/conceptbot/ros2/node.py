@@ -35,6 +35,7 @@ from rclpy.exceptions import NameValidationException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
+from rclpy.validate_node_name import validate_node_name
 from std_msgs.msg import String
 
 from conceptbot.core.config import Settings
@@ -363,6 +364,13 @@ def run_node(
         ConfigError: Bad ROS arguments or node name, or a bad parameter (see :class:`ConceptBotNode`).
         ConceptBotError: The planner's backends cannot be opened.
     """
+    try:
+        validate_node_name(name)  # before a node exists: rclpy warns while tearing down a bad one
+    except NameValidationException as exc:
+        raise ConfigError(
+            f"bad node name {name!r}: {str(exc).splitlines()[0].rstrip(':')}",
+            hint="use letters, digits and '_' (e.g. conceptbot_arm)",
+        ) from None
     context = Context()
     try:
         # No rclpy signal handler (it shuts the context down at once): Ctrl-C and SIGTERM raise
@@ -375,13 +383,7 @@ def run_node(
         raise ConfigError(f"bad ROS arguments: {exc}", hint="e.g. --ros-args -p scene:=kitchen") from None
     previous = signal.signal(signal.SIGTERM, _interrupt)
     try:
-        try:
-            node = ConceptBotNode(settings, name=name, defaults=defaults, context=context)
-        except NameValidationException as exc:
-            raise ConfigError(
-                f"bad node name {name!r}: {str(exc).splitlines()[0]}",
-                hint="use letters, digits and '_' (e.g. conceptbot_arm)",
-            ) from None
+        node = ConceptBotNode(settings, name=name, defaults=defaults, context=context)
         executor = SingleThreadedExecutor(context=context)
         executor.add_node(node)
         try:
