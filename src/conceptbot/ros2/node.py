@@ -251,7 +251,13 @@ class ConceptBotNode(Node):
     def _plan(self, request: PlanRequest) -> None:
         running = _Running(request, time.monotonic(), threading.Lock())
         with self._lock:
-            self._current = running
+            # close() may have come between taking the request and here: it did not see this one.
+            closed = self._closed
+            if not closed:
+                self._current = running
+        if closed:
+            self._answer_error(request.id, "planner_error", "the node shut down before planning it")
+            return
         timer = None
         if self.config.plan_timeout_s > 0:
             timer = threading.Timer(self.config.plan_timeout_s, self._time_out, args=(running,))
