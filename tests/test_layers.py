@@ -23,6 +23,7 @@ RANK = {
     "sim": 6,
     "bench": 6,
     "web": 7,
+    "ros2": 7,  # the ROS 2 node: plans through systems, like the web page
     "cli": 8,
     "api": 9,
     "__main__": 9,

@@ -13,7 +13,8 @@ torch) for the CLI and for code that only wants one submodule.
 
 Layers (imports flow one way; ``tests/test_layers.py`` checks it): ``core`` -> ``models``,
 ``scenes`` -> ``knowledge`` -> ``pipeline`` -> ``baselines``, ``household`` -> ``systems`` ->
-``sim``, ``bench`` -> ``web`` -> ``cli``; the API (``api``) on top of ``systems``.
+``sim``, ``bench`` -> ``web``, ``ros2`` (the ROS 2 node) -> ``cli``; the API (``api``) on top of
+``systems``.
 """
 
 from __future__ import annotations

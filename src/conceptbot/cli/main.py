@@ -62,6 +62,7 @@ def _register() -> None:
         llm_cmd,
         models_cmd,
         plan_cmd,
+        ros2_cmd,
         safebench_cmd,
         scenes_cmd,
         serve_cmd,
@@ -79,6 +80,7 @@ def _register() -> None:
     cli.add_command(safebench_cmd.safebench)
     cli.add_command(sim_cmd.sim)
     cli.add_command(serve_cmd.serve)
+    cli.add_command(ros2_cmd.ros2)
 
 
 _register()

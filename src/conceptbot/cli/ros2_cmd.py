@@ -1,0 +1,101 @@
+"""``conceptbot ros2``: run the planner as a ROS 2 node, or send a node one request."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import click
+
+from conceptbot.cli.context import AppContext, pass_app
+from conceptbot.cli.progress import say
+from conceptbot.core.limits import check_request
+from conceptbot.ros2 import require_rclpy
+from conceptbot.scenes import demo_scene_names, resolve_scene
+from conceptbot.systems import SYSTEMS
+
+
+@click.group("ros2")
+def ros2() -> None:
+    """ROS 2: plan requests arriving on a topic (docs/ros2.md)."""
+
+
+@ros2.command("node", context_settings={"ignore_unknown_options": True})
+@click.option("--llm", "llm", metavar="SPEC", help="LLM backend (default: the settings').")
+@click.option(
+    "--scene",
+    "scene_ref",
+    default="kitchen",
+    show_default=True,
+    help="Scene of a request that sends none: a demo scene name or a scene file.",
+)
+@click.option(
+    "--config", "system", type=click.Choice(SYSTEMS), default="conceptbot", show_default=True, help="System."
+)
+@click.option("--name", default="conceptbot", show_default=True, help="Node name (topics /NAME/...).")
+@click.argument("ros_args", nargs=-1, type=click.UNPROCESSED, metavar="[--ros-args ...]")
+@pass_app
+def node(
+    app: AppContext, llm: str | None, scene_ref: str, system: str, name: str, ros_args: tuple[str, ...]
+) -> None:
+    """Start a ROS 2 node: requests on /NAME/request, progress and results out; Ctrl-C stops it.
+
+    The flags set the ROS parameters' defaults; `--ros-args -p queue_size:=8 -p plan_timeout_s:=120`
+    sets any parameter (system, llm, scene, queue_size, plan_timeout_s).
+    """
+    if ros_args and ros_args[0] != "--ros-args":
+        raise click.UsageError(f"unexpected argument {ros_args[0]!r} (ROS arguments follow --ros-args)")
+    require_rclpy()
+    from conceptbot.ros2.node import NodeConfig, run_node
+
+    defaults = NodeConfig(system=system, llm=llm or app.settings.llm, scene=scene_ref)
+    run_node(app.settings, name=name, defaults=defaults, ros_args=ros_args)
+
+
+@ros2.command("send")
+@click.argument("request")
+@click.option(
+    "--scene",
+    "scene_ref",
+    help="A demo scene name or a scene file (sent in the request); default: the node's scene.",
+)
+@click.option("--name", default="conceptbot", show_default=True, help="The node's name.")
+@click.option(
+    "--timeout",
+    "timeout_s",
+    default=300.0,
+    show_default=True,
+    type=click.FloatRange(min=0.1),
+    help="Seconds.",
+)
+def send(request: str, scene_ref: str | None, name: str, timeout_s: float) -> None:
+    """Send REQUEST to a running node; print its progress (stderr) and the result JSON (stdout)."""
+    payload: dict[str, Any] = {"request": check_request(request)}
+    if scene_ref is not None:
+        payload["scene"] = _scene_payload(scene_ref)
+    require_rclpy()
+    from conceptbot.ros2.client import send_request
+
+    result = send_request(payload, node_name=name, timeout_s=timeout_s, on_progress=_show)
+    click.echo(json.dumps(result, indent=2, ensure_ascii=False))
+    if not result.get("ok"):
+        raise click.exceptions.Exit(1)
+
+
+def _scene_payload(ref: str) -> str | dict[str, Any]:
+    """A demo scene goes by name; a file is read (and checked) here and sent whole."""
+    if (
+        not Path(ref).expanduser().is_file()
+        and ref.strip().lower().removesuffix(".json") in demo_scene_names()
+    ):
+        return ref
+    return resolve_scene(ref).to_dict()
+
+
+def _show(payload: dict[str, Any]) -> None:
+    """One progress payload as a dim line on stderr."""
+    if payload.get("kind") == "event":
+        say(f"[{payload.get('module')}] done")
+    else:
+        say(str(payload.get("message", "")))
