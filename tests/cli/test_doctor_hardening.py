@@ -170,3 +170,20 @@ def test_doctor_header_hides_credentials_in_the_spec(
     result = CliRunner().invoke(cli, ["--llm", spec, "doctor"])
     assert result.exit_code == 0 and "SECRET" not in result.output
     assert "http://127.0.0.1:1/v1?key=***#m" in result.output
+
+
+def test_ros2_check_reports_the_installed_rclpy() -> None:
+    check = doctor.check_ros2()
+    assert check.ok and not check.required
+    assert check.detail.startswith("rclpy 9.1.2, Fast DDS ")
+
+
+def test_a_missing_ros2_is_a_warning_with_the_install_hint(monkeypatch: pytest.MonkeyPatch) -> None:
+    def no_ros(module: str) -> None:
+        raise ImportError(f"No module named {module!r}")
+
+    monkeypatch.setattr(doctor, "_import_silently", no_ros)
+    monkeypatch.setattr(doctor, "CHECKS", [("ROS 2", lambda s: doctor.check_ros2())])
+    result = CliRunner().invoke(cli, ["doctor"])
+    assert result.exit_code == 0, result.output
+    assert "[warn] ROS 2: not installed" in result.output and "conceptbot[ros2]" in result.output

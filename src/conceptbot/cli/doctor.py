@@ -178,6 +178,22 @@ def check_pybullet() -> Check:
         return Check("pybullet", False, f"cannot import pybullet ({exc})")
 
 
+def check_ros2() -> Check:
+    """ROS 2 for ``conceptbot ros2`` imports (optional: only the ROS 2 node needs it)."""
+    try:
+        _import_silently("rclpy")
+        _import_silently("rmw_fastrtps_cpp")
+    except ImportError:
+        return Check(
+            "ROS 2",
+            False,
+            "not installed (only `conceptbot ros2` needs it: pip install 'conceptbot[ros2]')",
+            required=False,
+        )
+    versions = f"rclpy {_version('ros-rclpy')}, Fast DDS {_version('ros-fastdds')}"
+    return Check("ROS 2", True, versions, required=False)
+
+
 def check_cache(settings: Settings) -> Check:
     """The cache database opens and is migrated."""
     try:
@@ -197,6 +213,7 @@ CHECKS: list[tuple[str, Callable[[Settings], Check]]] = [
     ("embedder", check_embedder),
     ("knowledge graph", check_knowledge),
     ("pybullet", lambda s: check_pybullet()),
+    ("ROS 2", lambda s: check_ros2()),
     ("cache database", check_cache),
 ]
 
