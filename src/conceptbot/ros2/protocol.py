@@ -45,8 +45,9 @@ MAX_ID_CHARS = 100
 """Characters in a request id."""
 
 QOS_DEPTH = 100
-"""History depth of the node's topics (reliable, volatile): a plan sends a few dozen progress
-messages in a burst, and a reader that falls more than this far behind loses the oldest."""
+"""History depth of the node's topics (all reliable; the replies transient local, see ``qos``): a
+plan sends a few dozen progress messages in a burst, and a reader that falls more than this far
+behind loses the oldest."""
 
 REQUEST_KEYS = ("id", "request", "scene")
 """The keys a request may have (others are refused, so a misspelt key is not silently ignored)."""
