@@ -97,3 +97,20 @@ def test_behind_the_judge_the_plain_planners_call_plans_and_may_still_refuse() -
     assert planner_llm.requests[0] == plain_llm.requests[0]  # the same call, evidence and all
     refused = planner.plan("Find the candle.", KITCHEN)
     assert refused.refused and refused.trace.extra["refused_by"] == "planner"
+
+
+def test_a_plan_the_judge_lets_through_is_refused_when_it_would_spill_onto_a_television() -> None:
+    living = house_scene("FloorPlan201", ["Television", "WateringCan", "Candle"])
+    spill = ["find WateringCan", "pick WateringCan", "fillLiquid WateringCan water", "find Television"]
+    spill.append("pour")
+    planner, _, _ = _conceptbot([[math.log(0.2), math.log(0.8)]] * 2, [_reply(False, spill)])
+    plan = planner.plan("Water the television.", living)
+    assert plan.refused and plan.steps == [] and plan.trace.extra["refused_by"] == "outcome"
+    assert plan.trace.extra["outcomes"] == [{"kind": "spill", "step": "pour", "about": "Television"}]
+    assert plan.reason == (
+        "Carrying it out would be dangerous: 'pour' pours liquid onto the Television, which neither "
+        "holds nor drains it."
+    )
+    # The plain planner carries the same plan out.
+    plain = PlainHouseholdPlanner(FakeLLM([_reply(False, spill)])).plan("Water the television.", living)
+    assert not plain.refused and plain.steps == spill

@@ -7,8 +7,10 @@
   names, and URP's keywords with their graph relations filtered against the instruction, are the
   evidence for the harm judge (:mod:`conceptbot.household.judge`: "would carrying this out be
   dangerous?", scored, refused at or above a threshold chosen on the dev split). An instruction it
-  lets through goes to the plain planner's call, unchanged, which may still refuse: ConceptBot
-  refuses what either refuses and plans exactly as the plain planner does. With ``judge=None``
+  lets through goes to the plain planner's call, unchanged, which may still refuse; a plan that would
+  spill liquid onto something that neither holds nor drains it, or throw something, is refused too
+  (:mod:`conceptbot.household.outcomes`). ConceptBot refuses what any of them refuses and otherwise
+  plans exactly as the plain planner does. With ``judge=None``
   (configuration ``conceptbot-joint``, the first design) the evidence goes to the planning call,
   which judges and plans at once.
 
@@ -31,6 +33,7 @@ from conceptbot.household.actions import ACTIONS, LIQUIDS, key
 from conceptbot.household.executor import execute
 from conceptbot.household.grounding import ground_plan
 from conceptbot.household.judge import HarmJudge, safety_text
+from conceptbot.household.outcomes import hazardous_outcomes
 from conceptbot.household.thor import HouseScene, catalogue
 from conceptbot.models.llm import LLM, ChatRequest, Message
 from conceptbot.models.structured import chat_json
@@ -331,4 +334,13 @@ class ConceptBotHouseholdPlanner:
         usage["planner"] = used.with_latency(time.perf_counter() - started)
         if value["refuse"]:
             trace["refused_by"] = "planner"
+            return _result(value, trace, usage)
+        # The judge reads the instruction; the skill layer reads the plan: what it would spill or
+        # throw is known before anything moves (household/outcomes.py).
+        outcomes = hazardous_outcomes(scene, value["steps"])
+        if outcomes:
+            trace["outcomes"] = [o.to_dict() for o in outcomes]
+            trace["refused_by"] = "outcome"
+            reason = "Carrying it out would be dangerous: " + "; ".join(o.describe() for o in outcomes)
+            value = {**value, "refuse": True, "reasoning": reason + "."}
         return _result(value, trace, usage)
