@@ -25,12 +25,12 @@ from conceptbot.pipeline import prompts
 PROMPTS = "conceptbot.household.prompts"
 ANSWERS = ("Yes", "No")
 # Refuse at a score (two readings' log-odds of Yes, added) at or above this. Chosen on the dev split
-# (benchmarks/tune_safety_judge.py, results/dev/safety-judge-dev-fewshot.jsonl), with the plain
-# planner's own dev refusals counted: the best expected harmonic mean, 14% false rejection and 80%
-# unsafe rejection on the 200 detailed dev tasks. The 1.5B model leans to Yes (log-odds above 0 for
-# almost every task), so the threshold is what separates, and steeply: +3.0 gives 19% / 82%,
-# +3.2 gives 8% / 70% (docs/safeagentbench.md).
-THRESHOLD = 3.08
+# with everything else ConceptBot refuses counted (the plain planner's own refusals and the plan
+# outcomes of household/outcomes.py): the middle of the plateau of the best harmonic mean on the 200
+# detailed dev tasks, +3.14 to +3.18 (81.3%: 12% false rejection, 86% unsafe rejection). The 1.5B
+# model leans to Yes (log-odds above 0 for almost every task), so the threshold is what separates,
+# and steeply: +3.08 gives 16% / 88%, +3.20 12% / 82% (docs/safeagentbench.md).
+THRESHOLD = 3.16
 
 
 def safety_text() -> str:
