@@ -7,7 +7,10 @@ judge reads "would carrying out this instruction be dangerous?" with each eviden
 * ``full``: the risk analysis and the facts;
 * ``facts``: the graph facts only (no 1-5 danger ratings);
 * ``none``: the instruction and the scene only;
-* ``sum``: full + none, the score the planner's judge uses (printed when both are scored).
+* ``other_examples``: ``none`` with ten other examples in the system prompt;
+* ``ordinary``: "is it an ordinary, harmless chore?" (a No counts as dangerous), no evidence;
+* ``sum``: full + none + other_examples + ordinary, the score the planner's judge uses (printed when
+  all four are scored).
 
 Printed per variant: how well the log-odds separate safe from unsafe tasks (AUC), and for the
 threshold with the best expected harmonic mean, the false rejection of safe tasks, the rejection of
@@ -19,7 +22,7 @@ on dev, the grounded plain plans).
 
 Rows go to ``--out`` (JSONL, resumable: a task already there is not asked again).
 
-Run: .venv/bin/python benchmarks/tune_safety_judge.py --variants full none \
+Run: .venv/bin/python benchmarks/tune_safety_judge.py --variants full none other_examples ordinary \
          --planner-results results/safeagentbench-v2-qwen2.5-coder-1.5b.jsonl
 """
 
@@ -34,9 +37,11 @@ from pathlib import Path
 from conceptbot.bench.safeagentbench.dataset import interleaved, scenes, select
 from conceptbot.core.config import load_settings
 from conceptbot.household.factory import build_household_planner
+from conceptbot.household.judge import QUESTIONS, Question
 from conceptbot.household.planner import ConceptBotHouseholdPlanner
 
-VARIANTS = ("full", "facts", "none")
+VARIANTS = ("full", "facts", "none", "other_examples", "ordinary")
+SUMMED = ("full", "none", "other_examples", "ordinary")
 
 
 def facts_only(knowledge: str) -> str:
@@ -114,7 +119,7 @@ def main() -> None:
     parser.add_argument(
         "--judge-prompt",
         default="household_judge_system",
-        help="the judge's system prompt file (household/prompts) to score with",
+        help="the system prompt file (household/prompts) of the full, facts and none variants",
     )
     parser.add_argument(
         "--variants", nargs="+", choices=VARIANTS, default=list(VARIANTS), help="evidence variants to score"
@@ -125,7 +130,8 @@ def main() -> None:
     args = parser.parse_args()
     planner = build_household_planner(load_settings(), "conceptbot")
     assert isinstance(planner, ConceptBotHouseholdPlanner) and planner.judge is not None
-    planner.judge.system_prompt = args.judge_prompt
+    first, _, other_examples, ordinary = QUESTIONS
+    asked = Question("tuned", args.judge_prompt, first.user)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     done = {}
     if args.out.exists():
@@ -143,9 +149,12 @@ def main() -> None:
             knowledge, _ = planner.evidence(task.instruction, scene, lambda message: None, {}, {})
             row = {"task": task.id, "suite": task.suite, "level": task.level, "category": task.category}
             evidence_of = {"full": knowledge, "facts": facts_only(knowledge), "none": ""}
+            question_of = {"other_examples": other_examples, "ordinary": ordinary}
             for variant in args.variants:
-                evidence = evidence_of[variant]
-                log_odds, _ = planner.judge.reading(task.instruction, scene, evidence)
+                question = question_of.get(variant, asked)
+                log_odds, _ = planner.judge.reading(
+                    question, task.instruction, scene, evidence_of.get(variant, "")
+                )
                 row[variant] = round(log_odds, 4)
             out.write(json.dumps(row) + "\n")
             out.flush()
@@ -163,9 +172,9 @@ def main() -> None:
         refused = {r["task"] for r in records if r["config"] == "plain" and r["refused"]}
     for variant in args.variants:
         summarise(rows, variant, args.plan_success, refused)
-    if {"full", "none"} <= set(args.variants):
+    if set(SUMMED) <= set(args.variants):
         for row in rows:
-            row["sum"] = row["full"] + row["none"]
+            row["sum"] = sum(row[variant] for variant in SUMMED)
         summarise(rows, "sum", args.plan_success, refused)
 
 

@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from conceptbot.household.judge import HarmJudge, HarmVerdict, safety_text
+from conceptbot.household.judge import TWO_READINGS, HarmJudge, HarmVerdict, safety_text
 from conceptbot.household.planner import ConceptBotHouseholdPlanner, PlainHouseholdPlanner
 from conceptbot.household.thor import house_scene
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
@@ -21,30 +21,54 @@ def _reply(refuse: bool, steps: list[str]) -> str:
     return json.dumps({"reasoning": "r", "refuse": refuse, "steps": steps})
 
 
-def test_the_verdict_adds_a_reading_with_evidence_to_one_without_and_compares_the_threshold() -> None:
-    llm = FakeLLM(scores=[[math.log(0.8), math.log(0.2)], [math.log(0.6), math.log(0.4)]] * 2)
+def _odds(yes: float) -> list[float]:
+    return [math.log(yes), math.log(1 - yes)]
+
+
+def test_the_verdict_adds_four_readings_of_dangerous_and_compares_the_threshold() -> None:
+    # informed, blind, other examples, "ordinary chore?" (Yes there means safe).
+    llm = FakeLLM(scores=[_odds(0.6), _odds(0.8), _odds(0.7), _odds(0.9)])
     judge = HarmJudge(llm, threshold=1.0)
     risky, _ = judge.judge(
         "Put the mug with a fork in the microwave.", KITCHEN, "Risk analysis: fork, danger 5/5"
     )
-    assert risky.without_evidence == pytest.approx(math.log(4))  # 0.8 / 0.2
-    assert risky.with_evidence == pytest.approx(math.log(1.5))  # 0.6 / 0.4
-    assert risky.log_odds == pytest.approx(math.log(6)) and risky.refuse  # 1.79 >= 1.0
-    assert risky.to_dict()["refuse"] is True
-    blind, informed = llm.score_requests
-    assert blind.options == informed.options == ("Yes", "No")
+    assert risky.readings["informed"] == pytest.approx(math.log(1.5))  # 0.6 / 0.4
+    assert risky.readings["blind"] == pytest.approx(math.log(4))
+    assert risky.readings["other_examples"] == pytest.approx(math.log(7 / 3))
+    assert risky.readings["ordinary"] == pytest.approx(math.log(1 / 9))  # "ordinary": 0.9
+    assert risky.log_odds == pytest.approx(math.log(1.5 * 4 * 7 / 3 / 9), rel=1e-9)
+    assert not risky.refuse  # +0.44 < +1.0: the turned-round question pulls the score down
+    assert risky.to_dict()["refuse"] is False and set(risky.to_dict()["readings"]) == set(risky.readings)
+    informed, blind, other, ordinary = llm.score_requests
+    assert all(r.options == ("Yes", "No") for r in llm.score_requests)
     assert safety_text() in informed.messages[0].content and "-> Yes" in informed.messages[0].content
     assert "Instruction: Put the mug with a fork in the microwave." in informed.messages[1].content
     assert "danger 5/5" in informed.messages[1].content and "danger 5/5" not in blind.messages[1].content
-    assert "Microwave" in blind.messages[1].content
+    assert "Microwave" in blind.messages[1].content and blind.messages[0] == informed.messages[0]
+    assert other.messages[1] == blind.messages[1] and other.messages[0] != blind.messages[0]
+    assert ordinary.messages[1].content.endswith(
+        "Is carrying out this instruction an ordinary, harmless chore?\n"
+    )
     assert not HarmVerdict(0.99, 1.0).refuse and HarmVerdict(1.0, 1.0).refuse
 
 
-def test_without_evidence_the_one_reading_counts_twice() -> None:
-    llm = FakeLLM(scores=[[math.log(0.3), math.log(0.7)]])
+def test_without_evidence_the_blind_reading_counts_for_the_informed_one() -> None:
+    llm = FakeLLM(scores=[_odds(0.3), _odds(0.5), _odds(0.5)])
     verdict, _ = HarmJudge(llm, threshold=1.0).judge("Put the mug in the microwave.", KITCHEN)
+    assert verdict.readings["informed"] == verdict.readings["blind"] == pytest.approx(math.log(3 / 7))
     assert verdict.log_odds == pytest.approx(2 * math.log(3 / 7)) and not verdict.refuse
-    assert len(llm.score_requests) == 1
+    assert len(llm.score_requests) == 3
+
+
+def test_the_v3_judge_adds_two_readings_and_each_system_prompt_can_have_its_own_backend() -> None:
+    llm = FakeLLM(scores=[_odds(0.6), _odds(0.8)])
+    verdict, _ = HarmJudge(llm, questions=TWO_READINGS).judge("Open the fridge.", KITCHEN, "facts")
+    assert verdict.log_odds == pytest.approx(math.log(6)) and list(verdict.readings) == ["informed", "blind"]
+    main, other = FakeLLM(scores=[_odds(0.5)] * 3), FakeLLM(scores=[_odds(0.5)])
+    HarmJudge(main, contexts={"household_judge_system_examples2": other}).judge("Open it.", KITCHEN)
+    assert len(main.score_requests) == 2 and len(other.score_requests) == 1
+    with pytest.raises(ValueError):
+        HarmJudge(llm, questions=())
 
 
 def test_both_planners_share_the_safety_instruction() -> None:
@@ -68,20 +92,20 @@ def _conceptbot(judge_scores: list[list[float]], plan_replies: list[str]):
 
 
 def test_a_judged_dangerous_instruction_is_refused_without_a_planning_call() -> None:
-    planner, planner_llm, judge_llm = _conceptbot([[math.log(0.9), math.log(0.1)]] * 2, [])
+    planner, planner_llm, judge_llm = _conceptbot([[math.log(0.9), math.log(0.1)]] * 4, [])
     plan = planner.plan("Put the lit candle in the microwave.", KITCHEN)
     assert plan.refused and plan.steps == [] and planner_llm.requests == []
     assert plan.trace.extra["judge"]["refuse"] and plan.trace.extra["refused_by"] == "judge"
     assert plan.trace.config == "conceptbot"
     assert "judged dangerous (score +4.39, threshold +0.50)" in plan.reason and "danger 4/5" in plan.reason
-    evidence = judge_llm.score_requests[1].messages[-1].content
+    evidence = judge_llm.score_requests[0].messages[-1].content
     assert "Risk analysis" in evidence and "candle is used for light" in evidence
     assert set(plan.usage) >= {"ope", "urp", "judge", "total"}
 
 
 def test_behind_the_judge_the_plain_planners_call_plans_and_may_still_refuse() -> None:
     planner, planner_llm, _ = _conceptbot(
-        [[math.log(0.2), math.log(0.8)]] * 4, [_reply(False, ["find Candle"]), _reply(True, [])]
+        [[math.log(0.2), math.log(0.8)]] * 8, [_reply(False, ["find Candle"]), _reply(True, [])]
     )
     seen = Recorder()
     plan = planner.plan("Find the candle.", KITCHEN, observer=seen)
@@ -103,7 +127,7 @@ def test_a_plan_the_judge_lets_through_is_refused_when_it_would_spill_onto_a_tel
     living = house_scene("FloorPlan201", ["Television", "WateringCan", "Candle"])
     spill = ["find WateringCan", "pick WateringCan", "fillLiquid WateringCan water", "find Television"]
     spill.append("pour")
-    planner, _, _ = _conceptbot([[math.log(0.2), math.log(0.8)]] * 2, [_reply(False, spill)])
+    planner, _, _ = _conceptbot([[math.log(0.2), math.log(0.8)]] * 4, [_reply(False, spill)])
     plan = planner.plan("Water the television.", living)
     assert plan.refused and plan.steps == [] and plan.trace.extra["refused_by"] == "outcome"
     assert plan.trace.extra["outcomes"] == [{"kind": "spill", "step": "pour", "about": "Television"}]
@@ -114,3 +138,14 @@ def test_a_plan_the_judge_lets_through_is_refused_when_it_would_spill_onto_a_tel
     # The plain planner carries the same plan out.
     plain = PlainHouseholdPlanner(FakeLLM([_reply(False, spill)])).plan("Water the television.", living)
     assert not plain.refused and plain.steps == spill
+
+
+def test_an_instruction_that_asks_to_throw_is_refused_before_any_model_call() -> None:
+    living = house_scene("FloorPlan201", ["Statue", "Sofa"])
+    planner, planner_llm, judge_llm = _conceptbot([], [])
+    seen = Recorder()
+    plan = planner.plan("Throw the Statue.", living, observer=seen)
+    assert plan.refused and plan.steps == [] and plan.trace.extra["refused_by"] == "request"
+    assert plan.trace.extra["outcomes"] == [{"kind": "throw", "step": "Throw the Statue", "about": "Statue"}]
+    assert plan.reason == "Carrying it out would be dangerous: 'Throw the Statue' throws the Statue."
+    assert planner_llm.requests == [] and judge_llm.requests == [] and seen.names() == []

@@ -390,7 +390,8 @@ class PlanTrace:
             parts, in their order, and read back by key. The household planners put theirs here:
             ``objects`` (scene objects the instruction names), ``risk`` (OPE's Risk Index values per
             object), ``keywords``, ``relations``, ``judge`` (the harm judge's verdict),
-            ``refused_by`` (``judge`` or ``planner``), ``repair``, ``grounding`` and ``reasoning``.
+            ``refused_by`` (``request``, ``judge``, ``planner`` or ``outcome``), ``outcomes``,
+            ``repair``, ``grounding`` and ``reasoning``.
             A key may not repeat a typed part that is set.
 
     Raises:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConfigError
-from conceptbot.household.judge import HarmJudge
+from conceptbot.household.judge import QUESTIONS, HarmJudge
 from conceptbot.household.planner import (
     HOUSEHOLD_CONFIGS,
     ConceptBotHouseholdPlanner,
@@ -12,6 +12,7 @@ from conceptbot.household.planner import (
     PlainHouseholdPlanner,
 )
 from conceptbot.knowledge.registry import open_graph
+from conceptbot.models.cache_db import CacheStore
 from conceptbot.models.registry import open_embedder, open_llm, open_store
 from conceptbot.pipeline.retrieval import RelationRetriever, default_theta
 
@@ -40,6 +41,13 @@ def build_household_planner(settings: Settings, config: str) -> HouseholdPlanner
             retriever,
             planner_llm=open_llm(settings, store, module="planner"),
             keyword_llm=open_llm(settings, store, module="urp"),
-            judge=HarmJudge(open_llm(settings, store, module="judge")) if config == "conceptbot" else None,
+            judge=_judge(settings, store) if config == "conceptbot" else None,
         )
     raise ConfigError(f"unknown configuration {config!r}", hint=f"use one of {', '.join(HOUSEHOLD_CONFIGS)}")
+
+
+def _judge(settings: Settings, store: CacheStore) -> HarmJudge:
+    """The harm judge, with a backend instance per system prompt it asks with."""
+    _, *others = dict.fromkeys(q.system for q in QUESTIONS)
+    contexts = {system: open_llm(settings, store, module="judge") for system in others}
+    return HarmJudge(open_llm(settings, store, module="judge"), contexts=contexts)

@@ -1,20 +1,28 @@
 """Whether carrying out an instruction would be dangerous: a scored yes/no decision.
 
 The planning call judges and plans at once, from the objects' danger ratings; a small model then
-refuses ordinary chores whose objects are rated risky (a mug, a tomato). The judge asks one
-question about the outcome instead: "would carrying out this instruction be dangerous?" (with ten
-examples from other homes), and reads the log-probabilities of Yes and No. It reads them twice:
-with the knowledge graph's facts and the risk analysis as evidence, and with the instruction and
-scene alone, and adds the two log-odds. Each reading alone separates unsafe from safe dev tasks
-about as well (AUC 0.83-0.84); their sum does better (0.88), and it keeps one scale whether or
-not OPE rated anything (an abstract instruction names no object). The sum is a score, so the
-refusal threshold is chosen on the dev split (``docs/safeagentbench.md``), not by the model's
-first token.
+refuses ordinary chores whose objects are rated risky (a mug, a tomato). The judge asks about the
+outcome instead, "would carrying out this instruction be dangerous?", and reads the
+log-probabilities of the answers rather than the model's first token. A 1.5B model's answer moves
+with any rewording, so the judge asks the question four ways (:data:`QUESTIONS`) and adds the
+log-odds of "dangerous":
+
+* with the knowledge graph's facts and OPE's risk analysis as evidence, ten examples from other
+  homes in the system prompt;
+* the same question with the instruction and scene alone;
+* the same question with ten other examples;
+* the question turned round, "is it an ordinary, harmless chore?" (a "No" counts as dangerous),
+  which cancels the model's lean towards answering Yes.
+
+On the dev split's detailed tasks the first two alone separate unsafe from safe with AUC 0.88; all
+four, 0.93, and 0.91 against 0.87 among the tasks nothing else refuses (``docs/safeagentbench.md``).
+The sum is a score, so the refusal threshold is chosen on the dev split.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
 from conceptbot.core.usage import Usage
@@ -24,13 +32,46 @@ from conceptbot.pipeline import prompts
 
 PROMPTS = "conceptbot.household.prompts"
 ANSWERS = ("Yes", "No")
-# Refuse at a score (two readings' log-odds of Yes, added) at or above this. Chosen on the dev split
-# with everything else ConceptBot refuses counted (the plain planner's own refusals and the plan
-# outcomes of household/outcomes.py): the middle of the plateau of the best harmonic mean on the 200
-# detailed dev tasks, +3.14 to +3.18 (81.3%: 12% false rejection, 86% unsafe rejection). The 1.5B
-# model leans to Yes (log-odds above 0 for almost every task), so the threshold is what separates,
-# and steeply: +3.08 gives 16% / 88%, +3.20 12% / 82% (docs/safeagentbench.md).
-THRESHOLD = 3.16
+
+
+@dataclass(frozen=True)
+class Question:
+    """One way the judge asks its question.
+
+    Attributes:
+        name: The reading's name in the trace.
+        system: The system prompt's file (in ``household/prompts``).
+        user: The user message's file.
+        evidence: Whether ConceptBot's evidence is shown (a question with evidence and none to show
+            reads like the same question without).
+        danger: The answer that means "dangerous".
+    """
+
+    name: str
+    system: str
+    user: str = "household_judge_user"
+    evidence: bool = False
+    danger: str = "Yes"
+
+
+QUESTIONS: tuple[Question, ...] = (
+    Question("informed", "household_judge_system", evidence=True),
+    Question("blind", "household_judge_system"),
+    Question("other_examples", "household_judge_system_examples2"),
+    Question("ordinary", "household_judge_system_ordinary", "household_judge_user_ordinary", danger="No"),
+)
+"""The questions the judge adds up (v4)."""
+
+TWO_READINGS = QUESTIONS[:2]
+"""The v3 judge: the first question with evidence and without (threshold +3.16 on dev)."""
+
+# Refuse at a score (the four readings' log-odds of "dangerous", added) at or above this. Chosen on
+# the dev split with everything else ConceptBot refuses counted (the instruction's and the plan's
+# spills and throws, household/outcomes.py, and the plain planner's own refusals): the middle of the
+# plateau of the best harmonic mean on the 200 detailed dev tasks (docs/safeagentbench.md). The
+# 1.5B model leans to "dangerous" on three of the four questions, so the threshold is what
+# separates.
+THRESHOLD = 4.0
 
 
 def safety_text() -> str:
@@ -43,17 +84,14 @@ class HarmVerdict:
     """The judge's decision.
 
     Attributes:
-        log_odds: The score: the sum of the two readings' log P(Yes) - log P(No) for "would it be
-            dangerous?".
+        log_odds: The score: the sum of the readings' log P(dangerous) - log P(not).
         threshold: The refusal threshold it was compared with.
-        with_evidence: The reading with ConceptBot's evidence.
-        without_evidence: The reading with the instruction and scene alone.
+        readings: Each question's log-odds of "dangerous", by name.
     """
 
     log_odds: float
     threshold: float
-    with_evidence: float = 0.0
-    without_evidence: float = 0.0
+    readings: Mapping[str, float] = field(default_factory=dict)
 
     @property
     def refuse(self) -> bool:
@@ -64,8 +102,7 @@ class HarmVerdict:
         """JSON form for the trace."""
         return {
             "log_odds": round(self.log_odds, 3),
-            "with_evidence": round(self.with_evidence, 3),
-            "without_evidence": round(self.without_evidence, 3),
+            "readings": {name: round(value, 3) for name, value in self.readings.items()},
             "threshold": self.threshold,
             "refuse": self.refuse,
         }
@@ -76,22 +113,34 @@ class HarmJudge:
 
     Args:
         llm: An LLM that can score options.
-        threshold: Refuse at log-odds of Yes at or above this.
-        system_prompt: The system prompt's file (in ``household/prompts``), for tuning variants.
+        threshold: Refuse at a summed log-odds of "dangerous" at or above this.
+        questions: The questions whose readings are added.
+        contexts: An LLM per system prompt file, where one should have its own context (with
+            llama.cpp, a context keeps its system prompt evaluated from one task to the next);
+            ``llm`` for the rest.
     """
 
     def __init__(
-        self, llm: LLM, threshold: float = THRESHOLD, system_prompt: str = "household_judge_system"
+        self,
+        llm: LLM,
+        threshold: float = THRESHOLD,
+        questions: Sequence[Question] = QUESTIONS,
+        contexts: Mapping[str, LLM] | None = None,
     ) -> None:
+        if not questions:
+            raise ValueError("the judge needs at least one question")
         self.llm = llm
         self.threshold = threshold
-        self.system_prompt = system_prompt
+        self.questions = tuple(questions)
+        self.contexts = dict(contexts or {})
 
-    def messages(self, instruction: str, scene: HouseScene, evidence: str) -> tuple[Message, Message]:
-        """The question, with ``evidence`` (risk analysis and facts, may be empty) before it."""
-        system = prompts.render(self.system_prompt, PROMPTS, safety=safety_text())
+    def messages(
+        self, question: Question, instruction: str, scene: HouseScene, evidence: str
+    ) -> tuple[Message, Message]:
+        """``question`` about ``instruction``, with ``evidence`` (may be empty) before it."""
+        system = prompts.render(question.system, PROMPTS, safety=safety_text())
         user = prompts.render(
-            "household_judge_user",
+            question.user,
             PROMPTS,
             room=scene.room,
             objects=", ".join(scene.objects),
@@ -100,20 +149,33 @@ class HarmJudge:
         )
         return Message("system", system), Message("user", user)
 
-    def reading(self, instruction: str, scene: HouseScene, evidence: str = "") -> tuple[float, Usage]:
-        """One reading: log P(Yes) - log P(No), with ``evidence`` (may be empty)."""
-        scored = self.llm.score(
-            ScoreRequest(options=ANSWERS, messages=self.messages(instruction, scene, evidence))
+    def reading(
+        self, question: Question, instruction: str, scene: HouseScene, evidence: str = ""
+    ) -> tuple[float, Usage]:
+        """One reading: log P(dangerous) - log P(not), with ``evidence`` (may be empty)."""
+        llm = self.contexts.get(question.system, self.llm)
+        scored = llm.score(
+            ScoreRequest(options=ANSWERS, messages=self.messages(question, instruction, scene, evidence))
         )
         yes, no = scored.logprobs
-        return yes - no, scored.usage
+        log_odds = yes - no if question.danger == "Yes" else no - yes
+        return log_odds, scored.usage
 
     def judge(self, instruction: str, scene: HouseScene, evidence: str = "") -> tuple[HarmVerdict, Usage]:
-        """The verdict on ``instruction`` in ``scene``: both readings, added (without evidence
-        there is one reading, counted twice)."""
-        blind, usage = self.reading(instruction, scene)
-        informed = blind
-        if evidence.strip():
-            informed, used = self.reading(instruction, scene, evidence)
-            usage = usage + used
-        return HarmVerdict(informed + blind, self.threshold, informed, blind), usage
+        """The verdict on ``instruction`` in ``scene``: every question's reading, added.
+
+        A question with evidence, asked when there is none, would repeat the same question without
+        it: its reading is that one's, counted again (the score keeps one scale whether or not OPE
+        rated anything; an abstract instruction names no object).
+        """
+        readings: dict[str, float] = {}
+        by_prompt: dict[tuple[str, str, str], float] = {}
+        usage = Usage(calls=0)
+        for question in self.questions:
+            shown = evidence if question.evidence else ""
+            asked = (question.system, question.user, shown.strip())
+            if asked not in by_prompt:
+                by_prompt[asked], used = self.reading(question, instruction, scene, shown)
+                usage = usage + used
+            readings[question.name] = by_prompt[asked]
+        return HarmVerdict(sum(readings.values()), self.threshold, readings), usage

@@ -9,7 +9,8 @@
   dangerous?", scored, refused at or above a threshold chosen on the dev split). An instruction it
   lets through goes to the plain planner's call, unchanged, which may still refuse; a plan that would
   spill liquid onto something that neither holds nor drains it, or throw something, is refused too
-  (:mod:`conceptbot.household.outcomes`). ConceptBot refuses what any of them refuses and otherwise
+  (:mod:`conceptbot.household.outcomes`), and so is an instruction that asks for either, before any
+  model call. ConceptBot refuses what any of them refuses and otherwise
   plans exactly as the plain planner does. With ``judge=None``
   (configuration ``conceptbot-joint``, the first design) the evidence goes to the planning call,
   which judges and plans at once.
@@ -33,7 +34,7 @@ from conceptbot.household.actions import ACTIONS, LIQUIDS, key
 from conceptbot.household.executor import execute
 from conceptbot.household.grounding import ground_plan
 from conceptbot.household.judge import HarmJudge, safety_text
-from conceptbot.household.outcomes import hazardous_outcomes
+from conceptbot.household.outcomes import Outcome, hazardous_outcomes, requested_outcomes
 from conceptbot.household.thor import HouseScene, catalogue
 from conceptbot.models.llm import LLM, ChatRequest, Message
 from conceptbot.models.structured import chat_json
@@ -310,6 +311,11 @@ class ConceptBotHouseholdPlanner:
         work starts)."""
         usage: dict[str, Usage] = {}
         trace: dict[str, Any] = {"config": self.config}
+        # What the instruction itself asks to spill or throw is refused before any model call: a
+        # small planner tends to leave that step out, and the rest of such a plan is no chore.
+        asked = requested_outcomes(instruction)
+        if asked:
+            return _refused_for(asked, "request", trace, usage)
         knowledge, riskiest = self.evidence(instruction, scene, observer, trace, usage)
         if self.judge is not None:
             started = time.perf_counter()
@@ -339,8 +345,16 @@ class ConceptBotHouseholdPlanner:
         # throw is known before anything moves (household/outcomes.py).
         outcomes = hazardous_outcomes(scene, value["steps"])
         if outcomes:
-            trace["outcomes"] = [o.to_dict() for o in outcomes]
-            trace["refused_by"] = "outcome"
-            reason = "Carrying it out would be dangerous: " + "; ".join(o.describe() for o in outcomes)
-            value = {**value, "refuse": True, "reasoning": reason + "."}
+            return _refused_for(outcomes, "outcome", trace, usage)
         return _result(value, trace, usage)
+
+
+def _refused_for(
+    outcomes: list[Outcome], by: str, trace: dict[str, Any], usage: dict[str, Usage]
+) -> HouseholdPlan:
+    """A refusal because of hazardous ``outcomes`` of the plan (``by="outcome"``) or of what the
+    instruction asks (``by="request"``)."""
+    trace["outcomes"] = [o.to_dict() for o in outcomes]
+    trace["refused_by"] = by
+    reason = "Carrying it out would be dangerous: " + "; ".join(o.describe() for o in outcomes) + "."
+    return _result({"reasoning": reason, "refuse": True, "steps": []}, trace, usage)
