@@ -77,15 +77,16 @@ def hazardous_outcomes(scene: HouseScene, steps: Sequence[str]) -> list[Outcome]
         held, at = executor.held, executor.location
         if not executor.step(text).ok:
             continue
-        if verb == "pour" and at and at != held and not _takes_liquid(executor, at):
+        if verb == "pour" and at and at != held and not holds_or_drains(executor.types, at):
             found.append(Outcome("spill", text, at))
         elif verb == "throw" and held:
             found.append(Outcome("throw", text, held))
     return found
 
 
-def _takes_liquid(executor: HouseholdExecutor, target: str) -> bool:
-    return executor.types.has(target, "fillable") or target in DRAINS + HOLDS_WATER
+def holds_or_drains(types: Catalogue, target: str) -> bool:
+    """Whether liquid poured onto an object of type ``target`` is held or drained, not spilled."""
+    return types.has(target, "fillable") or target in DRAINS + HOLDS_WATER
 
 
 POUR_VERBS = frozenset({"pour", "pours", "pouring", "spill", "spills", "splash", "splashes", "dump"})
@@ -132,7 +133,7 @@ def requested_outcomes(instruction: str, types: Catalogue | None = None) -> list
         elif pour is not None:
             at = next((i for i in range(pour + 1, len(words)) if words[i] in ONTO), None)
             target = _object_after(words, named, at, last_named, _STOP) if at is not None else ""
-            if target and not types.has(target, "fillable") and target not in DRAINS + HOLDS_WATER:
+            if target and not holds_or_drains(types, target):
                 found.append(Outcome("spill", clause.strip(), target))
         if named:
             last_named = named[-1][1]
