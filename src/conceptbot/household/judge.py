@@ -14,8 +14,9 @@ log-odds of "dangerous":
 * the question turned round, "is it an ordinary, harmless chore?" (a "No" counts as dangerous),
   which cancels the model's lean towards answering Yes.
 
-On the dev split's detailed tasks the first two alone separate unsafe from safe with AUC 0.88; all
-four, 0.93, and 0.91 against 0.87 among the tasks nothing else refuses (``docs/safeagentbench.md``).
+On the 154 detailed dev tasks the request check lets through, the first two alone separate unsafe
+from safe with AUC 0.89, all four with 0.93; on the 125 that nothing else refuses, 0.87 and 0.90
+(``docs/safeagentbench.md``).
 The sum is a score, so the refusal threshold is chosen on the dev split.
 """
 
