@@ -303,6 +303,37 @@ class StackTrace:
 
 
 @dataclass(frozen=True)
+class Veto:
+    """A move dropped because its own evidence names a hazard for its recipient
+    (:mod:`conceptbot.pipeline.hazards`), or because its risk decision could not be made.
+
+    Attributes:
+        move: The action text (``pick_and_place(knife, child)``).
+        object: The object moved.
+        to: The recipient.
+        source: What vetoed it: ``ope`` (OPE's rating), ``graph`` (a graph statement) or ``error``
+            (the risk decision failed: a backend error, a non-finite score).
+        statement: The evidence in words ("OPE rates the knife 5/5 dangerous with the child").
+    """
+
+    move: str
+    object: str
+    to: str
+    source: str
+    statement: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
+        return {
+            "move": self.move,
+            "object": self.object,
+            "to": self.to,
+            "source": self.source,
+            "statement": self.statement,
+        }
+
+
+@dataclass(frozen=True)
 class RiskCheck:
     """The risk decision and affordance of one move (the goal planner's constraints).
 
@@ -310,25 +341,28 @@ class RiskCheck:
         object: The object moved.
         to: Where.
         move: The move in words.
-        p_unsafe: P(unsafe) (4 decimals).
-        score: Calibrated log-odds of unsafe (3 decimals).
+        p_unsafe: P(unsafe) (4 decimals); None where the decision could not be made.
+        score: Calibrated log-odds of unsafe (3 decimals); None where the decision could not be made.
         evidence: The graph facts put in the question.
         ope: OPE's finding about the object for this move, or None where OPE did not rate it.
         affordance: S_aff of the move (4 decimals).
         dropped: Whether the move was dropped.
-        why: ``judged dangerous``, ``not feasible`` or "".
+        why: ``vetoed`` (its evidence names a hazard for the recipient, or its risk decision failed:
+            ``veto`` says which), ``judged dangerous``, ``not feasible`` or "".
+        veto: The veto (in the JSON: its statement), or None.
     """
 
     object: str
     to: str
     move: str
-    p_unsafe: float
-    score: float
+    p_unsafe: float | None
+    score: float | None
     evidence: tuple[str, ...]
     ope: str | None
     affordance: float
     dropped: bool
     why: str
+    veto: Veto | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form."""
@@ -343,6 +377,7 @@ class RiskCheck:
             "affordance": self.affordance,
             "dropped": self.dropped,
             "why": self.why,
+            "veto": self.veto.statement if self.veto is not None else None,
         }
 
 
@@ -364,10 +399,10 @@ class PlannerSummary:
 
 
 _HEADER = ("config", "planner_kind", "request", "scene")
-_STEP_PARTS = ("ope", "urp", "goal", "decisions", "stack", "risk", "planner")
+_STEP_PARTS = ("ope", "urp", "goal", "decisions", "stack", "risk", "vetoes", "planner")
 # The goal planner's OPE runs on the moves it checks, after the rest; its trace has always listed
 # OPE last, and the JSON keeps that order.
-_GOAL_PARTS = ("urp", "goal", "decisions", "stack", "risk", "planner", "ope")
+_GOAL_PARTS = ("urp", "goal", "decisions", "stack", "risk", "vetoes", "planner", "ope")
 
 
 @dataclass(frozen=True)
@@ -385,6 +420,8 @@ class PlanTrace:
         decisions: The goal planner's per-target decisions.
         stack: The goal planner's pile order.
         risk: The goal planner's risk checks, one per move considered.
+        vetoes: Moves dropped because their evidence names a hazard for the recipient, or because
+            their risk decision could not be made (both planners; None: no move was vetoed).
         planner: How the steps were chosen.
         extra: Planner-specific parts with no type of their own, written to the JSON after the typed
             parts, in their order, and read back by key. The household planners put theirs here:
@@ -408,6 +445,7 @@ class PlanTrace:
     decisions: tuple[DecisionTrace, ...] | None = None
     stack: StackTrace | None = None
     risk: tuple[RiskCheck, ...] | None = None
+    vetoes: tuple[Veto, ...] | None = None
     planner: PlannerSummary | None = None
     extra: Mapping[str, Any] = field(default_factory=dict)
 

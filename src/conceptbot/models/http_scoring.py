@@ -42,7 +42,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
-from conceptbot.core.errors import BackendRequestError, ConfigError
+from conceptbot.core.errors import BackendRequestError, ConfigError, ModelOutputError
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import Message, ScoreRequest
 
@@ -178,6 +178,7 @@ def search_scores(
         if not rest:
             continue
         found, used = transport.next_tokens(prompt + read, top)
+        found = finite(found)
         calls, tokens = calls + 1, tokens + used
         children: dict[str, list[int]] = {}
         for i in rest:
@@ -202,14 +203,38 @@ def _echo_scores(
         tail = [
             lp or 0.0 for off, lp in zip(found.offsets, found.logprobs, strict=False) if off >= len(prompt)
         ]
+        finite({f"token {i}": lp for i, lp in enumerate(tail)})
         scores.append(sum(tail))
         counts.append(len(tail))
     return scores, counts, tokens
 
 
+def finite(top: dict[str, float]) -> dict[str, float]:
+    """``top`` if every log-probability in it is a finite number.
+
+    Raises:
+        ModelOutputError: The server sent NaN or an infinity (an overflow, a broken quantisation): a
+            decision read from it would be arbitrary, so none is made.
+    """
+    bad = {token: lp for token, lp in top.items() if not (isinstance(lp, int | float) and math.isfinite(lp))}
+    if bad:
+        token, lp = next(iter(bad.items()))
+        raise ModelOutputError(
+            f"the server returned a non-finite log-probability ({lp!r} for {token!r})",
+            hint="the server's numbers overflowed or are broken (fp16?); try another model or "
+            "CONCEPTBOT_SCORING=vote",
+        )
+    return top
+
+
 def _read(top: dict[str, float], wanted: Sequence[str]) -> list[float]:
     """Each wanted token's log-probability among ``top`` (leading spaces ignored, variants summed);
-    the lowest returned minus one where it is missing."""
+    the lowest returned minus one where it is missing.
+
+    Raises:
+        ModelOutputError: A log-probability is not finite (:func:`finite`).
+    """
+    top = finite(top)
     floor = (min(top.values()) if top else 0.0) - 1.0
     out = []
     for token in wanted:

@@ -22,6 +22,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal, Protocol, runtime_checkable
 
+from conceptbot.core.errors import ModelOutputError
 from conceptbot.core.usage import Usage
 
 Role = Literal["system", "user", "assistant"]
@@ -191,6 +192,18 @@ class ScoreResponse:
     model: str
     cached: bool = False
     method: str = "logprob"
+
+    def __post_init__(self) -> None:
+        # A NaN compares False with every threshold, so a risk check reading it would pass the move;
+        # a non-finite score is the backend's error, raised where every scorer's answer arrives.
+        bad = [lp for lp in self.logprobs if not math.isfinite(lp)]
+        if bad:
+            raise ModelOutputError(
+                f"the {self.backend} backend ({self.model}) returned a non-finite log-probability "
+                f"({bad[0]!r}) for {len(bad)} of {len(self.logprobs)} options",
+                hint="the server's numbers overflowed or are broken (fp16?); try another model or "
+                "CONCEPTBOT_SCORING=vote",
+            )
 
 
 @dataclass(frozen=True)

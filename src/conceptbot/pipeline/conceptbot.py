@@ -35,7 +35,8 @@ from conceptbot.models.cache_db import CacheStore
 from conceptbot.models.llm import LLM
 from conceptbot.pipeline import modes, prompts
 from conceptbot.pipeline.decide import Decider, FactFinder
-from conceptbot.pipeline.goal_planner import GoalPlanner, GoalPlanResult, Thresholds, is_person
+from conceptbot.pipeline.goal_planner import GoalPlanner, GoalPlanResult, Thresholds
+from conceptbot.pipeline.hazards import HazardCheck, is_person
 from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
 from conceptbot.pipeline.planner import Planner
 from conceptbot.pipeline.retrieval import RelationRetriever
@@ -110,7 +111,9 @@ class ConceptBot:
         self._llm_for = llm.with_module
         self.ope = ObjectPropertiesExtractor(self._llm_for("ope"), retriever, store, graph_version)
         self.urp = UserRequestProcessor(self._llm_for("urp"), retriever)
-        self.planner = Planner(self._llm_for("planner"), method=planner_method, n=n)
+        # One veto for both planners: OPE's top ratings and, with a graph, its hazard statements.
+        self.hazards = HazardCheck(retriever.graph if retriever is not None else None)
+        self.planner = Planner(self._llm_for("planner"), method=planner_method, n=n, hazards=self.hazards)
         if planner == "auto":
             # The goal planner measured better on the dev split (51% against SayCan's 28%, with the
             # same model; docs/planner-redesign.md). It needs option scoring; without it (chat APIs)
@@ -125,6 +128,7 @@ class ConceptBot:
             Decider(self._llm_for("decide"), facts),
             self.ope if self.switches.ope else None,
             thresholds,
+            hazards=self.hazards,
         )
 
     def plan(
@@ -183,8 +187,13 @@ class ConceptBot:
         usage["planner"] = planned.usage
         usage["total"] = _total(usage, started)
         summary = PlannerSummary(self.planner.method, len(planned.steps))
-        trace = replace(trace, ope=ope, urp=urp, planner=summary)
-        return Plan(planned.actions, planned.steps, False, None, trace, usage)
+        vetoes = planned.vetoes or None
+        trace = replace(trace, ope=ope, urp=urp, planner=summary, vetoes=vetoes)
+        # Nothing moved because what the model wanted was vetoed: that is a refusal, with its reason.
+        fresh = planned.actions[len(feedback.executed) if feedback else 0 :]
+        refused = bool(planned.vetoes) and fresh == [DONE]
+        reason = "; ".join(f"{v.move}: vetoed, {v.statement}" for v in planned.vetoes) if refused else None
+        return Plan(planned.actions, planned.steps, refused, reason, trace, usage)
 
     def _from_goal(
         self, result: GoalPlanResult, trace: PlanTrace, feedback: Feedback | None, started: float

@@ -15,7 +15,9 @@
    give the scissors to the child?", calibrated), and for a move to a child or an animal OPE's
    Risk Index of the object (the paper's 1-5 danger rating). A move judged unsafe is dropped and
    the target takes its next best object; when every move is dropped the plan is a refusal. The
-   trace says why.
+   trace says why. Before any score, a move whose evidence names a hazard for its recipient is
+   vetoed (:mod:`conceptbot.pipeline.hazards`), and a risk decision that cannot be made (a backend
+   error, a non-finite score) drops the move: safety fails closed.
 
 The paper's step-by-step planner stays available (:mod:`conceptbot.pipeline.planner`).
 """
@@ -23,25 +25,31 @@ The paper's step-by-step planner stays available (:mod:`conceptbot.pipeline.plan
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import dataclass, field
 
+from conceptbot.core.errors import (
+    BackendRequestError,
+    BackendUnavailableError,
+    ModelOutputError,
+    NotSupportedError,
+)
 from conceptbot.core.observe import SILENT, Observer
 from conceptbot.core.plan import DONE, Action, CandidateScore, Step
 from conceptbot.core.scene import Scene
-from conceptbot.core.trace import DecisionTrace, GoalTrace, PlanTrace, RiskCheck, StackTrace
+from conceptbot.core.trace import DecisionTrace, GoalTrace, PlanTrace, RiskCheck, StackTrace, Veto
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.affordance import Gripper, affordance
 from conceptbot.pipeline.decide import Decider, Judgement
+from conceptbot.pipeline.hazards import HazardCheck, is_person, is_vulnerable
 from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
 from conceptbot.pipeline.targets import ALL, Target, TargetFinder, is_stacking, mentions
 from conceptbot.pipeline.tracing import judgement_trace, target_trace
-from conceptbot.pipeline.vocabulary import PERSON_WORDS
 
 METHOD = "decide"
 TOP_K = 6
 NAMED = 10.0  # the score of an object the request names: above any decided one
-ANIMALS = ("dog", "cat", "puppy", "kitten", "pet")
 BASE = "a sturdy object with a flat top that other things can safely be stacked on"
 
 
@@ -97,20 +105,6 @@ class GoalPlanResult:
     properties: dict[str, ObjectProperties] = field(default_factory=dict)
 
 
-def is_person(name: str) -> bool:
-    """Whether a destination is a person or an animal (things are handed to it)."""
-    extra = ("toddler", "man", "woman", "girl", "boy", "infant")
-    return any(word in PERSON_WORDS or word in extra or word in ANIMALS for word in name.lower().split())
-
-
-def is_vulnerable(name: str) -> bool:
-    """Whether a destination is someone who must not be handed dangerous things: a child or an
-    animal (an adult user who asks for a knife gets the knife)."""
-    return is_person(name) and not any(
-        w in ("user", "person", "human", "man", "woman") for w in name.lower().split()
-    )
-
-
 def move_text(obj: str, target: str) -> str:
     """The move in words, for the questions."""
     if is_person(target):
@@ -129,6 +123,24 @@ def _standardised(scores: dict[str, float]) -> dict[str, float]:
     mean = sum(values) / len(values)
     spread = (sum((v - mean) ** 2 for v in values) / len(values)) ** 0.5 or 1.0
     return {k: (v - mean) / spread for k, v in scores.items()}
+
+
+def _why(check: RiskCheck) -> str:
+    """A dropped move's reason for a refusal: the veto's statement where it has one."""
+    if check.veto is not None:
+        return f"{check.move}: vetoed, {check.veto.statement}"
+    return f"{check.move}: {check.why}"
+
+
+def _failed(obj: str, target: str, message: str) -> Veto:
+    """The veto of a move whose risk decision could not be made."""
+    statement = f"the risk decision could not be made: {message}"
+    return Veto(f"pick_and_place({obj}, {target})", obj, target, "error", statement)
+
+
+def _vetoed(veto: Veto, move: str, ope: str | None, s_aff: float) -> RiskCheck:
+    """The risk check of a vetoed move (no score: none was needed, or none could be had)."""
+    return RiskCheck(veto.object, veto.to, move, None, None, (), ope, round(s_aff, 4), True, "vetoed", veto)
 
 
 def _danger(props: ObjectProperties | None) -> int:
@@ -152,6 +164,8 @@ class GoalPlanner:
         ope: OPE for the objects a plan moves (evidence for the risk decisions), or None.
         thresholds: Decision thresholds.
         gripper: For the affordance.
+        hazards: Vetoes moves whose evidence names a hazard for the recipient (default: OPE's
+            ratings only, no graph).
     """
 
     def __init__(
@@ -161,12 +175,14 @@ class GoalPlanner:
         ope: ObjectPropertiesExtractor | None = None,
         thresholds: Thresholds | None = None,
         gripper: Gripper | None = None,
+        hazards: HazardCheck | None = None,
     ) -> None:
         self.targets = targets
         self.decider = decider
         self.ope = ope
         self.thresholds = thresholds or Thresholds()
         self.gripper = gripper or Gripper()
+        self.hazards = hazards if hazards is not None else HazardCheck()
 
     def plan(
         self,
@@ -221,14 +237,15 @@ class GoalPlanner:
             if stack:
                 moves = [m for m in moves if m not in dropped]
         risk = tuple(checks.values())
+        vetoes = tuple(c.veto for c in risk if c.veto is not None)
         observer.event("risk", {"checks": [c.to_dict() for c in risk]})
         steps = self._steps(moves, ranked, scene, properties)
         for step in steps:
             observer.event("step", step.to_dict())
         refused = not moves and bool(blocked)
-        reason = "; ".join(f"{c.move}: {c.why}" for c in risk if c.dropped) if refused else None
+        reason = "; ".join(_why(c) for c in risk if c.dropped) if refused else None
         actions = [str(Action(o, t)) for o, t in moves] + [DONE]
-        trace = PlanTrace(goal=goal, decisions=decisions, stack=pile, risk=risk)
+        trace = PlanTrace(goal=goal, decisions=decisions, stack=pile, risk=risk, vetoes=vetoes or None)
         return GoalPlanResult(actions, steps, refused, reason, trace, usage, properties)
 
     def _decide(
@@ -339,12 +356,27 @@ class GoalPlanner:
         usage: dict[str, Usage],
         observer: Observer,
     ) -> RiskCheck:
-        """The risk decision and the affordance of one move."""
+        """The risk decision and the affordance of one move.
+
+        A veto (:mod:`conceptbot.pipeline.hazards`) drops the move before the model is asked; a
+        decision the backend cannot make (an error, a non-finite score) drops it too, and so does a
+        score that compares with nothing (NaN): the move is kept only when its score is known and at
+        or below the threshold."""
         move = move_text(obj, target)
-        observer.progress(f"Risk: is it safe to {move}?")
         s_aff, factors = affordance(Action(obj, target), scene, properties, [], self.gripper)
-        judgement, used = self.decider.dangerous(request, move, obj, scene, ())
+        ope = _evidence(properties[obj], target) if obj in properties else None
+        veto = self.hazards.veto(obj, target, properties)
+        if veto is not None:
+            observer.progress(f"Risk: {move}: vetoed ({veto.statement})")
+            return _vetoed(veto, move, ope, s_aff)
+        observer.progress(f"Risk: is it safe to {move}?")
+        try:
+            judgement, used = self.decider.dangerous(request, move, obj, scene, ())
+        except (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError) as exc:
+            return _vetoed(_failed(obj, target, exc.message), move, ope, s_aff)
         usage["risk"] = usage["risk"] + used
+        if not (math.isfinite(judgement.score) and math.isfinite(judgement.p_yes)):
+            return _vetoed(_failed(obj, target, "the backend gave a non-finite score"), move, ope, s_aff)
         rated = _danger(properties.get(obj))
         # OPE's Risk Index counts for moves to a child or an animal: handing over is where an
         # object's own danger matters; elsewhere the question decides (metal into a microwave).
@@ -360,7 +392,7 @@ class GoalPlanner:
             p_unsafe=round(judgement.p_yes, 4),
             score=round(judgement.score, 3),
             evidence=tuple(judgement.facts),
-            ope=_evidence(properties[obj], target) if obj in properties else None,
+            ope=ope,
             affordance=round(s_aff, 4),
             dropped=dangerous or infeasible,
             why="judged dangerous" if dangerous else "not feasible" if infeasible else "",

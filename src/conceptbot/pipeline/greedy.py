@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from conceptbot.core.observe import SILENT, Observer
 from conceptbot.core.plan import DONE, Action, CandidateScore, Feedback, Step, valid_actions
 from conceptbot.core.scene import Scene
+from conceptbot.core.trace import Veto
 from conceptbot.core.usage import Usage
 
 TOP_K = 8  # candidates kept in the trace per step, besides done()
@@ -48,11 +49,13 @@ class PlannerResult:
         steps: Per step, the chosen action and the best candidates' scores.
         actions: The action texts, ending with ``done()``.
         usage: Tokens, calls and wall time of the planning.
+        vetoes: Moves the LLM ranked first that were vetoed (:mod:`conceptbot.pipeline.hazards`).
     """
 
     steps: list[Step]
     actions: list[str]
     usage: Usage
+    vetoes: tuple[Veto, ...] = ()
 
 
 LLMScorer = Callable[[list[Action], list[str], int], LLMScores]

@@ -18,15 +18,18 @@ from __future__ import annotations
 
 import math
 from collections import Counter
+from dataclasses import replace
 
 from conceptbot.core.observe import SILENT, Observer
 from conceptbot.core.plan import DONE, Action, Feedback, InvalidActionError, parse_action
 from conceptbot.core.scene import Scene
+from conceptbot.core.trace import Veto
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, ChatRequest, Message, ScoreRequest
 from conceptbot.pipeline import prompts
 from conceptbot.pipeline.affordance import Gripper, affordance, relative_property_scores
 from conceptbot.pipeline.greedy import LLMScores, PlannerResult, greedy_plan
+from conceptbot.pipeline.hazards import HazardCheck
 from conceptbot.pipeline.ope import ObjectProperties
 
 METHODS = ("auto", "logprob", "vote")
@@ -52,6 +55,9 @@ class Planner:
         gripper: Gripper opening for the affordance.
         relative_properties: Score S_prop relative to the step's safest move (default; see
             :mod:`conceptbot.pipeline.affordance`); False keeps the absolute penalties.
+        hazards: Vetoes moves whose evidence names a hazard for the recipient
+            (:mod:`conceptbot.pipeline.hazards`): a vetoed move gets S_aff 0 (factor ``veto``), so
+            no score can choose it. None: OPE's ratings alone, without the graph.
     """
 
     def __init__(
@@ -63,6 +69,7 @@ class Planner:
         max_steps: int | None = None,
         gripper: Gripper | None = None,
         relative_properties: bool = True,
+        hazards: HazardCheck | None = None,
     ) -> None:
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}")
@@ -76,6 +83,7 @@ class Planner:
         self.max_steps = max_steps
         self.gripper = gripper or Gripper()
         self.relative_properties = relative_properties
+        self.hazards = hazards if hazards is not None else HazardCheck()
 
     def messages(
         self,
@@ -196,17 +204,30 @@ class Planner:
         """
         if feedback and feedback.failed:
             guidance = "\n".join([guidance, *feedback.script_lines()]).strip()
+        last: list[float] = []  # the step's S_LLM, for telling which vetoes changed the choice
+        vetoed: dict[str, Veto] = {}  # vetoes of moves the LLM ranked first at their step
 
         def llm_scores(candidates: list[Action], history: list[str], index: int) -> LLMScores:
             messages = self.messages(request, scene, properties, guidance, history)
             prompt = self.completion_prompt(request, scene, properties, commands or [], history, feedback)
-            return self._llm_scores(candidates, messages, scene, index, prompt)
+            found = self._llm_scores(candidates, messages, scene, index, prompt)
+            last[:] = found.scores
+            return found
 
         def affordances(candidates: list[Action], history: list[str]) -> list[tuple[float, dict[str, float]]]:
             found = [affordance(a, scene, properties, history, self.gripper) for a in candidates]
+            top = max(last, default=0.0)
+            for i, action in enumerate(candidates):
+                veto = self._veto(action, properties)
+                if veto is None:
+                    continue
+                # Vetoed before the relative scaling, so a vetoed move is never the step's best S_prop.
+                found[i] = (0.0, {**found[i][1], "veto": 0.0})
+                if i < len(last) and last[i] >= top > 0.0:
+                    vetoed.setdefault(str(action), veto)
             return relative_property_scores(found) if self.relative_properties else found
 
-        return greedy_plan(
+        result = greedy_plan(
             scene,
             llm_scores,
             affordances,
@@ -216,3 +237,10 @@ class Planner:
             label="Planner",
             observer=observer,
         )
+        return replace(result, vetoes=tuple(vetoed.values()))
+
+    def _veto(self, action: Action, properties: dict[str, ObjectProperties]) -> Veto | None:
+        if action.is_done:
+            return None
+        assert action.obj is not None and action.target is not None
+        return self.hazards.veto(action.obj, action.target, properties)

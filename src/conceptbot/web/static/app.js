@@ -199,7 +199,9 @@ function showDecisions(decisions) {
 
 function showRisk(checks) {
   $("risk-checks").replaceChildren(...checks.map((c) => el("li", { class: c.dropped ? "error" : "kept" },
-    `${c.move}: P(unsafe) ${c.p_unsafe.toFixed(2)}${c.dropped ? " — dropped: " + c.why : " — ok"}`)));
+    // p_unsafe is null for a vetoed move (no score was needed, or none could be had): say why instead.
+    `${c.move}: ${c.p_unsafe === null ? "no score" : "P(unsafe) " + c.p_unsafe.toFixed(2)}` +
+    `${c.dropped ? " — dropped: " + (c.veto ? "vetoed, " + c.veto : c.why) : " — ok"}`)));
 }
 
 function showRefusal(reason) {
