@@ -104,3 +104,58 @@ def test_valid_values_are_coerced(isolated_home: Path) -> None:
         2,
     )
     assert isinstance(settings.timeout_s, float)
+
+
+@pytest.mark.parametrize(
+    ("content", "fragment"),
+    [
+        (
+            'compatible_api_key = ["sk-secret-abc"]',
+            "compatible_api_key must be a non-empty string, got an array",
+        ),
+        ('openai_api_key = {k = "sk-secret-abc"}', "openai_api_key must be a non-empty string, got a table"),
+        ("compatible_api_key = 7531902468", "compatible_api_key must be a non-empty string, got a number"),
+        ('compatible_api_key = "   "', "compatible_api_key must be a non-empty string, got an empty string"),
+        (
+            'llm = ["openai-compatible:http://u:sk-secret-abc@h/v1#m"]',
+            "llm must be a non-empty string, got an array",
+        ),
+        ('kg_fallback = "http://u:sk-secret-abc@h/?t=sk-secret-abc"', "got 'http://h/?t=***'"),
+    ],
+)
+def test_type_errors_never_quote_a_secret(isolated_home: Path, content: str, fragment: str) -> None:
+    isolated_home.mkdir(parents=True)
+    (isolated_home / "config.toml").write_text(content + "\n")
+    with pytest.raises(ConfigError, match=r"config\.toml") as info:
+        load_settings()
+    text = str(info.value)
+    assert fragment in text
+    assert "secret" not in text and "7531902468" not in text
+
+
+def test_a_key_with_a_line_break_in_the_config_file_names_the_key_not_its_value(isolated_home: Path) -> None:
+    isolated_home.mkdir(parents=True)
+    (isolated_home / "config.toml").write_text('compatible_api_key = "ck-abc\\nX-Evil: 1"\n')
+    with pytest.raises(ConfigError) as info:
+        load_settings()
+    text = str(info.value)
+    assert "config.toml: compatible_api_key holds a line break" in text and "ck-abc" not in text
+    assert info.value.hint and "printable ASCII" in info.value.hint
+
+
+def test_a_key_with_surrounding_whitespace_is_accepted_stripped(isolated_home: Path) -> None:
+    env = {"CONCEPTBOT_HOME": str(isolated_home), "CONCEPTBOT_API_KEY": " ck-456\n"}  # $(cat keyfile)
+    assert load_settings(env=env).compatible_api_key == "ck-456"
+
+
+@pytest.mark.parametrize("value", ["1000000000", "131073"])
+def test_an_absurd_context_size_is_refused_when_settings_are_read(isolated_home: Path, value: str) -> None:
+    with pytest.raises(ConfigError) as info:
+        load_settings(env={"CONCEPTBOT_HOME": str(isolated_home), "CONCEPTBOT_N_CTX": value})
+    assert "CONCEPTBOT_N_CTX: n_ctx must be at most 131072 tokens" in str(info.value)
+    assert info.value.hint and "32768" in info.value.hint
+
+
+def test_the_largest_context_size_is_accepted(isolated_home: Path) -> None:
+    env = {"CONCEPTBOT_HOME": str(isolated_home), "CONCEPTBOT_N_CTX": "131072"}
+    assert load_settings(env=env).n_ctx == 131072

@@ -20,7 +20,8 @@ Environment variables:
     CONCEPTBOT_SCORING     how HTTP backends score options: ``auto`` (default: the best the server
                            supports, found once), ``echo``, ``search``, ``chat-logprobs`` or ``vote``
     CONCEPTBOT_THREADS     CPU threads for the embedded LLM (default: all cores)
-    CONCEPTBOT_N_CTX       context window of the embedded LLM (default 4096)
+    CONCEPTBOT_N_CTX       context window of the embedded LLM (default 4096; 512 to 131072, and at
+                           most what the model was trained on, 32768 for the shipped Qwen2.5 models)
     CONCEPTBOT_KG          knowledge graph: ``sqlite`` (default, offline), ``conceptnet-api[:URL]``,
                            ``conceptnet-api-cache`` (the API's local cache only, no network)
     CONCEPTBOT_KG_FALLBACK ``1``/``0``: ask Wikipedia when the graph knows too little (default 1)
@@ -39,6 +40,7 @@ from typing import Any
 import platformdirs
 
 from conceptbot.core.errors import ConfigError
+from conceptbot.core.urls import redact_secrets
 
 DEFAULT_LLM = "llamacpp:qwen2.5-coder-1.5b"
 DEFAULT_EMBEDDER = "sentence-transformers:all-MiniLM-L6-v2"
@@ -157,31 +159,103 @@ _MINIMUM: dict[str, tuple[float, str]] = {
     "n_threads": (1, "a whole number >= 1"),
     "n_ctx": (512, "a whole number of tokens >= 512"),
 }
+# The longest trained context of the GGUF models in common use (Llama 3.x, Qwen2.5 with YaRN); an
+# absurd value (1,000,000,000) would otherwise pass and fail at load as if the model file were bad.
+# Each model's own trained context is checked when it is loaded (models/llamacpp.py).
+MAX_N_CTX = 131_072
+_MAXIMUM: dict[str, tuple[float, str, str]] = {
+    "n_ctx": (
+        MAX_N_CTX,
+        f"at most {MAX_N_CTX} tokens",
+        "the shipped models were trained on 32768 tokens or fewer; the default is 4096",
+    ),
+}
+# API keys: never quoted in a message (a type error must not print the key), and sent in an HTTP
+# header, so they must be printable ASCII on one line.
+_API_KEYS = frozenset({"openai_api_key", "compatible_api_key"})
+
+
+def api_key_problem(key: str) -> str | None:
+    """What makes ``key`` unusable as an API key, or ``None`` when it is fine.
+
+    A key goes into the ``Authorization`` header, which HTTP clients encode as ASCII and refuse with
+    a line break in it (an opaque UnicodeEncodeError, or a "cannot connect" from the SDK), so that is
+    checked where the key is given. The answer never quotes the key.
+
+    Args:
+        key: The key as given (after stripping surrounding whitespace).
+
+    Returns:
+        A phrase such as ``"holds a line break"``, or ``None``.
+    """
+    if any(c in "\r\n" for c in key):
+        return "holds a line break"
+    if any(ord(c) > 126 for c in key):
+        return "holds a non-ASCII character"
+    if any(ord(c) < 32 or ord(c) == 127 for c in key):
+        return "holds a control character"
+    return None
+
+
+API_KEY_HINT = "an API key is printable ASCII on one line: copy it again, without quotes or line breaks"
+
+
+def _kind(value: Any) -> str:
+    """A value's type in words, for messages that must not quote it."""
+    if isinstance(value, str):
+        return "a string" if value.strip() else "an empty string"
+    if isinstance(value, bool):
+        return "true/false"
+    if isinstance(value, (int, float)):
+        return "a number"
+    if isinstance(value, (list, tuple)):
+        return "an array"
+    if isinstance(value, dict):
+        return "a table"
+    return f"a {type(value).__name__}"
+
+
+def _shown(name: str, value: Any) -> str:
+    """How a rejected value is quoted: never for a secret or a structure (an array may hold the key
+    meant for the setting), URLs and keys in text masked (a spec may carry ``user:password@``)."""
+    if name in _API_KEYS or not isinstance(value, (str, int, float)):
+        return _kind(value)
+    if isinstance(value, str):
+        return repr(redact_secrets(value))
+    return repr(value)
 
 
 def _coerce(name: str, value: Any, kind: type, origin: str) -> Any:
+    got = _shown(name, value)
     if kind is bool:
         if isinstance(value, bool):
             return value
         lowered = str(value).strip().lower()
         if lowered not in ("1", "0", "true", "false", "yes", "no", "on", "off"):
-            raise ConfigError(f"{origin}: {name} must be 1/0 or true/false, got {value!r}")
+            raise ConfigError(f"{origin}: {name} must be 1/0 or true/false, got {got}")
         return lowered in ("1", "true", "yes", "on")
     if kind is str:
         if not isinstance(value, str) or not value.strip():
-            raise ConfigError(f"{origin}: {name} must be a non-empty string, got {value!r}")
-        return value.strip()
+            raise ConfigError(f"{origin}: {name} must be a non-empty string, got {got}")
+        text = value.strip()
+        problem = api_key_problem(text) if name in _API_KEYS else None
+        if problem:
+            raise ConfigError(f"{origin}: {name} {problem} (the key is not shown)", hint=API_KEY_HINT)
+        return text
     if isinstance(value, bool) or (kind is int and isinstance(value, float) and not value.is_integer()):
-        raise ConfigError(f"{origin}: {name} must be a{'n int' if kind is int else ' number'}, got {value!r}")
+        raise ConfigError(f"{origin}: {name} must be a{'n int' if kind is int else ' number'}, got {got}")
     try:
         number = kind(value)
     except (TypeError, ValueError, OverflowError):
         label = "whole number" if kind is int else "number"
-        raise ConfigError(f"{origin}: {name} must be a {label}, got {value!r}") from None
+        raise ConfigError(f"{origin}: {name} must be a {label}, got {got}") from None
     if number != number or number in (float("inf"), float("-inf")):
-        raise ConfigError(f"{origin}: {name} must be a finite number, got {value!r}")
+        raise ConfigError(f"{origin}: {name} must be a finite number, got {got}")
     if name in _MINIMUM and number < _MINIMUM[name][0]:
-        raise ConfigError(f"{origin}: {name} must be {_MINIMUM[name][1]}, got {value!r}")
+        raise ConfigError(f"{origin}: {name} must be {_MINIMUM[name][1]}, got {got}")
+    if name in _MAXIMUM and number > _MAXIMUM[name][0]:
+        _limit, wanted, hint = _MAXIMUM[name]
+        raise ConfigError(f"{origin}: {name} must be {wanted}, got {got}", hint=hint)
     return number
 
 
@@ -197,8 +271,9 @@ def load_settings(env: Mapping[str, str] | None = None, **overrides: Any) -> Set
 
     Raises:
         ConfigError: The config file is not valid UTF-8 TOML, or has an unknown key; a setting from
-            any source has the wrong type or is out of range (the message names the setting and where
-            it came from).
+            any source has the wrong type or is out of range, or an API key holds a line break or a
+            non-ASCII character (the message names the setting and where it came from, and never
+            quotes an API key).
     """
     env = os.environ if env is None else env
     home = Path(overrides.pop("home", None) or default_home(env))

@@ -7,12 +7,18 @@ scheme, host, port, path and fragment are kept. :func:`redact_secrets` applies t
 every URL found in a free text, and also masks ``Bearer`` tokens, OpenAI-style ``sk-...`` keys and
 ``key=``/``token=``/``password=``/``secret=`` assignments outside URLs. Both run on anything that
 is shown to a user or written to disk (error messages, the call log in ``cache.db``).
+
+Patterns cannot know a key that looks like nothing in particular ("boom for key ck-456"), so a backend
+also masks the secrets it was configured with, by value (:class:`Redactor`): its API key, its base
+URL's password and the ``Basic`` form an HTTP client makes of ``user:password@``, and its base URL's
+query values, whatever the text around them.
 """
 
 from __future__ import annotations
 
+import base64
 import re
-from urllib.parse import urlsplit, urlunsplit
+from urllib.parse import parse_qsl, quote, unquote, urlsplit, urlunsplit
 
 from conceptbot.core.errors import ConfigError
 
@@ -21,6 +27,12 @@ MASK = "***"
 # A URL ends at whitespace, quotes or brackets, as it does inside repr()s and log lines.
 _URL = re.compile(r"\b[A-Za-z][A-Za-z0-9+.\-]*://[^\s'\"<>`]+")
 _BEARER = re.compile(r"(?i)\b(bearer\s+)[A-Za-z0-9._~+/=\-]+")
+# HTTP Basic credentials (base64 of "user:password"); a digit, "+", "/" or "=" is required so that
+# English ("basic authentication") is left alone.
+_BASIC = re.compile(r"\b(Basic\s+)(?=[A-Za-z0-9+/]*[0-9+/=])[A-Za-z0-9+/]{8,}={0,2}")
+# Configured secrets shorter than this are not masked by value: masking "1" or "v2" everywhere would
+# garble messages, and so short a value protects nothing (the patterns above still apply).
+MIN_SECRET_CHARS = 4
 # OpenAI keys: sk-..., sk-proj-...; 16+ characters so "sk-learn" and the like are left alone.
 _SK_KEY = re.compile(r"\bsk-[A-Za-z0-9_\-]{16,}")
 _ASSIGNMENT = re.compile(
@@ -110,13 +122,14 @@ def _redact_userinfo_loosely(text: str) -> str:
 
 def _redact_plain(text: str) -> str:
     text = _BEARER.sub(lambda m: m.group(1) + MASK, text)
+    text = _BASIC.sub(lambda m: m.group(1) + MASK, text)
     text = _SK_KEY.sub(MASK, text)
     return _ASSIGNMENT.sub(lambda m: m.group(1) + MASK, text)
 
 
 def redact_secrets(text: str) -> str:
-    """``text`` with credentials masked: every URL redacted (:func:`redact_url`), ``Bearer``
-    tokens, OpenAI-style ``sk-...`` keys and ``key=...``-style assignments replaced by ``***``.
+    """``text`` with credentials masked: every URL redacted (:func:`redact_url`), ``Bearer`` and
+    ``Basic`` tokens, OpenAI-style ``sk-...`` keys and ``key=...``-style assignments replaced by ``***``.
 
     Used on error messages before they are shown or written to the call log, since a backend's
     message may quote the URL it was given (query string and userinfo included) or the key itself.
@@ -131,3 +144,101 @@ def redact_secrets(text: str) -> str:
         last = match.end()
     out.append(_redact_plain(text[last:]))
     return "".join(out)
+
+
+def split_query(url: str) -> tuple[str, dict[str, str]]:
+    """``url`` without its query and fragment, and the query's fields.
+
+    HTTP clients that append endpoint paths to a base URL (the OpenAI SDK: ``BASE + "chat/completions"``)
+    would put the path after a query (``/v1?key=Xchat/completions``); they take the query apart
+    (``default_query``) and send it with every request instead.
+
+    Args:
+        url: An absolute URL (already checked with :func:`check_http_url`).
+
+    Returns:
+        ``(base, fields)``: ``http://h/v1?api_key=X#m`` -> ``("http://h/v1", {"api_key": "X"})``.
+        Values are percent-decoded (the client encodes them again); a bare field (``?TOKEN``)
+        becomes ``{"TOKEN": ""}``.
+
+    Raises:
+        ConfigError: A field is named twice (one value per name can be sent as a default).
+    """
+    parts = urlsplit(str(url))
+    fields: dict[str, str] = {}
+    for name, value in parse_qsl(parts.query, keep_blank_values=True):
+        if name in fields:
+            raise ConfigError(
+                f"base URL {redact_url(str(url))!r} names query parameter {name!r} twice",
+                hint="give each query parameter once",
+            )
+        fields[name] = value
+    base = urlunsplit((parts.scheme, parts.netloc, parts.path.rstrip("/"), "", ""))
+    return base, fields
+
+
+def url_secrets(url: str | None) -> list[str]:
+    """The secret parts of ``url`` in every form a server may quote them back.
+
+    The password of ``user:password@`` (as written and percent-decoded), the ``Basic`` credential an
+    HTTP client builds from it (base64 of ``user:password``), and each query value (and bare field).
+
+    Args:
+        url: A URL, or ``None``.
+
+    Returns:
+        The values, possibly with repeats; none for a URL without credentials.
+    """
+    if not url:
+        return []
+    try:
+        parts = urlsplit(str(url))
+        username, password = parts.username, parts.password
+    except ValueError:
+        return []
+    found: list[str] = []
+    if password is not None:
+        user, secret = unquote(username or ""), unquote(password)
+        found += [password, secret]
+        for creds in {f"{user}:{secret}", f"{username}:{password}"}:
+            encoded = base64.b64encode(creds.encode("utf-8")).decode("ascii")
+            found += [encoded, encoded.rstrip("=")]
+    for field in parts.query.split("&") if parts.query else []:
+        name, sep, value = field.partition("=")
+        raw = value if sep else name
+        found += [raw, unquote(raw.replace("+", " "))]
+    return found
+
+
+class Redactor:
+    """Masks the secrets a backend was configured with, by value, then by pattern.
+
+    Servers and proxies quote keys back in forms no pattern recognises ("boom for key ck-456",
+    "token ck-456"), so the key, the base URL's password (and its ``Basic`` form) and query values
+    are replaced by ``***`` wherever they appear; :func:`redact_secrets` then masks URLs and the
+    usual ``Bearer``/``sk-``/``key=`` forms. Values shorter than :data:`MIN_SECRET_CHARS` are not
+    masked by value.
+
+    Args:
+        keys: API keys.
+        urls: URLs whose credentials are secret (the base URL).
+    """
+
+    def __init__(self, keys: tuple[str | None, ...] = (), urls: tuple[str | None, ...] = ()) -> None:
+        values = {k for k in keys if k}
+        values |= {quote(k, safe="") for k in keys if k}
+        for url in urls:
+            values.update(url_secrets(url))
+        # Longest first, so a secret that contains another is masked whole.
+        self._values = tuple(sorted((v for v in values if len(v) >= MIN_SECRET_CHARS), key=len, reverse=True))
+
+    def __repr__(self) -> str:
+        # Never the values: a repr can end up in a log or a traceback.
+        return f"Redactor({len(self._values)} secrets)"
+
+    def __call__(self, text: str) -> str:
+        """``text`` with every configured secret and every pattern-recognised credential masked."""
+        text = str(text)
+        for value in self._values:
+            text = text.replace(value, MASK)
+        return redact_secrets(text)

@@ -11,23 +11,111 @@
 * Chat switches that off while it runs (:func:`_logits_for_every_token`): a kept logits row costs
   about 1.7 MB resident per prompt token with a 152k vocabulary (a 2,000-token context held 3.4 GB
   that nothing read) and the output layer is computed for every prompt token instead of the last.
+* ``n_ctx`` is checked against the context the model was trained on (read from the GGUF header,
+  :func:`trained_context`) before loading: llama.cpp would accept more and answer worse, or fail to
+  allocate it. A load that fails for the context (or memory) is reported as that, not as a damaged
+  file; neither is a load failure of a catalogue model whose checksum was verified.
 """
 
 from __future__ import annotations
 
 import os
+import struct
 import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 
-from conceptbot.core.errors import BackendRequestError, BackendUnavailableError, ModelCorruptError
+from conceptbot.core.errors import (
+    BackendRequestError,
+    BackendUnavailableError,
+    ConceptBotError,
+    ConfigError,
+    ModelCorruptError,
+)
 from conceptbot.core.usage import Usage
+from conceptbot.models import weights
 from conceptbot.models.llm import Capabilities, ChatRequest, ChatResponse, ScoreRequest, ScoreResponse
+
+# GGUF metadata value types (https://github.com/ggml-org/ggml/blob/master/docs/gguf.md), as struct
+# formats: 0-7 u8 i8 u16 i16 u32 i32 f32 bool, 10-12 u64 i64 f64 (all little-endian).
+_GGUF_SCALARS = {
+    kind: "<" + fmt for kind, fmt in zip((0, 1, 2, 3, 4, 5, 6, 7, 10, 11, 12), "BbHhIif?Qqd", strict=True)
+}
+_GGUF_STRING, _GGUF_ARRAY = 8, 9
+# Bounds that no real header exceeds; past them the file is damaged and the answer is "unknown".
+_GGUF_MAX_KEYS, _GGUF_MAX_STRING = 100_000, 1 << 24
+
+
+def _read(stream: BinaryIO, fmt: str) -> Any:
+    size = struct.calcsize(fmt)
+    data = stream.read(size)
+    if len(data) != size:
+        raise ValueError("truncated GGUF header")
+    return struct.unpack(fmt, data)[0]
+
+
+def _read_string(stream: BinaryIO) -> str:
+    length = _read(stream, "<Q")
+    if length > _GGUF_MAX_STRING:
+        raise ValueError("implausible GGUF string length")
+    data = stream.read(length)
+    if len(data) != length:
+        raise ValueError("truncated GGUF header")
+    return data.decode("utf-8")
+
+
+def _read_value(stream: BinaryIO, kind: int) -> Any:
+    """One metadata value; arrays are skipped (``None``): only scalars and strings are needed."""
+    if kind in _GGUF_SCALARS:
+        return _read(stream, _GGUF_SCALARS[kind])
+    if kind == _GGUF_STRING:
+        return _read_string(stream)
+    if kind != _GGUF_ARRAY:
+        raise ValueError(f"unknown GGUF value type {kind}")
+    item, count = _read(stream, "<I"), _read(stream, "<Q")
+    if item in _GGUF_SCALARS:
+        stream.seek(count * struct.calcsize(_GGUF_SCALARS[item]), os.SEEK_CUR)
+    else:  # strings (the tokenizer's vocabulary) or nested arrays, one by one
+        for _ in range(count):
+            _read_value(stream, item)
+    return None
+
+
+def trained_context(path: Path) -> int | None:
+    """The context length a GGUF model was trained on (its ``ARCH.context_length`` metadata).
+
+    Only the header is read, not the weights (the key comes before the tokenizer's arrays in the
+    files llama.cpp writes, so this reads a few hundred bytes).
+
+    Returns:
+        The length in tokens, or ``None`` when the file does not say (not GGUF, version 1, damaged):
+        llama.cpp then reports the problem itself when it loads the file.
+    """
+    try:
+        with open(path, "rb") as stream:
+            if stream.read(4) != b"GGUF" or _read(stream, "<I") < 2:
+                return None
+            _read(stream, "<Q")  # tensor count
+            keys = _read(stream, "<Q")
+            arch, lengths = None, {}
+            for _ in range(min(keys, _GGUF_MAX_KEYS)):
+                key = _read_string(stream)
+                value = _read_value(stream, _read(stream, "<I"))
+                if key == "general.architecture":
+                    arch = value
+                elif key.endswith(".context_length"):
+                    lengths[key] = value
+                if arch is not None and f"{arch}.context_length" in lengths:
+                    found = lengths[f"{arch}.context_length"]
+                    return int(found) if isinstance(found, int) and found > 0 else None
+    except (OSError, ValueError, OverflowError, struct.error):
+        return None
+    return None
 
 
 def _log_softmax(row: np.ndarray) -> np.ndarray:
@@ -72,6 +160,12 @@ class LlamaCppLLM:
     def _load(self) -> Any:
         if self._llama is not None:
             return self._llama
+        trained = trained_context(self.model_path)
+        if trained is not None and self.n_ctx > trained:
+            raise ConfigError(
+                f"n_ctx {self.n_ctx} is more than {self.model} was trained on ({trained} tokens)",
+                hint=f"set CONCEPTBOT_N_CTX (or n_ctx in config.toml) to {trained} or less; default 4096",
+            )
         try:
             from llama_cpp import Llama
         except ImportError as exc:
@@ -88,12 +182,31 @@ class LlamaCppLLM:
                 logits_all=True,
                 verbose=False,
             )
-        except (ValueError, RuntimeError) as exc:
-            raise ModelCorruptError(
-                f"llama.cpp could not load {self.model_path}: {exc}",
-                hint="reinstall it with `conceptbot models install NAME --force`",
-            ) from None
+        except (ValueError, RuntimeError, MemoryError) as exc:
+            raise self._load_error(exc) from None
         return self._llama
+
+    def _load_error(self, exc: BaseException) -> ConceptBotError:
+        """What a failed load means: the context could not be made, or the file could not be read
+        (only then, and only if its checksum is not known to be good, is the file blamed)."""
+        # "Failed to create llama_context" comes after the weights loaded; a MemoryError is the
+        # logits array (n_ctx rows of the vocabulary) that the context needs.
+        if isinstance(exc, MemoryError) or "llama_context" in str(exc):
+            return BackendUnavailableError(
+                f"llama.cpp could not create a context of {self.n_ctx} tokens for {self.model_path.name}: "
+                f"{exc or 'out of memory'}",
+                hint="lower CONCEPTBOT_N_CTX (default 4096) or free memory; the model file is fine",
+            )
+        if weights.checksum_known_good(self.model_path):
+            return BackendUnavailableError(
+                f"llama.cpp could not load {self.model_path}: {exc}",
+                hint="the file's sha256 is verified, so it is not damaged: free memory, or reinstall "
+                "llama-cpp-python (bash scripts/install.sh)",
+            )
+        return ModelCorruptError(
+            f"llama.cpp could not load {self.model_path}: {exc}",
+            hint="reinstall it with `conceptbot models install NAME --force`",
+        )
 
     def _chat_formatter(self) -> Any:
         if self._formatter is None:

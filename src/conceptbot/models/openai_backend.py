@@ -4,6 +4,14 @@
 Time-outs and bounded retries with exponential backoff come from the SDK (``timeout``,
 ``max_retries``). API keys are only handed to the SDK client; they are never logged, cached or put
 in error messages, and URLs in messages are redacted (:func:`conceptbot.core.urls.redact_url`).
+A server's own error text is quoted with this backend's key, base-URL password (and its ``Basic``
+form) and query values masked by value (:class:`conceptbot.core.urls.Redactor`): servers echo keys
+in forms no pattern knows. A key that cannot go into an HTTP header (a line break, a non-ASCII
+character) is a :class:`ConfigError` when the backend is built, not a failed request.
+
+A base URL with a query string (``http://h/v1?api_key=X``) works: the query is sent with every
+request (the SDK's ``default_query``) instead of being left where the SDK would append the endpoint
+path after it.
 
 Key routing: the registry gives ``openai`` the user's OPENAI_API_KEY and ``openai-compatible`` only
 CONCEPTBOT_API_KEY. Without a key this backend sends no ``Authorization`` header at all, and it
@@ -29,8 +37,9 @@ import json
 import time
 from typing import Any
 
+from conceptbot.core.config import API_KEY_HINT, api_key_problem
 from conceptbot.core.errors import BackendRequestError, BackendUnavailableError, ConfigError
-from conceptbot.core.urls import check_http_url, redact_secrets, redact_url
+from conceptbot.core.urls import Redactor, check_http_url, redact_url, split_query
 from conceptbot.core.usage import Usage
 from conceptbot.models.http_scoring import EchoTokens, HTTPScorer
 from conceptbot.models.llm import (
@@ -46,6 +55,31 @@ from conceptbot.models.llm import (
 def validate_base_url(url: str) -> str:
     """An OpenAI-compatible base URL, checked (see :func:`conceptbot.core.urls.check_http_url`)."""
     return check_http_url(url, "base URL", "http://127.0.0.1:8000/v1")
+
+
+def check_api_key(api_key: str | None, variable: str) -> None:
+    """Refuse a key the HTTP client could not send (checked before any request is made).
+
+    Args:
+        api_key: The key, or ``None``.
+        variable: The environment variable it usually comes from, for the message.
+
+    Raises:
+        ConfigError: The key holds a line break, a control or a non-ASCII character (the message
+            says which, never the key).
+    """
+    problem = api_key_problem(api_key) if api_key else None
+    if problem:
+        raise ConfigError(f"the API key ({variable}) {problem} (the key is not shown)", hint=API_KEY_HINT)
+
+
+def sdk_url_options(base_url: str | None) -> dict[str, Any]:
+    """``base_url`` and ``default_query`` for ``openai.OpenAI``: the URL without its query, the
+    query's fields sent with every request (see :func:`conceptbot.core.urls.split_query`)."""
+    if base_url is None:
+        return {"base_url": None}
+    base, query = split_query(base_url)
+    return {"base_url": base, "default_query": query} if query else {"base_url": base}
 
 
 def not_openai_reply(where: str, got: str) -> BackendRequestError:
@@ -139,9 +173,11 @@ class OpenAILLM:
                 "the openai-compatible backend needs a base URL",
                 hint="use a spec like openai-compatible:http://127.0.0.1:8000/v1#MODEL",
             )
+        check_api_key(api_key, "OPENAI_API_KEY" if backend == "openai" else "CONCEPTBOT_API_KEY")
         self.backend = backend
         self.model = model
         self.base_url = validate_base_url(base_url) if base_url else None
+        self._redact = Redactor(keys=(api_key,), urls=(self.base_url,))
         self.capabilities = Capabilities(scoring=True, json_schema=True, native_n=backend == "openai")
         self.scorer = HTTPScorer(self, scoring)
         self._json_mode = "json_schema"
@@ -150,9 +186,9 @@ class OpenAILLM:
             import openai
 
             client = openai.OpenAI(
-                base_url=self.base_url,
                 timeout=timeout_s,
                 max_retries=max_retries,
+                **sdk_url_options(self.base_url),
                 **client_options(backend, api_key),
             )
         self._client = client
@@ -208,11 +244,16 @@ class OpenAILLM:
         if isinstance(exc, openai.NotFoundError):
             return BackendRequestError(
                 f"{self._where()} does not know model {self.model!r} or the URL path is wrong: "
-                f"{_message(exc)}"
+                f"{self._message(exc)}"
             )
         if isinstance(exc, (openai.BadRequestError, openai.UnprocessableEntityError)):
-            return BackendRequestError(f"{self._where()} rejected the request: {_message(exc)}")
-        return BackendRequestError(f"{self._where()} answered HTTP {exc.status_code}: {_message(exc)}")
+            return BackendRequestError(f"{self._where()} rejected the request: {self._message(exc)}")
+        return BackendRequestError(f"{self._where()} answered HTTP {exc.status_code}: {self._message(exc)}")
+
+    def _message(self, exc: Any) -> str:
+        """The server's error message with this backend's secrets and every recognisable
+        credential masked (before the cut, so a cut cannot leave half a key)."""
+        return self._redact(_raw_message(exc))[:300]
 
     def with_module(self, module: str) -> OpenAILLM:
         """This backend itself: it keeps no call log to label (see :meth:`LLM.with_module`)."""
@@ -373,15 +414,15 @@ def _rejects_json_schema(exc: Any) -> bool:
 
     vLLM-style servers answer 400/422; llama.cpp's server answers 500 with a validation message.
     """
-    message = _message(exc)
+    message = _raw_message(exc)  # only searched, never shown
     if exc.status_code in (400, 422):
         return True
     return "json_schema" in message or "response_format" in message
 
 
-def _message(exc: Any) -> str:
-    """The server's error message, credentials masked (servers and proxies echo URLs and keys)."""
-    return redact_secrets(_raw_message(exc))[:300]
+# Far beyond the 300 characters shown: a key cut in half at this bound could not be masked by value,
+# but it also lies far past the part that is kept after masking.
+_RAW_CHARS = 100_000
 
 
 def _raw_message(exc: Any) -> str:
@@ -389,7 +430,7 @@ def _raw_message(exc: Any) -> str:
     if isinstance(body, dict):
         error = body.get("error", body)
         if isinstance(error, dict) and error.get("message"):
-            return str(error["message"])[:1000]
+            return str(error["message"])[:_RAW_CHARS]
         if isinstance(body.get("detail"), (str, list)):
-            return str(body["detail"])[:1000]
-    return str(getattr(exc, "message", exc))[:1000]
+            return str(body["detail"])[:_RAW_CHARS]
+    return str(getattr(exc, "message", exc))[:_RAW_CHARS]

@@ -1,7 +1,9 @@
 """OpenAI embeddings (``text-embedding-ada-002`` as in the paper, or newer models).
 
 This is an ``openai`` backend: it uses OPENAI_API_KEY, sent to the official API or to
-OPENAI_BASE_URL when the user set one. URLs in its messages are redacted.
+OPENAI_BASE_URL when the user set one. URLs in its messages are redacted, and its messages never
+quote the server's text (so a key the server echoes cannot reach them). A base URL's query string is
+sent with every request, as for the chat backend (:func:`conceptbot.models.openai_backend.sdk_url_options`).
 """
 
 from __future__ import annotations
@@ -15,7 +17,13 @@ import numpy as np
 from conceptbot.core.errors import BackendRequestError, BackendUnavailableError, ConfigError
 from conceptbot.core.urls import redact_url
 from conceptbot.models.embedder import normalise
-from conceptbot.models.openai_backend import describe_reply, not_openai_reply, validate_base_url
+from conceptbot.models.openai_backend import (
+    check_api_key,
+    describe_reply,
+    not_openai_reply,
+    sdk_url_options,
+    validate_base_url,
+)
 
 BATCH = 512
 
@@ -44,6 +52,7 @@ class OpenAIEmbedder:
         max_retries: int = 3,
         client: Any = None,
     ) -> None:
+        check_api_key(api_key, "OPENAI_API_KEY")
         self.model = model
         self.base_url = validate_base_url(base_url) if base_url else None
         if client is None:
@@ -53,7 +62,7 @@ class OpenAIEmbedder:
 
             client = openai.OpenAI(
                 api_key=api_key,
-                base_url=self.base_url,
+                **sdk_url_options(self.base_url),
                 timeout=timeout_s,
                 max_retries=max_retries,
             )

@@ -315,6 +315,26 @@ def verify(models_dir: Path, name: str, *, full: bool = False, progress: Progres
     return path
 
 
+def checksum_known_good(path: Path) -> bool:
+    """Whether ``path`` is a catalogue model whose sha256 was verified and that has not changed since.
+
+    Read from the stamp :func:`verify` writes (no re-hashing), so a loader can tell a damaged file
+    from one that failed to load for another reason (memory, context size).
+    """
+    path = Path(path)
+    try:
+        stamp = json.loads(_stamp_path(path).read_text(encoding="utf-8"))
+        stat = path.stat()
+        return any(
+            entry.filename == path.name
+            and (stamp["sha256"], stamp["size"], stamp["mtime_ns"])
+            == (entry.sha256, stat.st_size, stat.st_mtime_ns)
+            for entry in catalogue().values()
+        )
+    except (OSError, ValueError, KeyError, TypeError):
+        return False
+
+
 def resolve(models_dir: Path, name_or_path: str) -> Path:
     """A catalogue name (verified) or the path of the user's own GGUF file.
 

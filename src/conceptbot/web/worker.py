@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 from conceptbot.core.config import Settings
 from conceptbot.core.plan import Plan
 from conceptbot.core.scene import Scene
+from conceptbot.core.urls import redact_secrets
 from conceptbot.models import weights
 from conceptbot.sim.options import SimOptions
 from conceptbot.systems import PlannerSystem, build_system
@@ -135,7 +136,7 @@ def make_worker(systems: SystemFactory, can_simulate: bool) -> Worker:
 
     def work(spec: RunSpec, emit: Emit, out_dir: Path) -> None:
         observer = PageObserver(emit)
-        observer.progress(f"loading {spec.config} on {spec.backend}")
+        observer.progress(f"loading {spec.config} on {redact_secrets(spec.backend)}")  # URL may hold a key
         system = systems(spec.config, spec.backend)
 
         def plan_on(scene: Scene) -> Plan:
