@@ -1,9 +1,16 @@
 """`conceptbot kg` as a user runs it, on small source files in the real formats."""
 
+import gzip
 import json
+import os
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 from tests.cli.test_cli import run
+from tests.kg_sources import cn5_line
 
 
 def test_install_stats_and_query_offline(isolated_home: Path, omcs_file: Path, wordnet_dir: Path) -> None:
@@ -78,3 +85,66 @@ def test_damaged_graph_file_is_one_clear_error(
         assert "Traceback" not in out.stderr
         assert "Error:" in out.stderr and "conceptnet.db" in out.stderr
         assert "kg install" in out.stderr
+
+
+def _big_dump(path: Path, lines: int = 3_000_000) -> Path:
+    """A ConceptNet 5 dump that takes several seconds to import (one edge, repeated: small on disk)."""
+    line = (cn5_line("UsedFor", "/c/en/knife", "/c/en/cut_bread", 3.46) + "\n").encode()
+    with gzip.open(path, "wb", compresslevel=1) as handle:
+        for _ in range(lines // 10_000):
+            handle.write(line * 10_000)
+    return path
+
+
+def _interrupted_install(home: Path, dump: Path, sig: signal.Signals) -> tuple[int, str, Path]:
+    """Start `kg install conceptnet5 --file DUMP`, send ``sig`` once its build file exists; return
+    the exit code, stderr and the build file's path."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("CONCEPTBOT_", "OPENAI_"))}
+    env["CONCEPTBOT_HOME"] = str(home)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "conceptbot", "kg", "install", "conceptnet5", "--file", str(dump)],
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    building = home / "kg" / f".conceptnet.db.{process.pid}.building"
+    try:
+        deadline = time.monotonic() + 60
+        while not building.exists():
+            assert process.poll() is None, "the install ended before it was interrupted"
+            assert time.monotonic() < deadline, "no build file appeared"
+            time.sleep(0.05)
+        process.send_signal(sig)
+        _, err = process.communicate(timeout=30)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.communicate()
+    return process.returncode, err, building
+
+
+def test_sigterm_during_a_build_leaves_no_temporary_file(
+    isolated_home: Path, cn5_file: Path, tmp_path: Path
+) -> None:
+    run("kg", "install", "conceptnet5", "--file", str(cn5_file), home=isolated_home)
+    db = isolated_home / "kg" / "conceptnet.db"
+    before = db.read_bytes()
+    code, err, building = _interrupted_install(
+        isolated_home, _big_dump(tmp_path / "big.csv.gz"), signal.SIGTERM
+    )
+    assert code == 128 + signal.SIGTERM and "Terminated." in err and "Traceback" not in err
+    assert not building.exists() and sorted(p.name for p in db.parent.iterdir()) == ["conceptnet.db"]
+    assert db.read_bytes() == before  # the installed graph is untouched
+
+
+def test_the_next_install_removes_what_a_killed_one_left(
+    isolated_home: Path, cn5_file: Path, tmp_path: Path
+) -> None:
+    code, _, building = _interrupted_install(
+        isolated_home, _big_dump(tmp_path / "big.csv.gz"), signal.SIGKILL
+    )
+    assert code == -signal.SIGKILL and building.exists()  # nothing can clean up after SIGKILL...
+    out = run("kg", "install", "conceptnet5", "--file", str(cn5_file), home=isolated_home)
+    assert not building.exists()  # ... but the next install does, and says so
+    assert f"removed {building}" in out.stderr and "interrupted install" in out.stderr

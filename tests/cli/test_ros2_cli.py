@@ -58,6 +58,26 @@ def test_bad_node_names_and_ros_arguments_are_one_error_line(
     assert caught.value.code == 2 and message in err and "Traceback" not in err
 
 
+@pytest.mark.parametrize(
+    ("name", "reason"),
+    [
+        ("bad name!", "must not contain characters other than alphanumerics"),
+        ("1robot", "must not have a token that starts with a number"),
+        ("robot//arm", "must not contain repeated '/'"),
+    ],
+)
+def test_send_to_a_bad_node_name_is_one_error_line(
+    name: str, reason: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # As `ros2 node --name` answers a bad name: exit code 2, the reason, a hint; no rclpy traceback.
+    monkeypatch.setattr(sys, "argv", ["conceptbot", "ros2", "send", "Bring me an apple", "--name", name])
+    with pytest.raises(SystemExit) as caught:
+        main()
+    err = capsys.readouterr().err
+    assert caught.value.code == 2 and "Traceback" not in err
+    assert f"bad node name {name!r}: topic name {reason}" in err and "Hint:" in err
+
+
 class Mover:
     """Plans moving the first pickable object to the first destination, and says so; a request
     that mentions a unicorn fails."""

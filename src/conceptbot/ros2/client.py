@@ -18,10 +18,12 @@ from typing import Any
 
 import rclpy
 from rclpy.context import Context
+from rclpy.exceptions import NameValidationException
 from rclpy.executors import SingleThreadedExecutor
+from rclpy.validate_full_topic_name import validate_full_topic_name
 from std_msgs.msg import String
 
-from conceptbot.core.errors import ConceptBotError
+from conceptbot.core.errors import ConceptBotError, ConfigError
 from conceptbot.ros2 import qos
 from conceptbot.ros2.protocol import encode
 
@@ -51,10 +53,11 @@ def send_request(
         The result payload: ``{"id", "ok": true, "plan"}`` or ``{"id", "ok": false, "error"}``.
 
     Raises:
+        ConfigError: ``node_name`` cannot name a node's topics (``bad name!``).
         ConceptBotError: No node is found on the topics, or no result comes within ``timeout_s``.
     """
+    base = topic_base(node_name)
     payload = {"id": f"send-{uuid.uuid4().hex[:12]}", **payload}
-    base = "/" + node_name.strip("/")
     context = Context()
     rclpy.init(context=context)
     try:
@@ -105,6 +108,28 @@ def send_request(
             node.destroy_node()
     finally:
         context.try_shutdown()
+
+
+def topic_base(node_name: str) -> str:
+    """The prefix of the node's topics, ``/<node_name>``, checked as ROS 2 checks topic names.
+
+    Checked here, before any ROS 2 call: rclpy's own check fails inside ``create_publisher`` with a
+    traceback. A namespaced node is ``NAMESPACE/NAME`` (its topics are ``/NAMESPACE/NAME/...``).
+
+    Raises:
+        ConfigError: The name has characters ROS 2 refuses (a space, ``-``, ``!``), an empty part,
+            or a part that starts with a digit.
+    """
+    base = "/" + node_name.strip("/")
+    try:
+        validate_full_topic_name(f"{base}/request")
+    except NameValidationException as exc:
+        reason = str(exc).splitlines()[0].rstrip(":").removeprefix("Invalid topic name: ")
+        raise ConfigError(
+            f"bad node name {node_name!r}: {reason}",
+            hint="give the name the node was started with (letters, digits and '_', e.g. conceptbot_arm)",
+        ) from None
+    return base
 
 
 def _decode(msg: String) -> dict[str, Any]:

@@ -9,7 +9,8 @@ Endpoints (JSON unless noted):
 * ``POST /api/runs`` — start a run: ``{"request", "scene" (demo name) or "objects" {objects,
   pickable_objects, destinations}, "config", "backend", "risk", "simulate"}`` -> ``{"id"}``;
   409 while any run on this server is going (the model is shared).
-* ``GET /api/runs/{id}/events`` (``text/event-stream``) — the run's events from the first.
+* ``GET /api/runs/{id}/events`` (``text/event-stream``) — the run's events from the first; 429 while
+  :data:`~conceptbot.web.runs.MAX_STREAMS` streams of the run are open.
 * ``GET /api/runs/{id}/files/{name}`` — before.png, after.png, execution.gif.
 * ``GET /api/results`` — the latest reports in the results folder; ``GET /api/results/files/{name}``
   — their charts.
@@ -29,13 +30,12 @@ from __future__ import annotations
 
 import json
 import secrets
-from collections.abc import AsyncIterator, Iterable, Iterator
+from collections.abc import AsyncIterator, Callable, Iterable
 from importlib import resources
 from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
-import anyio
 from fastapi import FastAPI, HTTPException, Request, Response
 from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, StreamingResponse
 from pydantic import BaseModel, Field
@@ -49,7 +49,7 @@ from conceptbot.core.urls import redact_secrets
 from conceptbot.scenes import demo_scene_names, load_demo_scene
 from conceptbot.sim import PICTURES
 from conceptbot.systems import SYSTEMS
-from conceptbot.web.runs import BusyError, Run, RunManager, RunSpec
+from conceptbot.web.runs import MAX_STREAMS, BusyError, Run, RunManager, RunSpec
 
 COOKIE = "conceptbot_session"
 MAX_BODY = 32 * 1024
@@ -176,6 +176,24 @@ class _Guard:
         await self.app(scope, receive, send_with_headers)
 
 
+class _EventStream(StreamingResponse):
+    """A run's ``text/event-stream`` that calls ``on_end`` once it is over, however it ends.
+
+    In ``__call__`` rather than in the body generator: a generator that never started (the client
+    left before the first byte) never runs its ``finally``.
+    """
+
+    def __init__(self, body: AsyncIterator[str], on_end: Callable[[], None]) -> None:
+        super().__init__(body, media_type="text/event-stream", headers={"Cache-Control": "no-cache"})
+        self.on_end = on_end
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        try:
+            await super().__call__(scope, receive, send)
+        finally:
+            self.on_end()
+
+
 def _static(name: str) -> str:
     return resources.files("conceptbot.web").joinpath(f"static/{name}").read_text(encoding="utf-8")
 
@@ -288,24 +306,22 @@ def _add_runs(app: FastAPI, manager: RunManager, shown_backends: dict[str, str],
         return run
 
     @app.get("/api/runs/{run_id}/events")
-    def events(run_id: str, request: Request) -> StreamingResponse:
+    async def events(run_id: str, request: Request) -> StreamingResponse:
+        # async: neither the endpoint nor its stream takes one of the worker threads that every
+        # sync endpoint shares (a stream that held one for the whole run let 40 streams stall them).
         run = run_of(run_id, request)
-
-        def lines() -> Iterator[str]:
-            for event in run.stream():
-                yield ": keep-alive\n\n" if event is None else f"data: {json.dumps(event)}\n\n"
+        if not run.open_stream():
+            raise HTTPException(
+                429,
+                f"{MAX_STREAMS} event streams of this run are open already: close the page's other "
+                "tabs or wait until the run has finished",
+            )
 
         async def body() -> AsyncIterator[str]:
-            iterator = lines()
-            while True:
-                line = await anyio.to_thread.run_sync(next, iterator, None)
-                if line is None:
-                    return
-                yield line
+            async for event in run.follow():
+                yield ": keep-alive\n\n" if event is None else f"data: {json.dumps(event)}\n\n"
 
-        return StreamingResponse(
-            body(), media_type="text/event-stream", headers={"Cache-Control": "no-cache"}
-        )
+        return _EventStream(body(), on_end=run.close_stream)
 
     @app.get("/api/runs/{run_id}/files/{name}")
     def run_file(run_id: str, name: str, request: Request) -> FileResponse:

@@ -6,16 +6,22 @@ simulator and renders pictures. Every event is kept, so a page that connects lat
 replays the run from the start. The embedded model is one llama.cpp context shared by every page, so
 while a run is going a new one is refused (:class:`BusyError`), whichever page or session asks:
 a per-session limit let a client run many at once by fetching a fresh cookie for each.
+
+A stream waits for events on the event loop (:meth:`Run.follow`), not in a worker thread: the sync
+endpoints share anyio's 40 threads, and 45 streams that each held one stalled every other endpoint
+for the 15 s keep-alive. A run also takes at most :data:`MAX_STREAMS` streams at once.
 """
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import shutil
 import tempfile
 import threading
 import traceback
 import uuid
-from collections.abc import Callable, Iterator
+from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -26,6 +32,13 @@ from conceptbot.core.scene import Scene
 # (what to run, emit(event type, data), folder for pictures) -> None; raises ConceptBotError for
 # errors a user can fix (shown on the page with their hint).
 Worker = Callable[["RunSpec", Callable[[str, dict[str, Any]], None], Path], None]
+
+MAX_STREAMS = 8
+"""Event streams one run serves at once. The page opens one (and one more for a moment while it
+reconnects); the cap bounds what a client holding the run's cookie can make the server keep open."""
+
+KEEP_ALIVE_S = 15.0
+"""Seconds of silence after which a stream sends a keep-alive (proxies close idle connections)."""
 
 
 class BusyError(Exception):
@@ -46,7 +59,11 @@ class RunSpec:
 
 @dataclass
 class Run:
-    """One run and everything it has reported so far."""
+    """One run and everything it has reported so far.
+
+    ``emit`` is called from the run's worker thread; the streams that follow the run live on the
+    server's event loop, so each waiting stream leaves a thread-safe wake-up callback in ``_wakers``.
+    """
 
     id: str
     session: str
@@ -54,32 +71,78 @@ class Run:
     out_dir: Path
     events: list[dict[str, Any]] = field(default_factory=list)
     finished: bool = False
-    changed: threading.Condition = field(default_factory=threading.Condition)
+    lock: threading.Lock = field(default_factory=threading.Lock)
+    streams: int = 0
+    closing: bool = False
+    _wakers: set[Callable[[], None]] = field(default_factory=set)
 
     def emit(self, kind: str, data: dict[str, Any]) -> None:
         """Record an event and wake the streams."""
-        with self.changed:
+        with self.lock:
             self.events.append({"type": kind, **data})
             if kind in ("done", "error"):
                 self.finished = True
-            self.changed.notify_all()
+            wakers = list(self._wakers)
+        for wake in wakers:
+            wake()
 
-    def stream(self, timeout: float = 15.0) -> Iterator[dict[str, Any] | None]:
-        """Every event from the first, waiting for new ones; ``None`` after ``timeout`` seconds of
-        silence (a keep-alive for the HTTP stream); ends after ``done`` or ``error``."""
+    def stop_streams(self) -> None:
+        """End every stream of this run after what it has sent (the server is shutting down)."""
+        with self.lock:
+            self.closing = True
+            wakers = list(self._wakers)
+        for wake in wakers:
+            wake()
+
+    def open_stream(self) -> bool:
+        """Count one more stream of this run; False (nothing counted) when :data:`MAX_STREAMS` are open."""
+        with self.lock:
+            if self.streams >= MAX_STREAMS:
+                return False
+            self.streams += 1
+            return True
+
+    def close_stream(self) -> None:
+        """A stream counted by :meth:`open_stream` has ended."""
+        with self.lock:
+            self.streams -= 1
+
+    async def follow(self, keep_alive_s: float = KEEP_ALIVE_S) -> AsyncIterator[dict[str, Any] | None]:
+        """Every event from the first, waiting on the running event loop for new ones.
+
+        Yields ``None`` after ``keep_alive_s`` seconds of silence (a keep-alive for the HTTP stream);
+        ends after ``done`` or ``error``, or once :meth:`stop_streams` is called.
+        """
+        loop = asyncio.get_running_loop()
         index = 0
         while True:
-            with self.changed:
-                if index >= len(self.events) and not self.finished:
-                    self.changed.wait(timeout)
+            woken = asyncio.Event()
+
+            def wake(woken: asyncio.Event = woken) -> None:
+                # RuntimeError: the loop is closed, so nobody is listening any more.
+                with contextlib.suppress(RuntimeError):
+                    loop.call_soon_threadsafe(woken.set)
+
+            with self.lock:
                 new = self.events[index:]
-                finished = self.finished
+                finished, closing = self.finished, self.closing
+                if not new and not finished and not closing:
+                    self._wakers.add(wake)
             index += len(new)
-            if not new and not finished:
-                yield None
-            yield from new
-            if finished and index >= len(self.events):
+            for event in new:
+                yield event
+            # Every event before `finished` was set is in `new`: nothing is left to send.
+            if finished or closing:
                 return
+            if new:
+                continue
+            try:
+                await asyncio.wait_for(woken.wait(), keep_alive_s)
+            except TimeoutError:
+                yield None
+            finally:
+                with self.lock:
+                    self._wakers.discard(wake)
 
 
 class RunManager:
@@ -152,6 +215,13 @@ class RunManager:
             run.emit("error", {"message": f"internal error: {type(exc).__name__}: {exc}", "hint": ""})
         finally:
             self._model.release()
+
+    def stop_streams(self) -> None:
+        """End every run's event streams, so that a server shutting down need not wait for them."""
+        with self._lock:
+            runs = list(self._runs.values())
+        for run in runs:
+            run.stop_streams()
 
     def close(self) -> None:
         """Remove every run's pictures."""

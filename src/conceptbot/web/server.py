@@ -1,12 +1,21 @@
-"""The listening socket of ``conceptbot serve``, bound before anything says the server is up."""
+"""The listening socket of ``conceptbot serve``, bound before anything says the server is up, and
+the uvicorn server that serves the app on it."""
 
 from __future__ import annotations
 
 import errno
 import os
 import socket
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from conceptbot.core.errors import ConfigError
+
+if TYPE_CHECKING:
+    from starlette.types import ASGIApp
+
+GRACEFUL_S = 5
+"""Seconds a stopping server waits for requests still being answered before it cancels them."""
 
 
 def bind(host: str, port: int) -> socket.socket:
@@ -45,3 +54,29 @@ def bind(host: str, port: int) -> socket.socket:
             hint="give --host an address of this machine, e.g. 127.0.0.1",
         ) from None
     return sock
+
+
+def serve(app: ASGIApp, sock: socket.socket, *, on_shutdown: Callable[[], None]) -> None:
+    """Serve ``app`` on ``sock`` with uvicorn until SIGINT or SIGTERM, then shut down gracefully.
+
+    uvicorn waits for every open connection before it stops, and an event stream stays open until
+    its run ends: ``on_shutdown`` (the run manager's ``stop_streams``) runs first, on the event loop,
+    so the streams end and the server stops at once; :data:`GRACEFUL_S` bounds anything else.
+
+    After shutting down, uvicorn raises the signal it caught again (so SIGTERM's handler, or
+    Python's default action, still runs): the caller decides what SIGTERM does.
+
+    Args:
+        app: The web app.
+        sock: A socket from :func:`bind` (uvicorn closes it).
+        on_shutdown: Called once the server begins to shut down.
+    """
+    import uvicorn  # not at the top: `bind` runs before the slow imports
+
+    class Server(uvicorn.Server):
+        async def shutdown(self, sockets: list[socket.socket] | None = None) -> None:
+            on_shutdown()
+            await super().shutdown(sockets=sockets)
+
+    config = uvicorn.Config(app, log_level="warning", timeout_graceful_shutdown=GRACEFUL_S)
+    Server(config).run(sockets=[sock])
