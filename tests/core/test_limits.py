@@ -36,3 +36,29 @@ def test_json_depth_is_iterative() -> None:
     assert json_depth(deep) == 50_001
     assert json_depth({"a": [1, {"b": 2}]}) == 3
     assert json_depth("x") == 0
+
+
+@pytest.mark.parametrize(
+    "request_text",
+    [
+        "bring me an apple \x1b]0;pwned\x07",  # OSC: retitles the terminal
+        "bring me \x1b[2J an apple",  # CSI: clears the screen
+        "bring me an apple\x07",  # BEL
+        "bring me an apple \x9b31m",  # 8-bit CSI (C1)
+        "bring me\x00 an apple",
+        "bring me an apple\x7f",
+        "bring me an \u202eelppa",  # right-to-left override
+    ],
+)
+def test_requests_with_control_characters_are_refused(request_text: str) -> None:
+    with pytest.raises(ConfigError, match="control characters") as info:
+        check_request(request_text)
+    # The message names the characters as escapes, so printing it is safe too.
+    assert info.value.message.isprintable()
+    assert "escape sequences" in (info.value.hint or "")
+
+
+def test_line_breaks_and_tabs_in_a_request_become_spaces() -> None:
+    assert check_request("bring me\r\n  an apple\tplease\n") == "bring me   an apple please"
+    assert check_request("bring me\u2028an apple") == "bring me an apple"
+    assert check_request("une crème brûlée, s'il te plaît") == "une crème brûlée, s'il te plaît"

@@ -11,6 +11,8 @@ from rich.console import Console
 from rich.table import Table
 
 from conceptbot.cli.context import AppContext, pass_app
+from conceptbot.cli.params import FiniteFloatRange
+from conceptbot.core.text import terminal_safe
 from conceptbot.knowledge.base import TARGET_PROPERTIES
 from conceptbot.knowledge.registry import open_graph
 from conceptbot.models.registry import open_embedder
@@ -40,9 +42,9 @@ PAPER_LINE = "paper (text-embedding-ada-002): " + ", ".join(
 )
 # From 0.10, not 0.30: all-MiniLM-L6-v2 cosines between a relation sentence and a property word are
 # low (its paper-equivalent threshold is about 0.25), so a sweep from 0.30 would miss it.
-@click.option("--from", "theta_from", default=0.10, show_default=True, type=click.FloatRange(-1, 1))
-@click.option("--to", "theta_to", default=0.90, show_default=True, type=click.FloatRange(-1, 1))
-@click.option("--step", default=0.05, show_default=True, type=click.FloatRange(0, 1, min_open=True))
+@click.option("--from", "theta_from", default=0.10, show_default=True, type=FiniteFloatRange(-1, 1))
+@click.option("--to", "theta_to", default=0.90, show_default=True, type=FiniteFloatRange(-1, 1))
+@click.option("--step", default=0.05, show_default=True, type=FiniteFloatRange(0, 1, min_open=True))
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 @pass_app
 def calibrate(
@@ -69,7 +71,10 @@ def calibrate(
     embedder = open_embedder(app.settings)
     retriever = RelationRetriever(graph, embedder, theta=min(thetas))
     if not as_json:
-        click.echo(f"scoring the edges of {len(objects)} objects with {app.settings.embedder} ...", err=True)
+        click.echo(
+            terminal_safe(f"scoring the edges of {len(objects)} objects with {app.settings.embedder} ..."),
+            err=True,
+        )
     retrievals = measure(retriever, objects, TARGET_PROPERTIES)
     rows = rows_for(retrievals.values(), thetas)
     recommended = choose_theta(rows, PAPER_KEPT)
@@ -96,8 +101,10 @@ def calibrate(
         click.echo(json.dumps(data, indent=2))
         return
     click.echo(
-        f"embedder {app.settings.embedder} (model {embedder.model}), graph {graph.name}: "
-        f"{len(objects)} objects, {edges:,} edges, {len(unknown)} objects without edges"
+        terminal_safe(
+            f"embedder {app.settings.embedder} (model {embedder.model}), graph {graph.name}: "
+            f"{len(objects)} objects, {edges:,} edges, {len(unknown)} objects without edges"
+        )
     )
     click.echo("targets: " + ", ".join(TARGET_PROPERTIES))
     table = Table("theta", "mean kept", "median", "min", "max", "objects with none")
@@ -114,7 +121,8 @@ def calibrate(
     Console(width=max(Console().width, 80)).print(table)
     click.echo(PAPER_LINE + f" (chosen: {PAPER_THETA:.2f})")
     if unknown:
-        click.echo("objects without edges: " + ", ".join(unknown))
+        # The names come from the user's --objects file.
+        click.echo(terminal_safe("objects without edges: " + ", ".join(unknown)))
     if at_edge:
         side, option = ("fewer", "--from") if rows[0].mean_kept < PAPER_KEPT else ("more", "--to")
         click.echo(
@@ -122,6 +130,8 @@ def calibrate(
             f"the sweep (widen it with {option})"
         )
     click.echo(
-        f"recommended theta for {embedder.model}: {recommended:.2f} "
-        f"(mean kept closest to the paper's ~{PAPER_KEPT:g}); current default {current:.2f}"
+        terminal_safe(
+            f"recommended theta for {embedder.model}: {recommended:.2f} "
+            f"(mean kept closest to the paper's ~{PAPER_KEPT:g}); current default {current:.2f}"
+        )
     )

@@ -4,7 +4,8 @@ Every check runs on its own: an unexpected exception in one (a corrupt database 
 native library) becomes a failing line, never a stack trace, and the other checks still run.
 HTTP backends are contacted once with a one-token request, so "doctor is green" means the server
 is up, knows the model and accepts the key. Everything printed is passed through
-:func:`conceptbot.core.urls.redact_secrets`: specs may carry keys in their URLs.
+:func:`conceptbot.core.urls.redact_secrets` (specs may carry keys in their URLs) and
+:func:`conceptbot.core.text.terminal_safe` (details quote servers' error bodies and exceptions).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ import click
 from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.core.config import DEFAULT_EMBEDDER, DEFAULT_LLM, Settings
 from conceptbot.core.errors import ConceptBotError
+from conceptbot.core.text import terminal_safe
 from conceptbot.core.urls import redact_secrets
 from conceptbot.knowledge.registry import create_graph
 from conceptbot.knowledge.sqlite_store import SQLiteGraph
@@ -244,17 +246,17 @@ def doctor(app: AppContext) -> None:
         f"conceptbot {_version_or_unknown('conceptbot')} | home {settings.home}"
         f" | llm {settings.llm} | embedder {settings.embedder}"
     )
-    click.echo(redact_secrets(header))
+    click.echo(terminal_safe(redact_secrets(header)))
     broken = False
     for name, run in CHECKS:
         check = run_check(name, run, settings)
-        detail = redact_secrets(" ".join(str(check.detail).split()))
+        detail = terminal_safe(redact_secrets(" ".join(str(check.detail).split())))
         if check.ok:
             mark, colour = "ok  ", "green"
         elif check.required:
             mark, colour, broken = "FAIL", "red", True
         else:
             mark, colour = "warn", "yellow"
-        click.echo(click.style(f"[{mark}] ", fg=colour) + f"{check.name}: {detail}")
+        click.echo(click.style(f"[{mark}] ", fg=colour) + f"{terminal_safe(check.name)}: {detail}")
     if broken:
         raise click.exceptions.Exit(1)

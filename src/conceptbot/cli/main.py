@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import sys
 from pathlib import Path
 
@@ -11,6 +12,7 @@ from conceptbot import __version__
 from conceptbot.cli.context import AppContext
 from conceptbot.core.config import load_settings
 from conceptbot.core.errors import ConceptBotError
+from conceptbot.core.text import terminal_safe
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
@@ -87,22 +89,29 @@ _register()
 
 
 def main() -> None:
-    """Entry point: run the CLI, turning user errors into a message and a non-zero exit."""
+    """Entry point: run the CLI, turning user errors into a message and a non-zero exit.
+
+    Every message printed here passes through :func:`~conceptbot.core.text.terminal_safe`: error
+    messages quote requests, file names and servers' error bodies, any of which can hold escapes.
+    """
     try:
         # With standalone_mode=False click returns the exit code of ctx.exit()/Exit instead of exiting.
         code = cli.main(standalone_mode=False)
         if isinstance(code, int) and code != 0:
             sys.exit(code)
     except ConceptBotError as exc:
-        click.secho(f"Error: {exc.message}", fg="red", err=True)
+        click.secho(f"Error: {terminal_safe(exc.message)}", fg="red", err=True)
         if exc.hint:
-            click.echo(f"Hint: {exc.hint}", err=True)
+            click.echo(f"Hint: {terminal_safe(exc.hint)}", err=True)
         sys.exit(exc.exit_code)
     except click.exceptions.Abort:
         click.echo("Aborted.", err=True)
         sys.exit(130)
     except click.ClickException as exc:
-        exc.show()
+        # Usage errors quote what was typed ("No such command '...'"), escapes included.
+        shown = io.StringIO()
+        exc.show(file=shown)
+        click.echo(terminal_safe(shown.getvalue()), err=True, nl=False)
         sys.exit(exc.exit_code)
     except click.exceptions.Exit as exc:
         sys.exit(exc.exit_code)

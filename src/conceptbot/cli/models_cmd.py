@@ -4,11 +4,20 @@ from __future__ import annotations
 
 import click
 from rich.console import Console
-from rich.progress import BarColumn, DownloadColumn, Progress, TimeRemainingColumn, TransferSpeedColumn
+from rich.progress import (
+    BarColumn,
+    DownloadColumn,
+    Progress,
+    TextColumn,
+    TimeRemainingColumn,
+    TransferSpeedColumn,
+)
 from rich.table import Table
 
 from conceptbot.cli.context import AppContext, pass_app
+from conceptbot.cli.richtext import line, plain
 from conceptbot.core.errors import ConceptBotError
+from conceptbot.core.text import terminal_safe
 from conceptbot.models import weights
 
 
@@ -40,9 +49,10 @@ def list_models(app: AppContext) -> None:
     for column in ("name", "size", "status", "description"):
         table.add_column(column)
     for name, entry in weights.catalogue().items():
-        table.add_row(name, f"{entry.size / 1e6:,.0f} MB", _status(app, name), entry.description)
+        size = f"{entry.size / 1e6:,.0f} MB"
+        table.add_row(plain(name), size, plain(_status(app, name)), plain(entry.description))
     Console().print(table)
-    click.echo(f"Models folder: {app.settings.models_dir}")
+    click.echo(terminal_safe(f"Models folder: {app.settings.models_dir}"))
 
 
 @models.command("install")
@@ -53,14 +63,15 @@ def install_model(app: AppContext, name: str, force: bool) -> None:
     """Join NAME's parts into the models folder and verify its sha256."""
     entry = weights.get_entry(name)
     with Progress(
-        "[progress.description]{task.description}",
+        # File names are plain text, not Rich markup.
+        TextColumn("{task.description}", style="progress.description", markup=False),
         BarColumn(),
         DownloadColumn(),
         TransferSpeedColumn(),
         TimeRemainingColumn(),
         transient=False,
     ) as progress:
-        task = progress.add_task(f"joining {name}", total=None)
+        task = progress.add_task(terminal_safe(f"joining {name}"), total=None)
         path = weights.install(
             app.settings.models_dir,
             name,
@@ -68,8 +79,8 @@ def install_model(app: AppContext, name: str, force: bool) -> None:
             progress=lambda n: progress.advance(task, n),
             on_total=lambda total: progress.update(task, total=total),
             on_cleaned=lambda stale, size: progress.console.print(
-                f"removed {stale.name} ({size / 1e6:,.1f} MB), left by an interrupted install",
+                line(f"removed {stale.name} ({size / 1e6:,.1f} MB), left by an interrupted install"),
                 soft_wrap=True,
             ),
         )
-    click.echo(f"{name}: installed and verified (sha256 {entry.sha256[:16]}...) at {path}")
+    click.echo(terminal_safe(f"{name}: installed and verified (sha256 {entry.sha256[:16]}...) at {path}"))

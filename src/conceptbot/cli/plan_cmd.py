@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping
 
 import click
@@ -10,9 +9,12 @@ from rich.console import Console
 from rich.table import Table
 
 from conceptbot.cli.context import AppContext, pass_app
+from conceptbot.cli.params import FiniteFloatRange
 from conceptbot.cli.progress import ON_STDERR
+from conceptbot.cli.richtext import line, plain
 from conceptbot.core.limits import check_request
 from conceptbot.core.plan import Plan
+from conceptbot.core.text import safe_json_dumps
 from conceptbot.core.trace import PlanTrace, RetrievalTrace
 from conceptbot.pipeline.planner import METHODS
 from conceptbot.scenes import resolve_scene
@@ -49,7 +51,7 @@ from conceptbot.systems import SYSTEMS, SystemOptions, build_system
 @click.option(
     "-n", "n", default=5, show_default=True, type=click.IntRange(1, 20), help="Completions for vote."
 )
-@click.option("--theta", type=click.FloatRange(-1.0, 1.0), help="Cosine threshold (default: per embedder).")
+@click.option("--theta", type=FiniteFloatRange(-1.0, 1.0), help="Cosine threshold (default: per embedder).")
 @click.option("--fallback/--no-fallback", default=None, help="Wikipedia fallback (default: settings).")
 @click.option("--json", "as_json", is_flag=True, help="Print the plan as one JSON object.")
 @pass_app
@@ -72,21 +74,30 @@ def plan(
     bot = build_system(app.settings, config, options)
     result = bot.plan(request, scene, risk=risk, observer=ON_STDERR)
     if as_json:
-        click.echo(json.dumps(result.to_dict(), indent=2, ensure_ascii=False))
+        # Valid JSON whose strings carry no raw control character (a model's words are in it).
+        click.echo(safe_json_dumps(result.to_dict(), indent=2))
         return
     show(result, Console())
 
 
 def show(result: Plan, console: Console) -> None:
-    """The readable trace of a plan."""
+    """The readable trace of a plan.
+
+    Everything in it but the labels comes from the user, the scene file or a model, so every line
+    is built as literal :class:`~rich.text.Text` (:mod:`conceptbot.cli.richtext`), never as markup.
+    """
     trace = result.trace
-    console.print(f"[bold]Request:[/bold] {trace.request}   [dim](scene {trace.scene}, {trace.config})[/dim]")
+    console.print(
+        line(("Request:", "bold"), f" {trace.request}   ", (f"(scene {trace.scene}, {trace.config})", "dim"))
+    )
     ope = trace.ope
     if ope:
-        console.print(f"\n[bold]Object properties[/bold] (OPE, {ope.mode}: {ope.why})")
+        console.print(line("\n", ("Object properties", "bold"), f" (OPE, {ope.mode}: {ope.why})"))
         objects = ope.objects
         keys = [k for k in next(iter(objects.values())).values if k != "object"] if objects else []
-        table = Table("object", *keys, "cached")
+        table = Table()
+        for header in ("object", *keys, "cached"):  # OPE's keys come from the model's JSON reply
+            table.add_column(plain(header))
         for name, info in objects.items():
             cells = []
             for key in keys:
@@ -95,40 +106,33 @@ def show(result: Plan, console: Console) -> None:
                     value = ", ".join(
                         f"{v['object']} ({v['score']})" if isinstance(v, dict) else str(v) for v in value
                     )
-                cells.append(str(value)[:60])
-            table.add_row(name, *cells, "yes" if info.cached else "")
+                cells.append(plain(str(value)[:60]))
+            table.add_row(plain(name), *cells, "yes" if info.cached else "")
         console.print(table)
         _relations(console, "Kept relations per object (similarity, source)", ope.retrieval)
     urp = trace.urp
     if urp:
-        console.print(f"\n[bold]Request keywords:[/bold] {', '.join(urp.keywords) or '(none)'}")
+        keywords = ", ".join(urp.keywords) or "(none)"
+        console.print(line("\n", ("Request keywords:", "bold"), f" {keywords}"))
         _relations(console, "Kept relations of the keywords (vs the request)", urp.keyword_relations)
-        console.print(f"\n[bold]Reasoning (URP):[/bold] {urp.reasoning}")
-        console.print(f"[bold]Commands:[/bold] {', '.join(urp.commands) or '(none)'}")
+        console.print(line("\n", ("Reasoning (URP):", "bold"), f" {urp.reasoning}"))
+        console.print(line(("Commands:", "bold"), f" {', '.join(urp.commands) or '(none)'}"))
         for rejected in urp.rejected_commands:
-            console.print(f"  [yellow]rejected:[/yellow] {rejected}")
+            console.print(line("  ", ("rejected:", "yellow"), f" {rejected}"))
     _goal(console, trace)
-    for step in result.steps:
-        how = step.method if step.scoring in ("", "logprob") else f"{step.method}, scored by {step.scoring}"
-        table = Table("action", "S_LLM", "S_aff", "combined", "factors", title=f"Step {step.index} ({how})")
-        for c in step.candidates:
-            mark = "[bold green]" if c.action == step.chosen else ""
-            factors = " ".join(f"{k}={v:.2f}" for k, v in c.factors.items())
-            table.add_row(
-                f"{mark}{c.action}", f"{c.llm:.3f}", f"{c.affordance:.2f}", f"{c.combined:.3f}", factors
-            )
-        console.print(table)
-        for rejected in step.rejected:
-            console.print(f"  [yellow]rejected LLM output:[/yellow] {rejected}")
+    _steps(console, result)
+    if trace.goal is None:  # the goal planner's vetoes are shown with its risk checks
+        for veto in trace.vetoes or ():
+            console.print(line("  ", ("vetoed:", "red"), f" {veto.move}: {veto.statement}"))
     if result.refused:
-        console.print(f"\n[bold red]Refused:[/bold red] {result.reason}")
-    console.print("\n[bold]Plan:[/bold]")
+        console.print(line("\n", ("Refused:", "bold red"), f" {result.reason}"))
+    console.print(line("\n", ("Plan:", "bold")))
     for i, action in enumerate(result.actions, 1):
-        console.print(f"  {i}. {action}")
+        console.print(line(f"  {i}. {action}"))
     table = Table("module", "time (s)", "tokens in", "tokens out", "LLM calls", "cost (USD)", title="Usage")
     for module, usage in result.usage.items():
         table.add_row(
-            module,
+            plain(module),
             f"{usage.latency_s:.2f}",
             str(usage.prompt_tokens),
             str(usage.completion_tokens),
@@ -138,22 +142,42 @@ def show(result: Plan, console: Console) -> None:
     console.print(table)
 
 
+def _steps(console: Console, result: Plan) -> None:
+    """The step planner's candidates per step, the chosen one in bold green (absent for the goal planner)."""
+    for step in result.steps:
+        how = step.method if step.scoring in ("", "logprob") else f"{step.method}, scored by {step.scoring}"
+        title = plain(f"Step {step.index} ({how})")
+        table = Table("action", "S_LLM", "S_aff", "combined", "factors", title=title)
+        for c in step.candidates:
+            factors = " ".join(f"{k}={v:.2f}" for k, v in c.factors.items())
+            table.add_row(
+                plain(c.action, "bold green" if c.action == step.chosen else ""),
+                f"{c.llm:.3f}",
+                f"{c.affordance:.2f}",
+                f"{c.combined:.3f}",
+                plain(factors),
+            )
+        console.print(table)
+        for rejected in step.rejected:
+            console.print(line("  ", ("rejected LLM output:", "yellow"), f" {rejected}"))
+
+
 def _goal(console: Console, trace: PlanTrace) -> None:
     """The goal planner's targets, per-object decisions and risk checks (absent for the step planner)."""
     goal = trace.goal
     if not goal:
         return
-    console.print("\n[bold]Goal[/bold]" + (" (stack)" if goal.stack else ""))
+    console.print(line("\n", ("Goal", "bold"), " (stack)" if goal.stack else ""))
     for target in goal.targets:
         how = {"named": "named in the request", "speaker": "the speaker", "scored": "scored"}[target.how]
         named = f"; objects named: {', '.join(target.named)}" if target.named else ""
         criterion = f"; objects that fit {target.criterion!r}" if target.criterion else ""
         criterion += f"; a dish the graph knows: {target.dish}" if target.dish else ""
-        console.print(f"  -> {target.to} ({how}): {target.count}{named}{criterion}")
+        console.print(line(f"  -> {target.to} ({how}): {target.count}{named}{criterion}"))
     for decision in trace.decisions or ():
         if not decision.decided:
             continue
-        title = f"Decisions for the {decision.target.to} (calibrated log-odds of yes)"
+        title = plain(f"Decisions for the {decision.target.to} (calibrated log-odds of yes)")
         # The name ranking (which object, all listed in one question) exists for targets taking N.
         names = any(row.name_score is not None for row in decision.objects)
         columns = ["object", "P(yes)", "score", *(["name"] if names else []), "graph facts in the question"]
@@ -161,16 +185,19 @@ def _goal(console: Console, trace: PlanTrace) -> None:
         for row in sorted(decision.objects, key=lambda r: -r.score):
             facts = "; ".join(row.facts)[:80]
             name = [f"{row.name_score:+.2f}" if row.name_score is not None else ""] if names else []
-            table.add_row(row.object, f"{row.p_yes:.2f}", f"{row.score:+.2f}", *name, facts)
+            table.add_row(plain(row.object), f"{row.p_yes:.2f}", f"{row.score:+.2f}", *name, plain(facts))
         if decision.context:
-            console.print("  facts about the request: " + "; ".join(decision.context))
+            console.print(line("  facts about the request: " + "; ".join(decision.context)))
         console.print(table)
     if trace.stack:
-        console.print("  stack, bottom first: " + ", ".join(o.object for o in trace.stack.order))
+        console.print(line("  stack, bottom first: " + ", ".join(o.object for o in trace.stack.order)))
     for check in trace.risk or ():
-        verdict = f"[red]dropped: {check.why}[/red]" if check.dropped else "ok"
-        numbers = f"P(unsafe) {check.p_unsafe:.2f}, score {check.score:+.2f}"
-        console.print(f"  risk: {check.move}: {numbers} -> {verdict}")
+        why = f"{check.why} ({check.veto.statement})" if check.veto is not None else check.why
+        verdict = plain(f"dropped: {why}", "red") if check.dropped else plain("ok")
+        # No numbers where the decision could not be made (a backend error, a non-finite score).
+        decided = check.p_unsafe is not None and check.score is not None
+        numbers = f"P(unsafe) {check.p_unsafe:.2f}, score {check.score:+.2f}" if decided else "not decided"
+        console.print(line(f"  risk: {check.move}: {numbers} -> ", verdict))
 
 
 def _relations(
@@ -180,9 +207,11 @@ def _relations(
     for name, info in retrievals.items():
         kept = sorted(info.kept, key=lambda e: -e.similarity)
         shown = "; ".join(f"{e.relation} ({e.similarity:.2f}, {e.source})" for e in kept[:per_concept])
-        note = f" [dim]{'; '.join(info.notes)}[/dim]" if info.notes else ""
-        lines.append(f"  {name} [{info.match}: {info.matched}] {len(kept)} kept: {shown or '-'}{note}")
+        text = line(f"  {name} [{info.match}: {info.matched}] {len(kept)} kept: {shown or '-'}")
+        if info.notes:
+            text.append_text(line(" ", ("; ".join(info.notes), "dim")))
+        lines.append(text)
     if lines:
-        console.print(f"\n[bold]{title}[/bold]")
-        for line in lines:
-            console.print(line)
+        console.print(line("\n", (title, "bold")))
+        for text in lines:
+            console.print(text)

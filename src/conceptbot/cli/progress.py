@@ -18,11 +18,15 @@ from rich.progress import (
 )
 
 from conceptbot.core.observe import Callbacks
+from conceptbot.core.text import terminal_safe
 
 
 def say(message: str) -> None:
-    """Print a progress message, dimmed, on stderr (stdout stays the command's output, e.g. JSON)."""
-    click.secho(message, dim=True, err=True)
+    """Print a progress message, dimmed, on stderr (stdout stays the command's output, e.g. JSON).
+
+    Messages quote requests and object names, so they are made terminal-safe first.
+    """
+    click.secho(terminal_safe(message), dim=True, err=True)
 
 
 ON_STDERR = Callbacks(on_progress=say)
@@ -34,7 +38,8 @@ events are not shown (the command prints the whole trace when the plan is done).
 def byte_progress() -> Iterator[Callable[[str, int | None], Callable[[int], None]]]:
     """Yield a factory ``task(description, total_bytes) -> advance(n)``; one bar per task."""
     columns = (
-        TextColumn("{task.description:<40}"),
+        # Descriptions quote file names and requests: plain text, never Rich markup.
+        TextColumn("{task.description:<40}", markup=False),
         BarColumn(),
         DownloadColumn(),
         TransferSpeedColumn(),
@@ -44,7 +49,7 @@ def byte_progress() -> Iterator[Callable[[str, int | None], Callable[[int], None
     with Progress(*columns) as progress:
 
         def task(description: str, total: int | None) -> Callable[[int], None]:
-            task_id = progress.add_task(description, total=total)
+            task_id = progress.add_task(terminal_safe(description), total=total)
             return lambda n: progress.advance(task_id, n)
 
         yield task
@@ -53,7 +58,12 @@ def byte_progress() -> Iterator[Callable[[str, int | None], Callable[[int], None
 @contextmanager
 def count_progress(total: int, description: str = "planning") -> Iterator[Callable[[str], None]]:
     """Yield ``step(description)``: advance one bar of ``total`` items by one and relabel it."""
-    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
+    columns = (
+        TextColumn("{task.description}", markup=False),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+    )
     with Progress(*columns) as progress:
-        task_id = progress.add_task(description, total=total)
-        yield lambda text: progress.update(task_id, advance=1, description=text)
+        task_id = progress.add_task(terminal_safe(description), total=total)
+        yield lambda text: progress.update(task_id, advance=1, description=terminal_safe(text))

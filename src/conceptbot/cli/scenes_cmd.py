@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import json
-
 import click
 from rich.console import Console
 from rich.table import Table
 
+from conceptbot.cli.richtext import plain
+from conceptbot.core.text import safe_json_dumps
 from conceptbot.scenes import demo_scene_names, load_demo_scene
 
 
@@ -16,16 +16,16 @@ from conceptbot.scenes import demo_scene_names, load_demo_scene
 def scenes(name: str | None) -> None:
     """List the demo scenes (the paper's), or print one as JSON to start your own from."""
     if name:
-        click.echo(json.dumps(load_demo_scene(name).to_dict(), indent=2, ensure_ascii=False))
+        click.echo(safe_json_dumps(load_demo_scene(name).to_dict(), indent=2))
         return
     table = Table("name", "objects", "pickable", "destinations", "from")
     for scene_name in demo_scene_names():
         scene = load_demo_scene(scene_name)
         table.add_row(
-            scene_name,
+            plain(scene_name),
             str(len(scene.names)),
             str(len(scene.pickable)),
-            ", ".join(scene.destinations)[:40],
-            scene.description[:50],
+            plain(", ".join(scene.destinations)[:40]),
+            plain(scene.description[:50]),
         )
     Console().print(table)

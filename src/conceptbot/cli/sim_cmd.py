@@ -12,6 +12,7 @@ from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.cli.progress import ON_STDERR, say
 from conceptbot.core.errors import ConfigError
 from conceptbot.core.plan import InvalidActionError, parse_action
+from conceptbot.core.text import terminal_safe
 from conceptbot.scenes import resolve_scene
 from conceptbot.sim import GRASP_MODES
 from conceptbot.systems import SYSTEMS, build_system
@@ -124,7 +125,7 @@ def run(
 
     def act(session: SimSession) -> Execution:
         if actions is not None:
-            say(f"Executing {len(actions)} actions from {plan_path}")
+            say(f"Executing {len(actions)} actions from {plan_path}")  # say() makes it terminal-safe
             return session.execute(actions)
         system = build_system(app.settings, config)
         execution, _ = run_closed_loop(
@@ -146,7 +147,7 @@ def run(
         act,
         options,
         title=request or planned_for or (plan_path.name if plan_path else ""),
-        on_warning=lambda warning: click.secho(f"warning: {warning}", fg="yellow", err=True),
+        on_warning=lambda warning: click.secho(terminal_safe(f"warning: {warning}"), fg="yellow", err=True),
     )
     execution = outcome.execution
     assert execution is not None  # act always executes
@@ -155,12 +156,14 @@ def run(
     if as_json:
         click.echo(json.dumps(result, indent=2))
         return
+    # Plans and messages quote object names and the planner's (a model's) actions.
     for i, plan in enumerate(execution.plans):
-        click.echo(f"{'Plan' if i == 0 else 'Replan ' + str(i)}: {', '.join(plan)}")
+        click.echo(terminal_safe(f"{'Plan' if i == 0 else 'Replan ' + str(i)}: {', '.join(plan)}"))
     for step in execution.results:
         status = "ok" if step.ok else f"FAILED ({step.failure}: {step.message})"
-        click.echo(f"  {step.action}: {status} [{step.seconds:.2f} s]")
+        click.echo(terminal_safe(f"  {step.action}: {status} [{step.seconds:.2f} s]"))
     for obj, where in execution.placements.items():
-        click.echo(f"  {obj} -> {where or 'table'}")
-    click.secho(f"Verdict: {execution.verdict}", fg="green" if execution.ok else "red", bold=True)
-    click.echo(f"Pictures: {out_dir}/{', '.join(outcome.files)}")
+        click.echo(terminal_safe(f"  {obj} -> {where or 'table'}"))
+    verdict = terminal_safe(f"Verdict: {execution.verdict}")
+    click.secho(verdict, fg="green" if execution.ok else "red", bold=True)
+    click.echo(terminal_safe(f"Pictures: {out_dir}/{', '.join(outcome.files)}"))

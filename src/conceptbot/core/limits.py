@@ -9,9 +9,16 @@ Object names must survive the round trip through the action format
 ``pick_and_place(object, destination)``: the action parser splits on commas and parentheses and
 strips quotes, so a name containing any of ``, ( ) ' " ` `` could be planned but never read back
 (and never executed). Such names are rejected when the scene is loaded, with the reason.
+
+Requests are free text, but they are printed on terminals and pages, so they may not carry control
+characters (a request holding ``ESC ] 0 ; ... BEL`` would retitle the terminal of whoever reads the
+trace); line breaks and tabs, which a pasted request often holds, become spaces instead.
 """
 
 from __future__ import annotations
+
+import re
+import unicodedata
 
 from conceptbot.core.errors import ConfigError
 
@@ -27,9 +34,18 @@ MAX_SCENE_FILE_BYTES = 1_000_000
 """Size of a scene file."""
 MAX_JSON_DEPTH = 20
 """Nesting of a scene file's JSON (a scene needs 3 levels; deeper is not a scene)."""
+MAX_SCHEMA_DEPTH = 64
+"""Nesting of a JSON Schema given to ``conceptbot llm --schema`` (each object level of the reply
+takes two: ``properties`` and the property's schema; validation recurses, so depth is bounded)."""
 
 FORBIDDEN_NAME_CHARS = ",()'\"`"
 """Characters the action format cannot carry in an object name."""
+
+# Layout a pasted request carries (line breaks, tabs, form feeds, Unicode line separators): one
+# space per run, so "bring me\r\n  an apple" reads as it was meant.
+_REQUEST_LAYOUT = re.compile(r"[\t\n\r\v\f\x85\u2028\u2029]+")
+# Formatting controls that reorder how text is displayed (the "Trojan Source" characters).
+_BIDI_CONTROLS = frozenset("\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
 
 
 def check_name(name: str, where: str) -> str:
@@ -54,20 +70,33 @@ def check_name(name: str, where: str) -> str:
 
 
 def check_request(request: object) -> str:
-    """A request, stripped, if it is non-empty text within :data:`MAX_REQUEST_CHARS`.
+    """A request, stripped, if it is non-empty plain text within :data:`MAX_REQUEST_CHARS`.
+
+    Line breaks and tabs are not refused: each run of them becomes one space (a request pasted from
+    an editor or a chat window keeps its meaning). Every other control character (ESC, BEL, CSI,
+    NUL, DEL, C1 controls) and the bidirectional override controls are refused: they have no
+    meaning to the robot and would be obeyed by the terminal that shows the request.
 
     Raises:
-        ConfigError: Not a string, empty (or only spaces), or too long.
+        ConfigError: Not a string, empty (or only spaces), too long, or a control character.
     """
     if not isinstance(request, str):
         raise ConfigError("the request must be text")
-    text = request.strip()
+    text = _REQUEST_LAYOUT.sub(" ", request).strip()
     if not text:
         raise ConfigError(
             "the request is empty", hint='say what the robot should do, e.g. "bring me an apple"'
         )
     if len(text) > MAX_REQUEST_CHARS:
         raise ConfigError(f"the request is {len(text)} characters long; the limit is {MAX_REQUEST_CHARS}")
+    bad = sorted({c for c in text if unicodedata.category(c) == "Cc" or c in _BIDI_CONTROLS})
+    if bad:
+        # repr() shows each one as an escape ('\x1b'), so the message itself is safe to print.
+        shown = " ".join(repr(c) for c in bad)
+        raise ConfigError(
+            f"the request contains the control characters {shown} (a terminal escape sequence?)",
+            hint="type the request as plain text, without colour codes or other escape sequences",
+        )
     return text
 
 
