@@ -94,7 +94,10 @@ class MisbehavingServer(LoopbackServer):
         if mode not in ("ok", *NON_FINITE):
             return 404, {"error": {"message": f"unknown mode {mode}"}}
         if request.path.endswith("/models"):
-            return 200, {"object": "list", "data": [{"id": "m", "object": "model", "created": 1, "owned_by": "x"}]}
+            return 200, {
+                "object": "list",
+                "data": [{"id": "m", "object": "model", "created": 1, "owned_by": "x"}],
+            }
         if request.path.endswith("/completions") and "chat" not in request.path:
             return 404, {"error": {"message": "no completions endpoint"}}
         if body.get("response_format"):
