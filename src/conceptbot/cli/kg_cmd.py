@@ -11,7 +11,9 @@ from rich.table import Table
 
 from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.cli.progress import byte_progress
+from conceptbot.cli.richtext import plain
 from conceptbot.cli.signals import Terminated, sigterm_raises
+from conceptbot.core.text import safe_json_dumps, terminal_safe
 from conceptbot.knowledge.importers.conceptnet5 import OFFICIAL_URL
 from conceptbot.knowledge.install import INSTALL_SETS, install_conceptnet5, install_offline
 from conceptbot.knowledge.registry import open_graph
@@ -75,7 +77,8 @@ def install(
             shown = {k: v for k, v in stats.items() if k != "examples"}
             click.echo(f"  {name}: {shown}")
             for example in stats.get("examples", [])[:3]:
-                click.echo(f"    skipped {example}")
+                # A skipped line of a dump is untrusted text: its control characters are shown.
+                click.echo(f"    skipped {terminal_safe(example)}")
 
 
 @kg.command("stats")
@@ -95,7 +98,7 @@ def stats(app: AppContext, as_json: bool) -> None:
     )
     table = Table("source", "edges", "version")
     for source in data["sources"]:
-        table.add_row(source["name"], f"{source['edges']:,}", source["version"])
+        table.add_row(plain(source["name"]), f"{source['edges']:,}", plain(source["version"]))
     Console().print(table)
     top = list(data["relations"].items())[:12]
     click.echo("relations: " + ", ".join(f"{name} {count:,}" for name, count in top))
@@ -107,7 +110,7 @@ def _choose_page(concept: str, candidates: list[PageCandidate]) -> PageCandidate
         return None
     click.echo(f"Wikipedia pages for {concept!r}:")
     for number, candidate in enumerate(candidates, 1):
-        click.echo(f"  {number}. {candidate.title} - {candidate.snippet[:90]}")
+        click.echo(f"  {number}. {terminal_safe(candidate.title)} - {terminal_safe(candidate.snippet[:90])}")
     choice = click.prompt("Page number (0 for none)", type=click.IntRange(0, len(candidates)), default=1)
     return None if choice == 0 else candidates[choice - 1]
 
@@ -139,7 +142,7 @@ def query(
     result = graph.edges(concept, list(relations) or None, limit)
     if as_json:
         click.echo(
-            json.dumps(
+            safe_json_dumps(
                 {
                     "query": result.query,
                     "matched": result.matched,
@@ -157,17 +160,25 @@ def query(
                         for e in result.edges
                     ],
                 },
-                indent=2,
             )
         )
         return
     if not result.edges:
-        click.echo(f"{concept!r}: no edges" + "".join(f"\n  note: {n}" for n in result.notes))
+        click.echo(terminal_safe(f"{concept!r}: no edges" + "".join(f"\n  note: {n}" for n in result.notes)))
         return
-    click.echo(f"{concept!r} matched {result.matched!r} ({result.match}), {len(result.edges)} edges")
+    click.echo(
+        terminal_safe(f"{concept!r} matched {result.matched!r} ({result.match}), {len(result.edges)} edges")
+    )
+    # Graph text (a dump, the ConceptNet API, Wikipedia) is untrusted: literal Text, escapes shown.
     table = Table("head", "relation", "tail", "weight", "source")
     for edge in result.edges:
-        table.add_row(edge.head, edge.relation, edge.tail[:60], f"{edge.weight:g}", edge.source)
+        table.add_row(
+            plain(edge.head),
+            plain(edge.relation),
+            plain(edge.tail[:60]),
+            f"{edge.weight:g}",
+            plain(edge.source),
+        )
     Console().print(table)
     for note in result.notes:
-        click.echo(f"note: {note}")
+        click.echo(terminal_safe(f"note: {note}"))

@@ -2,15 +2,16 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 import click
 
 from conceptbot.cli.context import AppContext, pass_app
+from conceptbot.cli.params import FiniteFloatRange
 from conceptbot.cli.progress import say
 from conceptbot.core.limits import check_request
+from conceptbot.core.text import safe_json_dumps
 from conceptbot.ros2 import require_rclpy
 from conceptbot.scenes import demo_scene_names, resolve_scene
 from conceptbot.systems import SYSTEMS
@@ -66,7 +67,7 @@ def node(
     "timeout_s",
     default=300.0,
     show_default=True,
-    type=click.FloatRange(min=0.1),
+    type=FiniteFloatRange(min=0.1),
     help="Seconds.",
 )
 def send(request: str, scene_ref: str | None, name: str, timeout_s: float) -> None:
@@ -78,7 +79,7 @@ def send(request: str, scene_ref: str | None, name: str, timeout_s: float) -> No
     from conceptbot.ros2.client import send_request
 
     result = send_request(payload, node_name=name, timeout_s=timeout_s, on_progress=_show)
-    click.echo(json.dumps(result, indent=2, ensure_ascii=False))
+    click.echo(safe_json_dumps(result))  # the node's answer is untrusted text
     if not result.get("ok"):
         raise click.exceptions.Exit(1)
 
