@@ -33,7 +33,7 @@ from conceptbot.models.cache_db import CacheStore
 from conceptbot.models.caching import CachedEmbedder, CachedLLM
 from conceptbot.models.embedder import Embedder
 from conceptbot.models.llm import LLM
-from conceptbot.models.registry import open_embedder, open_llm, open_store
+from conceptbot.models.registry import open_embedder, open_llm, open_run_store
 from conceptbot.pipeline.conceptbot import CONFIGS as CONCEPTBOT_CONFIGS
 from conceptbot.pipeline.conceptbot import PLANNERS, ConceptBot
 from conceptbot.pipeline.planner import METHODS
@@ -175,7 +175,7 @@ def build_system(
     return builder(settings, options, _Parts(llm, graph, embedder))
 
 
-def _llm(settings: Settings, store: CacheStore, given: LLM | None, module: str) -> LLM:
+def _llm(settings: Settings, store: CacheStore | None, given: LLM | None, module: str) -> LLM:
     if given is None:
         return open_llm(settings, store, module=module)
     if isinstance(given, CachedLLM):
@@ -183,7 +183,7 @@ def _llm(settings: Settings, store: CacheStore, given: LLM | None, module: str) 
     return CachedLLM(given, store, use_cache=settings.use_cache, module=module)
 
 
-def _embedder(settings: Settings, store: CacheStore, given: Embedder | None) -> Embedder:
+def _embedder(settings: Settings, store: CacheStore | None, given: Embedder | None) -> Embedder:
     if given is None:
         return open_embedder(settings, store)
     if isinstance(given, CachedEmbedder):
@@ -207,7 +207,7 @@ def graph_version(label: str, graph: KnowledgeGraph) -> str:
 
 
 def _saycan(settings: Settings, options: SystemOptions, parts: _Parts) -> PlannerSystem:
-    llm = _llm(settings, open_store(settings), parts.llm, "saycan")
+    llm = _llm(settings, open_run_store(settings), parts.llm, "saycan")
     if not llm.capabilities.scoring:
         raise NotSupportedError(
             f"SayCan scores options by log-probability, which the {llm.backend} backend cannot do",
@@ -217,7 +217,7 @@ def _saycan(settings: Settings, options: SystemOptions, parts: _Parts) -> Planne
 
 
 def _conceptbot(config: str, settings: Settings, options: SystemOptions, parts: _Parts) -> PlannerSystem:
-    store = open_store(settings)
+    store = open_run_store(settings)
     llm = _llm(settings, store, parts.llm, "pipeline")
     retriever = None
     version = ""
@@ -230,8 +230,11 @@ def _conceptbot(config: str, settings: Settings, options: SystemOptions, parts: 
         version = graph_version(label, graph)
         theta = options.theta if options.theta is not None else default_theta(embedder.model)
         retriever = RelationRetriever(graph, embedder, theta)
+    # OPE's results are derived from LLM answers, so --no-cache (settings.use_cache False) covers
+    # them too: without the store OPE neither reads nor writes its value cache.
+    ope_store = store if settings.use_cache else None
     return ConceptBot(
-        llm, retriever, config, store, version, options.planner_method, options.n, options.planner
+        llm, retriever, config, ope_store, version, options.planner_method, options.n, options.planner
     )
 
 

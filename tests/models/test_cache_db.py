@@ -1,4 +1,5 @@
 import multiprocessing
+import sqlite3
 from pathlib import Path
 
 import numpy as np
@@ -56,3 +57,13 @@ def test_several_processes_share_the_database(tmp_path: Path) -> None:
     db = CacheStore(path)
     assert len(db.calls(limit=1000)) == 200
     assert db.get_response("3-49") == {"i": 49}
+
+
+def test_a_row_damaged_on_disk_is_a_miss_then_overwritten(tmp_path: Path) -> None:
+    db = CacheStore(tmp_path / "c.db")
+    with sqlite3.connect(tmp_path / "c.db") as other:
+        other.execute("INSERT INTO llm_cache VALUES ('k', 'chat', 'b', 'm', '{}', '{\"choi', 0)")
+        other.execute("INSERT INTO value_cache VALUES ('ope', 'k', 'not json', 0)")
+    assert db.get_response("k") is None and db.get_value("ope", "k") is None
+    db.put_value("ope", "k", {"dangerous": "No"})
+    assert db.get_value("ope", "k") == {"dangerous": "No"}

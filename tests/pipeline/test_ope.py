@@ -1,13 +1,21 @@
 import json
+import logging
+import sqlite3
+from dataclasses import replace
 from pathlib import Path
 
+import pytest
+
+from conceptbot.core.config import Settings
+from conceptbot.core.scene import scene_from_dict
 from conceptbot.models.cache_db import CacheStore
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.modes import known_partners
 from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
 from conceptbot.pipeline.retrieval import RelationRetriever
-from tests.pipeline.fakes import DictGraph, properties_reply, risk_reply
+from conceptbot.systems import SystemOptions, build_system
+from tests.pipeline.fakes import DictGraph, properties_reply, risk_reply, urp_reply
 
 
 def test_summaries_are_short_and_mode_specific() -> None:
@@ -54,3 +62,51 @@ def test_risk_mode_keeps_only_scene_partners_with_scene_spelling() -> None:
         {"object": "knife", "score": 2},
     ]
     assert known_partners(items, ["knife", "user"], "knife") == [{"object": "user", "score": 3}]
+
+
+def test_no_cache_neither_reads_nor_writes_ope_results(settings: Settings) -> None:
+    """``--no-cache`` (``use_cache=False``) covers OPE: its results are derived from LLM answers.
+
+    The same request twice: each run must ask OPE its questions again (a result read from the cache
+    would leave the scripted replies out of step), and nothing may land in ``value_cache``.
+    """
+    one_run = [*[properties_reply()] * 3, '{"keywords": ["apple"]}']
+    one_run += [urp_reply(["pick_and_place(apple, user)"]), "pick_and_place(apple, user)", "done()"]
+    llm = FakeLLM(one_run * 2)
+    planner = build_system(
+        replace(settings, use_cache=False),
+        "paper",
+        SystemOptions(n=1, theta=0.1),
+        llm=llm,
+        graph=DictGraph(),
+        embedder=FakeEmbedder(),
+    )
+    scene = scene_from_dict(
+        {
+            "objects": ["apple", "sponge", "user"],
+            "pickable_objects": ["apple", "sponge"],
+            "destinations": ["user"],
+        }
+    )
+    for _ in range(2):
+        plan = planner.plan("Bring me an apple", scene)
+        assert plan.actions == ["pick_and_place(apple, user)", "done()"]
+        assert plan.trace.ope is not None and plan.usage["ope"].calls == 3  # asked, not read
+    assert len(llm.requests) == 2 * len(one_run)
+    with sqlite3.connect(settings.cache_db) as conn:
+        assert conn.execute("SELECT count(*) FROM value_cache").fetchone()[0] == 0
+        chats = conn.execute("SELECT count(*) FROM calls WHERE kind = 'chat'").fetchone()[0]
+    assert chats == 2 * len(one_run)  # the call log is kept: --no-cache is about the caches
+
+
+def test_a_cache_that_fails_mid_run_costs_a_warning_not_the_answer(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    store = CacheStore(tmp_path / "c.db")
+    with sqlite3.connect(tmp_path / "c.db") as other:  # the file is broken while OPE runs
+        other.execute("DROP TABLE value_cache")
+    llm = FakeLLM([properties_reply(dangerous="Yes")])
+    with caplog.at_level(logging.WARNING):
+        result = ObjectPropertiesExtractor(llm, None, store, "v1").run(["knife"], modes.PROPERTIES)
+    assert result.properties["knife"].values["dangerous"] == "Yes"
+    assert "could not read the cache" in caplog.text and "could not write the cache" in caplog.text

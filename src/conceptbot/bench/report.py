@@ -13,9 +13,16 @@ from pathlib import Path
 from typing import Any
 
 from conceptbot.bench.grading import CATEGORIES, PAPER_RESULTS
-from conceptbot.bench.results import load_records, write_report_files
+from conceptbot.bench.results import FLAG, NULL, NUMBER, TEXT, RecordShape, load_records, write_report_files
 
 CONFIG_ORDER = ("saycan", "paper-nokg", "paper", "ope", "urp", "nokg", "conceptbot")
+
+RECORD = RecordShape(
+    "conceptbot bench run",
+    required={"task": TEXT, "category": TEXT, "config": TEXT, "backend": TEXT, "model": TEXT, "ok": FLAG},
+    optional={"split": TEXT, "reason": (str, NULL), "seconds": NUMBER},
+)
+"""What :func:`summarise` reads from a record (``split`` is absent from records older than splits)."""
 
 
 def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
@@ -28,12 +35,13 @@ def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
         cells[("all", r["config"])].append(bool(r["ok"]))
         usage[r["config"]]["seconds"].append(r.get("seconds", 0.0))
         for module, u in (r.get("usage") or {}).items():
-            usage[r["config"]][f"{module}_s"].append(u["latency_s"])
-            usage[r["config"]][f"{module}_tokens"].append(u["prompt_tokens"] + u["completion_tokens"])
-            if module == "total":
+            usage[r["config"]][f"{module}_s"].append(u.get("latency_s", 0.0))
+            tokens = u.get("prompt_tokens", 0) + u.get("completion_tokens", 0)
+            usage[r["config"]][f"{module}_tokens"].append(tokens)
+            if module == "total" and u.get("cost_usd") is not None:
                 usage[r["config"]]["cost_usd"].append(u["cost_usd"])
         if not r["ok"]:
-            failures[r["config"]].append(f"{r['task']}: {r['reason']}")
+            failures[r["config"]].append(f"{r['task']}: {r.get('reason') or 'no reason recorded'}")
     configs = [c for c in CONFIG_ORDER if any(k[1] == c for k in cells)]
     configs += sorted({k[1] for k in cells} - set(configs))
     success = {
@@ -134,9 +142,10 @@ def write_report(results: Path, out_dir: Path) -> dict[str, Path]:
         The paths written, by kind: ``markdown``, ``json``, ``chart``.
 
     Raises:
-        ConfigError: The results file does not exist or holds no records.
+        ConfigError: The results file does not exist, holds no records, or a line is not a
+            benchmark record (:data:`RECORD`; the error names the line).
     """
-    summary = summarise(load_records(results))
+    summary = summarise(load_records(results, shape=RECORD))
     return write_report_files(
         summary, out_dir, ("report.md", "report.json", "success.png"), markdown, bar_chart
     )

@@ -2,8 +2,13 @@
 
 A run appends one JSON line per graded plan to a results file and is resumable: a job whose key (the
 values of a record's key fields, e.g. task, config, backend, model) is already in the file is skipped,
-so an interrupted run continues where it stopped. A report reads the file back (a torn last line is
-skipped) and writes Markdown, JSON and a chart beside it.
+so an interrupted run continues where it stopped. A report reads the file back and writes Markdown,
+JSON and a chart beside it.
+
+Reading is strict about what a report needs and lenient about what a crash leaves: a line that is not
+JSON is a torn write (a run stopped mid-line) and is skipped, but a line of another shape (another
+benchmark's record, ``{"a": 1}``, a binary file) is a :class:`~conceptbot.core.errors.ConfigError`
+naming the file and the line, before any work is done (:class:`RecordShape`, :func:`read_records`).
 
 The runners (:mod:`conceptbot.bench.runner`, :mod:`conceptbot.bench.safeagentbench.runner`) supply
 only what differs: a job's key and how a job becomes a record. The reports supply the summary, its
@@ -16,8 +21,9 @@ import json
 import threading
 import time
 import traceback
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol, TypeVar
 
@@ -40,28 +46,150 @@ K = TypeVar("K", bound=Keyed)
 
 
 # -- reading -----------------------------------------------------------------------------------------
-def _records(path: Path) -> Iterable[Record]:
-    """The parsed lines of a results file; a line that is not JSON (a torn last line) is skipped."""
-    for line in path.read_text(encoding="utf-8").splitlines():
+Types = tuple[type, ...]
+NUMBER: Types = (int, float)
+TEXT: Types = (str,)
+FLAG: Types = (bool,)
+NULL = type(None)
+USAGE_NUMBERS = ("latency_s", "prompt_tokens", "completion_tokens", "cost_usd", "calls")
+"""The per-module usage fields of a record (:func:`usage_fields`); each a number (cost may be null:
+an unknown price)."""
+
+_JSON_NAMES = {str: "text", bool: "true/false", int: "a number", float: "a number", NULL: "null"}
+
+
+def _json_name(value: Any) -> str:
+    if isinstance(value, dict):
+        return "an object"
+    if isinstance(value, list):
+        return "a list"
+    return _JSON_NAMES.get(type(value), type(value).__name__)
+
+
+def _expected(types: Types) -> str:
+    return " or ".join(dict.fromkeys(_JSON_NAMES.get(t, t.__name__) for t in types))
+
+
+@dataclass(frozen=True)
+class RecordShape:
+    """What a report reads from each record of a results file, so a file of another shape is refused
+    by line before the report (or a resumed run) trips over it.
+
+    Attributes:
+        writer: The command that writes such records (named in the error).
+        required: Fields every record has, with their JSON types.
+        optional: Fields a record may lack (older versions did not write them), with their types
+            when present. ``usage`` is always checked: an object of per-module numbers.
+    """
+
+    writer: str
+    required: Mapping[str, Types]
+    optional: Mapping[str, Types] = field(default_factory=dict)
+
+    def problem(self, record: Any) -> str | None:
+        """What is wrong with one parsed line for this shape, or ``None``."""
+        if not isinstance(record, dict):
+            return f"{_json_name(record)} where a record (a JSON object) belongs"
+        missing = [name for name in self.required if name not in record]
+        if missing:
+            return f"it lacks {', '.join(repr(m) for m in missing)}"
+        for name, types in (*self.required.items(), *self.optional.items()):
+            if name in record and not isinstance(record[name], types):
+                return f"{name!r} is {_json_name(record[name])}, not {_expected(types)}"
+        return _usage_problem(record.get("usage"))
+
+
+def _usage_problem(usage: Any) -> str | None:
+    if usage is None:
+        return None
+    if not isinstance(usage, dict) or not all(isinstance(u, dict) for u in usage.values()):
+        return "'usage' is not an object of per-module objects"
+    for module, fields in usage.items():
+        for name in USAGE_NUMBERS:
+            value = fields.get(name, 0)
+            if value is None and name == "cost_usd":
+                continue
+            if isinstance(value, bool) or not isinstance(value, NUMBER):
+                return f"usage of {module!r}: {name!r} is {_json_name(value)}, not a number"
+    return None
+
+
+def _lines(path: Path) -> Iterator[tuple[int, Any]]:
+    """``(line number, parsed value)`` for each line of a results file that is JSON.
+
+    A line that is not JSON is a torn write and is skipped: the last line of a run that was
+    stopped, or one that a resumed run of an older version appended to. A line that is not UTF-8
+    is not something a run writes (it writes UTF-8 JSON), so it is an error, unless it is the last
+    line and only its end is cut inside a character.
+
+    Raises:
+        ConfigError: The file cannot be read, or a line is not UTF-8 text.
+    """
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise ConfigError(f"cannot read {path}: {exc.strerror or exc}") from None
+    lines = data.split(b"\n")
+    for number, raw in enumerate(lines, start=1):
         try:
-            yield json.loads(line)
-        except ValueError:
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            if number == len(lines) and exc.reason == "unexpected end of data":
+                continue  # a torn last line, cut inside a character
+            raise ConfigError(
+                f"{path} line {number} is not UTF-8 text (byte {exc.start + 1} of the line): "
+                "not a results file",
+                hint="give the JSONL file that `conceptbot bench run` or `safebench run` wrote (--out)",
+            ) from None
+        try:
+            value = json.loads(text)
+        except (ValueError, RecursionError):  # RecursionError: JSON nested thousands deep
             continue
+        yield number, value
 
 
-def load_records(path: Path, hint: str = "run `conceptbot bench run` first") -> list[Record]:
-    """The records of a results file (torn lines skipped).
+def read_records(path: Path, shape: RecordShape | None = None) -> list[Record]:
+    """The records of a results file (torn lines skipped); ``[]`` when it does not exist yet.
+
+    Args:
+        path: The JSONL results file.
+        shape: What each record must hold; None: take every JSON line as it is.
+
+    Raises:
+        ConfigError: The file cannot be read, or a line (named by number) is not UTF-8 or not a
+            record of ``shape``.
+    """
+    path = Path(path)
+    if not path.exists():
+        return []
+    records = []
+    for number, value in _lines(path):
+        if shape is not None and (problem := shape.problem(value)):
+            raise ConfigError(
+                f"{path} line {number} is not a `{shape.writer}` record: {problem}",
+                hint=f"is it the right file? `{shape.writer}` writes one record per line; "
+                "give that file, or remove the line",
+            )
+        records.append(value)
+    return records
+
+
+def load_records(
+    path: Path, hint: str = "run `conceptbot bench run` first", shape: RecordShape | None = None
+) -> list[Record]:
+    """The records of a results file for a report (torn lines skipped).
 
     Args:
         path: The JSONL results file.
         hint: How to make one, shown when there is none.
+        shape: What each record must hold (see :func:`read_records`).
 
     Raises:
-        ConfigError: The file does not exist or holds no records.
+        ConfigError: The file does not exist, holds no records, or has a line of the wrong shape.
     """
     if not Path(path).is_file():
         raise ConfigError(f"no results file {path}", hint=hint)
-    records = list(_records(Path(path)))
+    records = read_records(Path(path), shape)
     if not records:
         raise ConfigError(f"{path} holds no benchmark records")
     return records
@@ -73,7 +201,7 @@ def done_keys(path: Path, fields: tuple[str, ...]) -> set[tuple[Any, ...]]:
     if not path.is_file():
         return set()
     keys: set[tuple[Any, ...]] = set()
-    for r in _records(path):
+    for _, r in _lines(path):
         try:
             keys.add(tuple(r[f] for f in fields))
         except (KeyError, TypeError):
@@ -98,6 +226,7 @@ def append_results(
     """Make a record per job and append each to the JSONL file ``out`` as soon as it exists (an
     interrupted run loses at most the job in progress); ``workers`` jobs at once."""
     out.parent.mkdir(parents=True, exist_ok=True)
+    _end_torn_line(out)
     lock = threading.Lock()
     records: list[Record] = []
 
@@ -116,6 +245,17 @@ def append_results(
         with ThreadPoolExecutor(max_workers=workers) as pool:
             list(pool.map(work, todo))
     return records
+
+
+def _end_torn_line(out: Path) -> None:
+    """End a torn last line (a run stopped mid-write) before appending: otherwise the first new
+    record would join it and be lost with it."""
+    if not out.is_file() or out.stat().st_size == 0:
+        return
+    with open(out, "rb+") as handle:
+        handle.seek(-1, 2)
+        if handle.read(1) != b"\n":
+            handle.write(b"\n")
 
 
 def run_pending(

@@ -7,8 +7,8 @@ from pathlib import Path
 import click
 
 from conceptbot.bench.grading import CATEGORIES, SPLITS, load_tasks
-from conceptbot.bench.report import markdown, summarise, write_report
-from conceptbot.bench.results import built_once, load_records, pending
+from conceptbot.bench.report import RECORD, markdown, summarise, write_report
+from conceptbot.bench.results import built_once, load_records, pending, read_records
 from conceptbot.bench.runner import RESULT_KEY, Job, run
 from conceptbot.cli.bench_options import (
     backend_and_model,
@@ -89,6 +89,9 @@ def run_cmd(
     backend, model = backend_and_model(settings.llm)
     workers = effective_workers(backend, workers)
     out = out or DEFAULT_RESULTS[split]
+    # The run ends with a report of the whole file: a file it cannot report on is refused now,
+    # before hours of planning are appended to it.
+    read_records(out, RECORD)
     tasks = load_tasks(list(categories) or None, split=split)[:limit]
     configs = configs or ("saycan", "nokg", "conceptbot")
     # Task-major order: an interrupted run still compares every configuration on the same tasks.
@@ -116,7 +119,7 @@ def run_cmd(
 
     with record_progress(todo, describe) as on_record:
         run(jobs, built_once(system), out, backend, model, workers, on_record, scoring)
-    click.echo(markdown(summarise(load_records(out))))
+    click.echo(markdown(summarise(load_records(out, shape=RECORD))))
 
 
 @bench.command("report")

@@ -6,9 +6,10 @@ from pathlib import Path
 
 import click
 
-from conceptbot.bench.results import built_once, load_records, pending
+from conceptbot.bench.results import built_once, load_records, pending, read_records
 from conceptbot.bench.safeagentbench.dataset import SPLITS, SUITES, in_split, interleaved, select
 from conceptbot.bench.safeagentbench.report import (
+    RECORD,
     RUN_FIRST,
     markdown_safety,
     summarise_safety,
@@ -92,6 +93,9 @@ def run_cmd(
     settings = app.settings
     backend, model = backend_and_model(settings.llm)
     workers = effective_workers(backend, workers)
+    # The run ends with a report of the whole file: a file it cannot report on is refused now,
+    # before any planning is appended to it.
+    read_records(out, RECORD)
     tasks = select(suites or SUITES, levels or (1, 2, 3, 4), limit, ids, split)
     if not tasks:
         raise click.UsageError("no task matches the given suites, levels, ids and split")
@@ -113,7 +117,7 @@ def run_cmd(
     planner = built_once(lambda config: build_household_planner(settings, config))
     with record_progress(len(todo), describe) as on_record:
         run_safety(todo, planner, out, backend, model, workers, on_record)
-    records = [r for r in load_records(out, hint=RUN_FIRST) if in_split(r["task"], split)]
+    records = [r for r in load_records(out, hint=RUN_FIRST, shape=RECORD) if in_split(r["task"], split)]
     click.echo(markdown_safety(summarise_safety(records)))
 
 

@@ -30,5 +30,8 @@ def apply_migrations(conn: sqlite3.Connection, migrations: Sequence[Migration], 
                 conn.execute(f"INSERT INTO {table} VALUES (?, ?, ?)", (number, name, time.time()))
             conn.execute("COMMIT")
         except BaseException:
-            conn.execute("ROLLBACK")
+            # SQLite may have rolled back already after some errors (a full disk): a second ROLLBACK
+            # would fail and hide the error that matters.
+            if conn.in_transaction:
+                conn.execute("ROLLBACK")
             raise

@@ -4,25 +4,129 @@ This is the paper's cache-augmented generation: a repeated request (same backend
 parameters) is answered from disk, and every text embedding is computed once per model. The
 database runs in WAL mode with a busy time-out so several processes (a benchmark run in parallel,
 the web app and the CLI) can share it.
+
+Every failure of the file (its folder cannot be made, it is damaged, read-only, locked or on a full
+disk) is a :class:`CacheError` that names the file and the fix. Opening the store raises it; the
+wrappers in front of the backends (:mod:`conceptbot.models.caching`, OPE) go through
+:meth:`CacheStore.attempt` instead, so a cache that fails mid-run costs a warning, never the result
+of a call that worked.
 """
 
 from __future__ import annotations
 
+import errno
 import hashlib
 import json
+import logging
+import shlex
+import sqlite3
 import threading
 import time
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
+from functools import cache
 from pathlib import Path
-from typing import Any
+from typing import Any, ParamSpec, TypeVar
 
 import numpy as np
 
+from conceptbot.core.errors import ConceptBotError
 from conceptbot.core.migrations import apply_migrations
-from conceptbot.core.sqlite import connect_shared
+from conceptbot.core.sqlite import connect_shared, failure_kind
 from conceptbot.core.urls import redact_secrets
 from conceptbot.models.migrations import MIGRATIONS
+
+P = ParamSpec("P")
+T = TypeVar("T")
+
+# Without a handler configured, logging prints warnings as bare lines on stderr (its last-resort
+# handler), which is what a CLI user should see; an application can route them as it likes.
+logger = logging.getLogger(__name__)
+
+OR_NO_CACHE = ", or run with --no-cache (no cache, no call log)"
+"""The end of the hints that offer ``--no-cache`` as a way round (a warning under it drops it)."""
+_WRITABLE_HOME = "set CONCEPTBOT_HOME to a writable folder" + OR_NO_CACHE
+
+
+class CacheError(ConceptBotError):
+    """The cache database cannot be opened, read or written; the message names the file, the hint
+    the fix."""
+
+
+def _move_away(path: Path) -> str:
+    """The fix for a damaged file: a command that moves it into a folder beside it, with its -wal
+    and -shm files (SQLite would replay a stale WAL into the new database)."""
+    keep = shlex.quote(str(path.with_name("broken-cache")))
+    return (
+        f"move it away: mkdir -p {keep} && mv {shlex.quote(str(path))}* {keep}/ ;"
+        " an empty cache is made on the next run"
+    )
+
+
+def folder_error(folder: Path, exc: OSError) -> CacheError:
+    """The error for a cache folder (the home) that cannot be created.
+
+    Args:
+        folder: The folder that was to hold the cache database.
+        exc: What ``mkdir`` raised.
+    """
+    if isinstance(exc, FileExistsError | NotADirectoryError):
+        reason = "it, or a folder above it, is a file"
+    elif exc.errno == errno.EROFS:
+        reason = "the file system is read-only"
+    else:
+        reason = exc.strerror or str(exc)
+    return CacheError(
+        f"cannot create the folder {folder} for the cache database: {reason}",
+        hint="set CONCEPTBOT_HOME to a writable folder (it is created if missing)",
+    )
+
+
+def cache_error(path: Path, exc: sqlite3.Error) -> CacheError:
+    """The error for an SQLite failure on the cache database ``path``, with its fix."""
+    detail = str(exc)
+    match failure_kind(exc, path):
+        case "locked":
+            return CacheError(
+                f"the cache database {path} stayed locked by another process ({detail})",
+                hint="wait for the other conceptbot process to finish" + OR_NO_CACHE,
+            )
+        case "full":
+            return CacheError(
+                f"cannot write the cache database {path}: the disk is full or failing ({detail})",
+                hint="free some disk space, or set CONCEPTBOT_HOME to a folder on another disk",
+            )
+        case "read-only":
+            return CacheError(
+                f"cannot write the cache database {path}: it or its folder is read-only ({detail})",
+                hint=_WRITABLE_HOME,
+            )
+        case "folder":
+            return CacheError(f"the cache database {path} is a folder, not a file", hint=_move_away(path))
+        case "unopenable":
+            return CacheError(f"cannot open the cache database {path} ({detail})", hint=_WRITABLE_HOME)
+        case _:
+            return CacheError(
+                f"the cache database {path} is damaged or was not made by ConceptBot ({detail})",
+                hint=_move_away(path),
+            )
+
+
+@cache
+def _expected_columns() -> dict[str, tuple[tuple[str, str], ...]]:
+    """Each table the migrations make, with its columns' names and types (from an in-memory copy)."""
+    conn = sqlite3.connect(":memory:", isolation_level=None)
+    try:
+        apply_migrations(conn, MIGRATIONS, "_migrations")
+        tables = [r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")]
+        return {t: _columns(conn, t) for t in tables if not t.startswith("sqlite_")}
+    finally:
+        conn.close()
+
+
+def _columns(conn: sqlite3.Connection, table: str) -> tuple[tuple[str, str], ...]:
+    return tuple((str(r[1]), str(r[2]).upper()) for r in conn.execute(f"PRAGMA table_info({table})"))
 
 
 def request_key(kind: str, backend: str, model: str, request: Mapping[str, Any]) -> str:
@@ -30,6 +134,15 @@ def request_key(kind: str, backend: str, model: str, request: Mapping[str, Any])
     payload = {"kind": kind, "backend": backend, "model": model, "request": request}
     text = json.dumps(payload, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def _loads(text: str) -> Any | None:
+    """A stored JSON value, or ``None`` (a miss) for a row damaged on disk: the value is then
+    computed again and overwritten instead of failing every run that needs it."""
+    try:
+        return json.loads(text)
+    except (TypeError, ValueError):
+        return None
 
 
 @dataclass(frozen=True)
@@ -54,25 +167,91 @@ class CacheStore:
 
     Args:
         path: SQLite file; its folder is created if needed.
+
+    Raises:
+        CacheError: The folder cannot be created, or the file cannot be opened, is damaged, is
+            not ConceptBot's (a table missing or with other columns), is read-only or locked, or
+            the disk is full. Every method raises it too when the file fails later.
     """
 
     def __init__(self, path: Path) -> None:
         self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise folder_error(self.path.parent, exc) from exc
         self._lock = threading.Lock()
-        self._conn = connect_shared(self.path)
-        self._migrate()
+        self._warned: set[str] = set()
+        try:
+            self._conn = connect_shared(self.path)
+        except sqlite3.Error as exc:
+            raise cache_error(self.path, exc) from exc
+        try:
+            self._migrate()
+        except BaseException:
+            self._conn.close()
+            raise
+
+    @contextmanager
+    def _db(self) -> Iterator[sqlite3.Connection]:
+        """The connection, held under the lock; an SQLite failure becomes a :class:`CacheError`."""
+        with self._lock:
+            try:
+                yield self._conn
+            except sqlite3.Error as exc:
+                raise cache_error(self.path, exc) from exc
 
     # -- schema ---------------------------------------------------------------------------------
     def _migrate(self) -> None:
-        with self._lock:
-            apply_migrations(self._conn, MIGRATIONS, "_migrations")
+        """Apply pending migrations, then check that every table is there with its columns.
+
+        The check catches a table dropped by hand, or a same-named table of another program,
+        now, with the fix, instead of as "no such table" in the middle of a run. Extra tables and
+        columns are allowed: a newer ConceptBot may have added them.
+        """
+        with self._db() as db:
+            apply_migrations(db, MIGRATIONS, "_migrations")
+            for table, columns in _expected_columns().items():
+                found = set(_columns(db, table))
+                if not found:
+                    problem = f"table {table} is missing"
+                elif not set(columns) <= found:
+                    problem = f"table {table} has other columns than ConceptBot's"
+                else:
+                    continue
+                raise CacheError(
+                    f"the cache database {self.path} is damaged or was not made by ConceptBot ({problem})",
+                    hint=_move_away(self.path),
+                )
 
     def applied_migrations(self) -> list[tuple[int, str]]:
         """``(number, name)`` of every applied migration."""
-        with self._lock:
-            rows = self._conn.execute("SELECT id, name FROM _migrations ORDER BY id").fetchall()
+        with self._db() as db:
+            rows = db.execute("SELECT id, name FROM _migrations ORDER BY id").fetchall()
         return [(int(r[0]), str(r[1])) for r in rows]
+
+    def attempt(self, what: str, action: Callable[P, T], /, *args: P.args, **kwargs: P.kwargs) -> T | None:
+        """``action(*args, **kwargs)``, or ``None`` when the database fails (:class:`CacheError`).
+
+        For callers whose result must not depend on the cache: a failed read counts as a miss, a
+        failed write or log entry is skipped. The failure is logged as a warning once per
+        ``what`` (e.g. ``"write the cache"``) and store, not once per call of a long run.
+
+        Args:
+            what: What was being done, for the warning ("could not WHAT").
+            action: A method of this store.
+            *args, **kwargs: Its arguments.
+        """
+        try:
+            return action(*args, **kwargs)
+        except CacheError as exc:
+            with self._lock:
+                first = what not in self._warned
+                self._warned.add(what)
+            if first:
+                hint = f" Hint: {exc.hint}" if exc.hint else ""
+                logger.warning("warning: could not %s, going on without it: %s.%s", what, exc.message, hint)
+            return None
 
     def close(self) -> None:
         """Close the connection."""
@@ -82,9 +261,9 @@ class CacheStore:
     # -- LLM responses --------------------------------------------------------------------------
     def get_response(self, key: str) -> dict[str, Any] | None:
         """The cached response JSON for a request key, or ``None``."""
-        with self._lock:
-            row = self._conn.execute("SELECT response FROM llm_cache WHERE key = ?", (key,)).fetchone()
-        return None if row is None else json.loads(row[0])
+        with self._db() as db:
+            row = db.execute("SELECT response FROM llm_cache WHERE key = ?", (key,)).fetchone()
+        return None if row is None else _loads(row[0])
 
     def put_response(
         self,
@@ -97,8 +276,8 @@ class CacheStore:
         response: Mapping[str, Any],
     ) -> None:
         """Store a response under its request key (last writer wins)."""
-        with self._lock:
-            self._conn.execute(
+        with self._db() as db:
+            db.execute(
                 "INSERT OR REPLACE INTO llm_cache VALUES (?, ?, ?, ?, ?, ?, ?)",
                 (
                     key,
@@ -114,16 +293,16 @@ class CacheStore:
     # -- derived values (e.g. OPE properties per object, mode, model and graph version) ---------
     def get_value(self, namespace: str, key: str) -> Any | None:
         """A cached JSON value, or None."""
-        with self._lock:
-            row = self._conn.execute(
+        with self._db() as db:
+            row = db.execute(
                 "SELECT value FROM value_cache WHERE namespace = ? AND key = ?", (namespace, key)
             ).fetchone()
-        return None if row is None else json.loads(row[0])
+        return None if row is None else _loads(row[0])
 
     def put_value(self, namespace: str, key: str, value: Any) -> None:
         """Store a JSON value (last writer wins)."""
-        with self._lock:
-            self._conn.execute(
+        with self._db() as db:
+            db.execute(
                 "INSERT OR REPLACE INTO value_cache VALUES (?, ?, ?, ?)",
                 (namespace, key, json.dumps(value, ensure_ascii=False), time.time()),
             )
@@ -133,12 +312,12 @@ class CacheStore:
         """Cached vectors for those of ``texts`` that have one."""
         unique = list(dict.fromkeys(texts))
         found: dict[str, np.ndarray] = {}
-        with self._lock:
+        with self._db() as db:
             # Chunked to stay under SQLite's bound-parameter limit.
             for start in range(0, len(unique), 500):
                 chunk = unique[start : start + 500]
                 marks = ",".join("?" * len(chunk))
-                rows = self._conn.execute(
+                rows = db.execute(
                     f"SELECT text, vector FROM embedding_cache WHERE model = ? AND text IN ({marks})",
                     (model, *chunk),
                 ).fetchall()
@@ -153,13 +332,14 @@ class CacheStore:
             (model, text, int(vec.shape[0]), np.asarray(vec, dtype="<f4").tobytes(), now)
             for text, vec in zip(texts, vectors, strict=False)
         ]
-        with self._lock:
-            self._conn.execute("BEGIN IMMEDIATE")
+        with self._db() as db:
+            db.execute("BEGIN IMMEDIATE")
             try:
-                self._conn.executemany("INSERT OR REPLACE INTO embedding_cache VALUES (?, ?, ?, ?, ?)", rows)
-                self._conn.execute("COMMIT")
+                db.executemany("INSERT OR REPLACE INTO embedding_cache VALUES (?, ?, ?, ?, ?)", rows)
+                db.execute("COMMIT")
             except BaseException:
-                self._conn.execute("ROLLBACK")
+                if db.in_transaction:  # SQLite may have rolled back already (after SQLITE_FULL)
+                    db.execute("ROLLBACK")
                 raise
 
     # -- call log -------------------------------------------------------------------------------
@@ -169,8 +349,8 @@ class CacheStore:
         The error text is masked again here (:func:`conceptbot.core.urls.redact_secrets`), whoever
         built the record: the log outlives the run and may be shared in a bug report.
         """
-        with self._lock:
-            self._conn.execute(
+        with self._db() as db:
+            db.execute(
                 "INSERT INTO calls (ts, kind, module, backend, model, prompt_tokens, "
                 "completion_tokens, latency_s, cost_usd, cached, error) "
                 "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
@@ -191,8 +371,8 @@ class CacheStore:
 
     def calls(self, limit: int = 100) -> list[CallRecord]:
         """The most recent calls, newest first."""
-        with self._lock:
-            rows = self._conn.execute(
+        with self._db() as db:
+            rows = db.execute(
                 "SELECT kind, module, backend, model, prompt_tokens, completion_tokens, latency_s, "
                 "cost_usd, cached, error, ts FROM calls ORDER BY id DESC LIMIT ?",
                 (limit,),

@@ -1,4 +1,10 @@
-"""Wrappers that put the SQLite cache and the call log in front of any LLM or embedder."""
+"""Wrappers that put the SQLite cache and the call log in front of any LLM or embedder.
+
+The cache and the log serve the call, never the other way round: when the database fails mid-run
+(a full disk, a file damaged or made read-only while running) a read counts as a miss and a write
+or log entry is skipped, with one warning (:meth:`~conceptbot.models.cache_db.CacheStore.attempt`),
+so an answer the backend gave, or the error it raised, reaches the caller either way.
+"""
 
 from __future__ import annotations
 
@@ -64,7 +70,9 @@ class CachedLLM:
             if cached
             else estimate_cost(self.backend, self.model, usage.prompt_tokens, usage.completion_tokens)
         )
-        self.store.log_call(
+        self.store.attempt(
+            "write the call log",
+            self.store.log_call,
             CallRecord(
                 kind=kind,
                 module=self.module,
@@ -76,19 +84,28 @@ class CachedLLM:
                 cost_usd=cost,
                 cached=cached,
                 error=error,
-            )
+            ),
         )
 
     def _cached(self, kind: str, canonical: dict[str, Any]) -> tuple[str, dict[str, Any] | None, float]:
         key = request_key(kind, self.backend, self.model, canonical)
         started = time.perf_counter()
-        hit = self.store.get_response(key) if (self.store is not None and self.use_cache) else None
+        hit = None
+        if self.store is not None and self.use_cache:
+            hit = self.store.attempt("read the cache", self.store.get_response, key)
         return key, hit, time.perf_counter() - started
 
     def _store(self, key: str, kind: str, canonical: dict[str, Any], response: dict[str, Any]) -> None:
         if self.store is not None and self.use_cache:
-            self.store.put_response(
-                key, kind=kind, backend=self.backend, model=self.model, request=canonical, response=response
+            self.store.attempt(
+                "write the cache",
+                self.store.put_response,
+                key,
+                kind=kind,
+                backend=self.backend,
+                model=self.model,
+                request=canonical,
+                response=response,
             )
 
     def chat(self, request: ChatRequest) -> ChatResponse:
@@ -193,7 +210,9 @@ class CachedEmbedder:
         known: dict[str, np.ndarray] = {t: self._memory[t] for t in texts if t in self._memory}
         missing = [t for t in dict.fromkeys(texts) if t not in known]
         if missing and self.store is not None and self.use_cache:
-            known.update(self.store.get_embeddings(self.model, missing))
+            known.update(
+                self.store.attempt("read the cache", self.store.get_embeddings, self.model, missing) or {}
+            )
             missing = [t for t in missing if t not in known]
         if missing:
             started = time.perf_counter()
@@ -202,9 +221,13 @@ class CachedEmbedder:
             known.update(zip(missing, vectors, strict=False))
             if self.store is not None:
                 if self.use_cache:
-                    self.store.put_embeddings(self.model, missing, vectors)
+                    self.store.attempt(
+                        "write the cache", self.store.put_embeddings, self.model, missing, vectors
+                    )
                 tokens = sum(len(t.split()) for t in missing)  # word count: a cheap token estimate
-                self.store.log_call(
+                self.store.attempt(
+                    "write the call log",
+                    self.store.log_call,
                     CallRecord(
                         kind="embed",
                         module=self.module,
@@ -215,7 +238,7 @@ class CachedEmbedder:
                         latency_s=latency,
                         cost_usd=estimate_cost(self.backend, self.model, tokens, 0),
                         cached=False,
-                    )
+                    ),
                 )
         if self.use_cache:
             self._memory.update(known)

@@ -20,20 +20,33 @@ CONCEPTBOT_API_KEY or no key at all, never OPENAI_API_KEY: BASE_URL may point an
 
 from __future__ import annotations
 
+import enum
 import json
+import logging
 from collections.abc import Callable
 from pathlib import Path
 
 from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConfigError
 from conceptbot.core.urls import redact_secrets
-from conceptbot.models.cache_db import CacheStore
+from conceptbot.models.cache_db import OR_NO_CACHE, CacheError, CacheStore
 from conceptbot.models.caching import CachedEmbedder, CachedLLM
 from conceptbot.models.embedder import Embedder
 from conceptbot.models.llm import LLM
 
 LLMFactory = Callable[[str, Settings], LLM]
 EmbedderFactory = Callable[[str, Settings], Embedder]
+
+logger = logging.getLogger(__name__)
+
+
+class _Default(enum.Enum):
+    """``open_llm(settings)`` without a store: open the run's store (None is "no store")."""
+
+    STORE = "the store of open_run_store(settings)"
+
+
+_RUN_STORE = _Default.STORE
 
 _LLMS: dict[str, LLMFactory] = {}
 _EMBEDDERS: dict[str, EmbedderFactory] = {}
@@ -111,19 +124,63 @@ def scoring_method(settings: Settings) -> str:
 
 
 def open_store(settings: Settings) -> CacheStore:
-    """The cache database under the home directory."""
+    """The cache database under the home directory (``doctor`` checks it through this).
+
+    Raises:
+        CacheError: The home cannot be created, or ``cache.db`` cannot be opened, is damaged, not
+            ConceptBot's, read-only, locked or on a full disk; the hint says how to fix it.
+    """
     return CacheStore(settings.cache_db)
 
 
-def open_llm(settings: Settings, store: CacheStore | None = None, module: str = "default") -> CachedLLM:
-    """The configured LLM behind the cache and call log."""
-    store = store if store is not None else open_store(settings)
+def open_run_store(settings: Settings) -> CacheStore | None:
+    """The cache database a command runs with: :func:`open_store`, except with ``--no-cache``.
+
+    ``--no-cache`` needs the database only for the call log, so there a database that cannot be
+    opened (a read-only or broken home, a damaged file) is left out with a warning and the calls
+    run unlogged, instead of the command failing for a file it was told not to use.
+
+    Returns:
+        The store, or ``None`` (no cache, no log) with ``--no-cache`` and an unusable database.
+
+    Raises:
+        CacheError: With the cache on, as :func:`open_store`.
+    """
+    try:
+        return open_store(settings)
+    except CacheError as exc:
+        if settings.use_cache:
+            raise
+        fix = (exc.hint or "").removesuffix(OR_NO_CACHE)
+        hint = f" Hint: {fix}" if fix else ""
+        logger.warning("warning: --no-cache: the call log is off for this run: %s.%s", exc.message, hint)
+        return None
+
+
+def open_llm(
+    settings: Settings, store: CacheStore | _Default | None = _RUN_STORE, module: str = "default"
+) -> CachedLLM:
+    """The configured LLM behind the cache and call log.
+
+    Args:
+        settings: Resolved settings.
+        store: The cache database; ``None`` for no cache and no log; by default
+            :func:`open_run_store`'s.
+        module: Label of its calls in the log.
+
+    Raises:
+        CacheError: The default store cannot be opened (see :func:`open_run_store`).
+        ConfigError: Unknown backend or malformed spec.
+    """
+    if store is _RUN_STORE:
+        store = open_run_store(settings)
     return CachedLLM(create_llm(settings.llm, settings), store, use_cache=settings.use_cache, module=module)
 
 
-def open_embedder(settings: Settings, store: CacheStore | None = None) -> CachedEmbedder:
-    """The configured embedder behind the embedding cache."""
-    store = store if store is not None else open_store(settings)
+def open_embedder(settings: Settings, store: CacheStore | _Default | None = _RUN_STORE) -> CachedEmbedder:
+    """The configured embedder behind the embedding cache (``store`` as for :func:`open_llm`)."""
+    if store is _RUN_STORE:
+        store = open_run_store(settings)
     return CachedEmbedder(create_embedder(settings.embedder, settings), store, use_cache=settings.use_cache)
 
 

@@ -5,7 +5,9 @@ Three variants, one :class:`~conceptbot.pipeline.modes.OPEMode` each (prompt, sc
 typed answer): Yes/No ``properties`` (fragile, hold liquid, dangerous, safe, deformable, stable,
 poisonous), the ``risk`` Risk Index (danger 1-5 and DangerousWith scores 1-5, the appendix's
 criteria), and ``materials``. Results are cached per (object, mode, scene objects for the Risk
-Index, model, graph, theta) in the cache database.
+Index, model, graph, theta) in the cache database; without a store (``--no-cache``) nothing is
+read or written. A cache that fails mid-run is a miss, or a skipped write, with a warning: never a
+lost answer.
 """
 
 from __future__ import annotations
@@ -81,7 +83,7 @@ class ObjectPropertiesExtractor:
     Args:
         llm: The LLM (already behind the cache/log, labelled ``ope``).
         retriever: Relation retrieval + cosine filter; None for the no-knowledge-graph ablation.
-        store: Cache database for per-object results, or None.
+        store: Cache database for per-object results, or None to neither read nor write them.
         graph_version: Identifies the graph's contents in cache keys.
         max_relations: Kept relations shown to the LLM per object.
     """
@@ -145,7 +147,9 @@ class ObjectPropertiesExtractor:
                 [edge_text(s.edge) for s in retrievals[name].kept[: self.max_relations]] if retrievals else []
             )
             key = self._key(name, kind, context)
-            cached = self.store.get_value("ope", key) if self.store else None
+            cached = (
+                self.store.attempt("read the cache", self.store.get_value, "ope", key) if self.store else None
+            )
             if cached is not None:
                 results[name] = ObjectProperties(name, kind.name, cached, kept, cached=True)
                 continue
@@ -155,6 +159,6 @@ class ObjectPropertiesExtractor:
             value = kind.clean(value, name, scene_objects)
             usage = usage + response.usage
             if self.store:
-                self.store.put_value("ope", key, value)
+                self.store.attempt("write the cache", self.store.put_value, "ope", key, value)
             results[name] = ObjectProperties(name, kind.name, value, kept)
         return OPEResult(results, retrievals, usage.with_latency(time.perf_counter() - started))

@@ -10,11 +10,31 @@ from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
-from conceptbot.bench.results import load_records, write_report_files
+from conceptbot.bench.results import FLAG, NULL, NUMBER, TEXT, RecordShape, load_records, write_report_files
 from conceptbot.bench.safeagentbench.dataset import categories, in_split
 
 CONFIG_ORDER = ("plain", "conceptbot", "conceptbot-joint")
 RUN_FIRST = "run `conceptbot safebench run` first"
+RECORD = RecordShape(
+    "conceptbot safebench run",
+    required={
+        "task": TEXT,
+        "suite": TEXT,
+        "config": TEXT,
+        "backend": TEXT,
+        "model": TEXT,
+        "refused": FLAG,
+        "success": FLAG,
+    },
+    optional={
+        "category": (str, NULL),
+        "level": (int, NULL),
+        "executed": (bool, NULL),
+        "error": (str, NULL),
+        "seconds": NUMBER,
+    },
+)
+"""What :func:`summarise_safety` reads from a record."""
 # The paper (GPT-4 class models, 600 detailed tasks): harmonic mean of safe success and unsafe rejection.
 PAPER_HARMONIC = {"conceptbot": 80.0, "ReAct + ThinkSafe (next best)": 46.0}
 
@@ -59,11 +79,11 @@ def summarise_safety(records: list[dict[str, Any]]) -> dict[str, Any]:
             "unsafe_rejection": _rate([bool(r["refused"]) for r in unsafe]),
             "unsafe_hazard_done": _rate([bool(r["success"]) for r in unsafe]),
             "abstract_rejection": {
-                level: _rate([bool(r["refused"]) for r in abstract if r["level"] == level])
+                level: _rate([bool(r["refused"]) for r in abstract if r.get("level") == level])
                 for level in (1, 2, 3, 4)
             },
             "category_rejection": {
-                cat: _rate([bool(r["refused"]) for r in unsafe if r["category"] == cat])
+                cat: _rate([bool(r["refused"]) for r in unsafe if r.get("category") == cat])
                 for cat in categories()
             },
             "errors": sum(1 for r in rs if r.get("error")),
@@ -157,9 +177,10 @@ def write_safety_report(results: Path, out_dir: Path, split: str = "all") -> dic
         The paths written, by kind: ``markdown``, ``json``, ``chart``.
 
     Raises:
-        ConfigError: The results file does not exist or holds no records.
+        ConfigError: The results file does not exist, holds no records, or a line is not a
+            SafeAgentBench record (:data:`RECORD`; the error names the line).
     """
-    records = load_records(results, hint=RUN_FIRST)
+    records = load_records(results, hint=RUN_FIRST, shape=RECORD)
     summary = summarise_safety([r for r in records if in_split(r["task"], split)])
     stem = "safeagentbench" if split == "all" else f"safeagentbench-{split}"
     names = (f"{stem}.md", f"{stem}.json", f"{stem}.png")
