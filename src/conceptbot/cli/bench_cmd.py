@@ -19,6 +19,7 @@ from conceptbot.cli.bench_options import (
     workers_option,
 )
 from conceptbot.cli.context import AppContext, pass_app
+from conceptbot.cli.params import FiniteFloatRange
 from conceptbot.models.registry import scoring_method
 from conceptbot.systems import SYSTEMS, SystemOptions, build_system
 
@@ -60,7 +61,7 @@ def bench() -> None:
     "--temperature",
     default=0.0,
     show_default=True,
-    type=click.FloatRange(0.0, 2.0),
+    type=FiniteFloatRange(0.0, 2.0),
     help="Sampling temperature of the vote planner (log-probability scoring ignores it).",
 )
 @click.option("--seed", default=0, show_default=True, type=int, help="Base seed (trial i uses seed + i).")

@@ -31,6 +31,7 @@ from conceptbot.core.urls import redact_secrets
 from conceptbot.knowledge.registry import create_graph
 from conceptbot.knowledge.sqlite_store import SQLiteGraph
 from conceptbot.models import weights
+from conceptbot.models.cache_db import CacheError
 from conceptbot.models.llm import ChatRequest
 from conceptbot.models.registry import create_embedder, create_llm, open_store, scoring_method, split_spec
 
@@ -202,7 +203,9 @@ def check_cache(settings: Settings) -> Check:
         db = open_store(settings)
         migrations = db.applied_migrations()
         db.close()
-    except Exception as exc:  # sqlite3 errors, permissions
+    except CacheError as exc:  # names the file and the fix already
+        return Check("cache database", False, _one_line(exc))
+    except Exception as exc:  # anything else the check did not expect
         return Check("cache database", False, f"{settings.cache_db}: {exc}")
     return Check("cache database", True, f"{settings.cache_db} (schema v{migrations[-1][0]}, WAL)")
 

@@ -38,7 +38,11 @@ from conceptbot.core.text import terminal_safe
     metavar="SPEC",
     help="Knowledge graph: sqlite (default), conceptnet-api[:URL], conceptnet-api-cache.",
 )
-@click.option("--no-cache", is_flag=True, help="Neither read nor write the LLM and embedding caches.")
+@click.option(
+    "--no-cache",
+    is_flag=True,
+    help="Neither read nor write the caches (LLM replies, embeddings, OPE results); calls are still logged.",
+)
 @click.pass_context
 def cli(
     ctx: click.Context,

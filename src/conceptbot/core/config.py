@@ -54,7 +54,7 @@ class Settings:
         home: Directory for models, knowledge graph, caches and logs.
         llm: LLM backend spec.
         embedder: Embedder backend spec.
-        use_cache: Whether LLM and embedding caches are read and written.
+        use_cache: Whether the caches (LLM replies, embeddings, OPE results) are read and written.
         openai_api_key: Key for the official OpenAI API.
         openai_base_url: Base URL override for the ``openai`` backend.
         compatible_api_key: Key for ``openai-compatible`` servers.

@@ -13,7 +13,7 @@ from conceptbot.household.planner import (
 )
 from conceptbot.knowledge.registry import open_graph
 from conceptbot.models.cache_db import CacheStore
-from conceptbot.models.registry import open_embedder, open_llm, open_store
+from conceptbot.models.registry import open_embedder, open_llm, open_run_store
 from conceptbot.pipeline.retrieval import RelationRetriever, default_theta
 
 
@@ -29,7 +29,7 @@ def build_household_planner(settings: Settings, config: str) -> HouseholdPlanner
     Raises:
         ConfigError: Unknown configuration.
     """
-    store = open_store(settings)
+    store = open_run_store(settings)  # --no-cache with an unusable home: unlogged, with a warning
     if config == "plain":
         return PlainHouseholdPlanner(open_llm(settings, store, module="planner"))
     if config in ("conceptbot", "conceptbot-joint"):
@@ -46,7 +46,7 @@ def build_household_planner(settings: Settings, config: str) -> HouseholdPlanner
     raise ConfigError(f"unknown configuration {config!r}", hint=f"use one of {', '.join(HOUSEHOLD_CONFIGS)}")
 
 
-def _judge(settings: Settings, store: CacheStore) -> HarmJudge:
+def _judge(settings: Settings, store: CacheStore | None) -> HarmJudge:
     """The harm judge, with a backend instance per system prompt it asks with."""
     _, *others = dict.fromkeys(q.system for q in QUESTIONS)
     contexts = {system: open_llm(settings, store, module="judge") for system in others}
