@@ -50,6 +50,8 @@ class Judgement:
         p_yes: P(Yes) normalised over Yes/No.
         score: Calibrated log-odds of Yes (0: no more likely than for a content-free object).
         facts: The graph facts about the object put in the question.
+        scoring: How the backend scored the question (``logprob``, ``chat-logprobs``, ...; "" for an
+            object the request names, which is not asked about).
     """
 
     subject: str
@@ -57,6 +59,7 @@ class Judgement:
     p_yes: float
     score: float
     facts: tuple[str, ...] = ()
+    scoring: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form for the trace."""
@@ -173,20 +176,23 @@ class FactFinder:
     def _is_a(self, concept: str, classes: set[str], depth: int = 3) -> bool:
         """Whether an IsA chain of at most ``depth`` steps leads from ``concept`` to one of ``classes``."""
         assert self.retriever is not None
-        level = {concept}
+        level = [concept]
         seen = set(level)
         for _ in range(depth):
-            parents = set()
+            # Ordered, strongest edges first: the 12 parents followed are the same on every run (a
+            # set's order depends on the hash seed, and so did which parents were kept).
+            parents: dict[str, None] = {}
             for node in level:
                 found = self.retriever.graph.edges(node, ["IsA"], 40)
                 if found.match not in ("exact", "lemma"):
                     continue
                 head = (found.matched or node).lower()
-                parents |= {e.tail.lower() for e in found.edges if e.head.lower() in (node, head)}
-            if parents & classes:
+                tails = (e.tail.lower() for e in found.edges if e.head.lower() in (node, head))
+                parents.update(dict.fromkeys(tails))
+            if classes.intersection(parents):
                 return True
-            level = set(list(parents - seen)[:12])
-            seen |= level
+            level = [p for p in parents if p not in seen][:12]
+            seen.update(level)
             if not level:
                 return False
         return False
@@ -219,6 +225,9 @@ class FactFinder:
 class Decider:
     """Scores yes/no questions about objects with the LLM.
 
+    Holds no state that a question changes: one decider serves every thread of a ``bench --workers``
+    run, so how a question was scored travels with its :class:`Judgement` (``scoring``).
+
     Args:
         llm: An LLM that can score options (labelled ``decide``).
         facts: Where the graph facts come from.
@@ -227,14 +236,12 @@ class Decider:
     def __init__(self, llm: LLM, facts: FactFinder) -> None:
         self.llm = llm
         self.facts = facts
-        self.scoring = ""  # how the backend scored the last question (for the trace)
 
-    def _ask(self, user: str) -> tuple[float, float, Usage]:
+    def _ask(self, user: str) -> tuple[float, float, Usage, str]:
         messages = (Message("system", prompts.render("decide_system")), Message("user", user))
         scored = self.llm.score(ScoreRequest(options=ANSWERS, messages=messages))
-        self.scoring = scored.method
         p_yes, log_odds = _log_odds(scored.logprobs)
-        return p_yes, log_odds, scored.usage
+        return p_yes, log_odds, scored.usage, scored.method
 
     def _judge_each(
         self,
@@ -245,12 +252,12 @@ class Decider:
     ) -> tuple[list[Judgement], Usage]:
         """Ask ``question`` about the content-free object (``None``, no facts), then about each object
         with its facts; each score is the object's log-odds of Yes minus the content-free one's."""
-        _, prior, usage = self._ask(question(None, ()))
+        _, prior, usage, _ = self._ask(question(None, ()))
         judgements = []
         for obj in objects:
-            p_yes, log_odds, used = self._ask(question(obj, about[obj]))
+            p_yes, log_odds, used, method = self._ask(question(obj, about[obj]))
             usage = usage + used
-            judgements.append(Judgement(obj, label, p_yes, log_odds - prior, about[obj]))
+            judgements.append(Judgement(obj, label, p_yes, log_odds - prior, about[obj], method))
         return judgements, usage
 
     def moves(
@@ -372,7 +379,7 @@ class Decider:
                 move=what,
             )
 
-        _, prior, usage = self._ask(question(move.replace(obj, CONTENT_FREE, 1), ()))
-        p_safe, log_odds, used = self._ask(question(move, lines))
-        judgement = Judgement(move, "dangerous", 1.0 - p_safe, prior - log_odds, tuple(lines))
+        _, prior, usage, _ = self._ask(question(move.replace(obj, CONTENT_FREE, 1), ()))
+        p_safe, log_odds, used, method = self._ask(question(move, lines))
+        judgement = Judgement(move, "dangerous", 1.0 - p_safe, prior - log_odds, tuple(lines), method)
         return judgement, (usage + used).with_latency(time.perf_counter() - started)

@@ -206,10 +206,13 @@ class GoalPlanner:
         goal = GoalTrace(tuple(target_trace(t) for t in targets), stack)
         observer.event("goal", goal.to_dict())
         ranked, decisions, usage["decide"] = self._decide(request, scene, targets, stack, observer)
+        # How the backend scored this plan's questions, for the steps: kept per plan (the planner
+        # object is shared between threads), the last question's method as before.
+        asked = [j.scoring for js in ranked.values() for j in js if j.scoring]
         observer.event("decisions", {"decisions": [d.to_dict() for d in decisions]})
         pile: StackTrace | None = None
         if stack:
-            moves, pile = self._stack(request, scene, ranked, usage)
+            moves, pile = self._stack(request, scene, ranked, usage, asked)
             ranked = {}
         blocked: set[tuple[str, str]] = set()
         checks: dict[tuple[str, str], RiskCheck] = {}
@@ -229,7 +232,9 @@ class GoalPlanner:
             handed = [o for o, t in fresh if is_vulnerable(t)]
             self._properties(request, scene, handed, properties, usage, observer)
             for obj, target in fresh:
-                checks[(obj, target)] = self._check(request, scene, obj, target, properties, usage, observer)
+                checks[(obj, target)] = self._check(
+                    request, scene, obj, target, properties, usage, observer, asked
+                )
             dropped = {m for m in fresh if checks[m].dropped}
             if not dropped:
                 break
@@ -239,7 +244,7 @@ class GoalPlanner:
         risk = tuple(checks.values())
         vetoes = tuple(c.veto for c in risk if c.veto is not None)
         observer.event("risk", {"checks": [c.to_dict() for c in risk]})
-        steps = self._steps(moves, ranked, scene, properties)
+        steps = self._steps(moves, ranked, scene, properties, asked[-1] if asked else "")
         for step in steps:
             observer.event("step", step.to_dict())
         refused = not moves and bool(blocked)
@@ -355,6 +360,7 @@ class GoalPlanner:
         properties: dict[str, ObjectProperties],
         usage: dict[str, Usage],
         observer: Observer,
+        asked: list[str],
     ) -> RiskCheck:
         """The risk decision and the affordance of one move.
 
@@ -375,6 +381,7 @@ class GoalPlanner:
         except (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError) as exc:
             return _vetoed(_failed(obj, target, exc.message), move, ope, s_aff)
         usage["risk"] = usage["risk"] + used
+        asked.append(judgement.scoring)
         if not (math.isfinite(judgement.score) and math.isfinite(judgement.p_yes)):
             return _vetoed(_failed(obj, target, "the backend gave a non-finite score"), move, ope, s_aff)
         rated = _danger(properties.get(obj))
@@ -404,6 +411,7 @@ class GoalPlanner:
         scene: Scene,
         ranked: dict[str, list[Judgement]],
         usage: dict[str, Usage],
+        asked: list[str],
     ) -> tuple[list[tuple[str, str]], StackTrace | None]:
         """Bottom-up moves for a pile of the objects that can both be moved and carry another, and
         the pile's order for the trace (None when there is nothing to pile)."""
@@ -415,6 +423,7 @@ class GoalPlanner:
             return [], None
         judgements, _, used = self.decider.fits(request, BASE, items, scene)
         usage["decide"] = usage["decide"] + used
+        asked.extend(j.scoring for j in judgements)
 
         def volume(name: str) -> float:
             size = scene.get(name).size_m  # type: ignore[union-attr]
@@ -431,8 +440,10 @@ class GoalPlanner:
         ranked: dict[str, list[Judgement]],
         scene: Scene,
         properties: dict[str, ObjectProperties],
+        scoring: str,
     ) -> list[Step]:
-        """One step per move; its candidates are the target's best objects (for the CLI and the page)."""
+        """One step per move; its candidates are the target's best objects (for the CLI and the page);
+        ``scoring`` is how the backend scored the plan's questions."""
         steps = []
         for number, (obj, target) in enumerate(moves, 1):
             chosen = str(Action(obj, target))
@@ -444,5 +455,5 @@ class GoalPlanner:
                 candidates.append(CandidateScore(str(action), p, s_aff, p * s_aff, factors))
             if not any(c.action == chosen for c in candidates):
                 candidates.insert(0, CandidateScore(chosen, 1.0, 1.0, 1.0, {}))
-            steps.append(Step(number, chosen, tuple(candidates), (), METHOD, self.decider.scoring))
+            steps.append(Step(number, chosen, tuple(candidates), (), METHOD, scoring))
         return steps
