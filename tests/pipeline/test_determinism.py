@@ -18,8 +18,8 @@ from conceptbot.core.scene import scene_from_dict
 from conceptbot.models.fake import FakeEmbedder
 from conceptbot.pipeline.decide import Decider, FactFinder
 from conceptbot.pipeline.retrieval import RelationRetriever
-from tests.pipeline.fakes import DictGraph
 from tests.pipeline.determinism_plan import HashLLM, graph_edges
+from tests.pipeline.fakes import DictGraph
 
 ROOT = Path(__file__).resolve().parents[2]
 
