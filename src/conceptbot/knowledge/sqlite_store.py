@@ -74,12 +74,20 @@ class GraphBuilder:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.tmp.unlink(missing_ok=True)
         self._started = time.time()
-        self._conn = sqlite3.connect(self.tmp, isolation_level=None)
-        # A private temp file: durability comes from the final fsync + rename, not the journal.
-        self._conn.execute("PRAGMA journal_mode=OFF")
-        self._conn.execute("PRAGMA synchronous=OFF")
-        self._conn.executescript(_SCHEMA)
-        self._conn.execute("BEGIN")
+        try:
+            self._conn = sqlite3.connect(self.tmp, isolation_level=None)
+            # A private temp file: durability comes from the final fsync + rename, not the journal.
+            self._conn.execute("PRAGMA journal_mode=OFF")
+            self._conn.execute("PRAGMA synchronous=OFF")
+            self._conn.executescript(_SCHEMA)
+            self._conn.execute("BEGIN")
+        except BaseException:
+            # Interrupted before the block began (SIGTERM right after the file appeared): __exit__
+            # will not run, so the temporary file is removed here.
+            if self._conn is not None:
+                self._conn.close()
+            self.tmp.unlink(missing_ok=True)
+            raise
         return self
 
     def _id(self, table: dict[str, int], name: str) -> int:
