@@ -15,7 +15,6 @@ install first removes the files of installs that are no longer running (:func:`c
 
 from __future__ import annotations
 
-import os
 import re
 import time
 from collections.abc import Callable
@@ -24,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from conceptbot.core.errors import ConfigError, ImportDataError
+from conceptbot.core.stale import remove_stale
 from conceptbot.knowledge import sources
 from conceptbot.knowledge.importers.conceptnet5 import OFFICIAL_URL, ConceptNet5Stats, iter_conceptnet5_edges
 from conceptbot.knowledge.importers.omcs import OmcsStats, iter_omcs_edges
@@ -62,21 +62,6 @@ class InstallReport:
     """``(path, size in bytes)`` of each stale build file of an earlier install that was removed."""
 
 
-def _pid_running(pid: int) -> bool:
-    """Whether process ``pid`` exists (on Windows: assumed, the file's age decides alone)."""
-    if pid == os.getpid():
-        return True
-    if os.name == "nt":
-        return True  # os.kill(pid, 0) would send it CTRL_C_EVENT there
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:
-        return True  # it exists, owned by another user
-    return True
-
-
 def clean_stale_builds(db_path: Path, *, now: float | None = None) -> list[tuple[str, int]]:
     """Delete the build files that interrupted installs of ``db_path`` left beside it.
 
@@ -91,24 +76,14 @@ def clean_stale_builds(db_path: Path, *, now: float | None = None) -> list[tuple
     Returns:
         ``(path, size in bytes)`` of every file removed.
     """
-    folder = Path(db_path).parent
-    if not folder.is_dir():
-        return []
-    now = time.time() if now is None else now
-    removed: list[tuple[str, int]] = []
-    for path in sorted(folder.iterdir()):
-        match = _BUILDING.match(path.name)
-        if match is None or match.group("name") != Path(db_path).name or not path.is_file():
-            continue
-        try:
-            stat = path.stat()
-            if _pid_running(int(match.group("pid"))) and now - stat.st_mtime < STALE_AFTER_S:
-                continue
-            path.unlink()
-        except FileNotFoundError:
-            continue  # its own install finished (or failed) meanwhile
-        removed.append((str(path), stat.st_size))
-    return removed
+    name = Path(db_path).name
+
+    def pid_of(file_name: str) -> int | None:
+        match = _BUILDING.match(file_name)
+        return int(match.group("pid")) if match is not None and match.group("name") == name else None
+
+    removed = remove_stale(Path(db_path).parent, pid_of, STALE_AFTER_S, now=now)
+    return [(str(path), size) for path, size in removed]
 
 
 def _current_install(db_path: Path) -> str | None:

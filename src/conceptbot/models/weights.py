@@ -18,7 +18,6 @@ import importlib.util
 import json
 import os
 import re
-import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from importlib import resources
@@ -26,6 +25,7 @@ from pathlib import Path
 from typing import Any, BinaryIO
 
 from conceptbot.core.errors import ConfigError, ModelCorruptError, ModelNotInstalledError
+from conceptbot.core.stale import remove_stale
 
 CHUNK = 8 * 1024 * 1024
 # A temporary file untouched this long is stale even if its pid now belongs to another process:
@@ -149,20 +149,6 @@ def _write_stamp(path: Path, sha: str) -> None:
     os.replace(tmp, _stamp_path(path))
 
 
-def _pid_running(pid: int) -> bool:
-    if pid == os.getpid():
-        return True
-    if os.name == "nt":
-        return True  # os.kill(pid, 0) would send CTRL_C_EVENT there; rely on the file's age alone
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:
-        return True  # exists, but owned by another user
-    return True
-
-
 def clean_stale_files(models_dir: Path, *, now: float | None = None) -> list[tuple[Path, int]]:
     """Delete temporary files that interrupted installs left in the models folder.
 
@@ -177,25 +163,12 @@ def clean_stale_files(models_dir: Path, *, now: float | None = None) -> list[tup
     Returns:
         ``(path, size in bytes)`` of every file removed.
     """
-    folder = Path(models_dir)
-    if not folder.is_dir():
-        return []
-    now = time.time() if now is None else now
-    removed: list[tuple[Path, int]] = []
-    for path in sorted(folder.iterdir()):
-        match = _TEMP_NAME.match(path.name)
-        if match is None or not path.is_file():
-            continue
-        pid = int(match.group("pid") or match.group("stamp_pid"))
-        try:
-            stat = path.stat()
-            if _pid_running(pid) and now - stat.st_mtime < STALE_AFTER_S:
-                continue
-            path.unlink()
-        except FileNotFoundError:
-            continue  # its own install finished meanwhile
-        removed.append((path, stat.st_size))
-    return removed
+
+    def pid_of(name: str) -> int | None:
+        match = _TEMP_NAME.match(name)
+        return None if match is None else int(match.group("pid") or match.group("stamp_pid"))
+
+    return remove_stale(Path(models_dir), pid_of, STALE_AFTER_S, now=now)
 
 
 def install(
