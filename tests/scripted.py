@@ -2,8 +2,9 @@
 
 The paper's pipeline (``--config paper``, and what ``conceptbot`` runs on a backend that cannot
 score) asks: one OPE answer per object, URP's keywords, URP's interpretation, then ``n`` votes per
-planning step. :func:`paper_replies` writes such a file; :data:`TINY_SCENE` is the five-name scene
-the hardening reproductions use.
+planning step. :func:`paper_replies` lists such replies (the OPE answers from
+``tests.pipeline.fakes.risk_reply`` / ``properties_reply``); :data:`TINY_SCENE` is the five-name
+scene the hardening reproductions use.
 """
 
 from __future__ import annotations
@@ -13,27 +14,13 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from tests.pipeline.fakes import urp_reply
+
 TINY_SCENE: dict[str, Any] = {
     "objects": ["apple", "knife", "bowl", "user", "child"],
     "pickable_objects": ["apple", "knife"],
     "destinations": ["bowl", "user", "child"],
 }
-PROPERTIES_NONE = {
-    "object": "x",
-    "fragile": "No",
-    "hold_liquid": "No",
-    "dangerous": "No",
-    "safe": "Yes",
-    "deformable": "No",
-    "stable": "Yes",
-    "poisonous": "No",
-}
-
-
-def risk_answer(danger: int = 1, dangerous_with: Sequence[tuple[str, int]] = (), reason: str = "r") -> str:
-    """One OPE answer in the Risk Index mode."""
-    partners = [{"object": o, "score": s} for o, s in dangerous_with]
-    return json.dumps({"object": "x", "dangerous": danger, "dangerous_with": partners, "reason": reason})
 
 
 def paper_replies(
@@ -55,8 +42,7 @@ def paper_replies(
         reasoning: URP's reasoning text.
         n: Votes per step.
     """
-    urp = {"reasoning": reasoning, "refuse": False, "refusal_reason": "", "commands": list(commands)}
-    replies = [*ope, json.dumps({"keywords": list(keywords)}), json.dumps(urp)]
+    replies = [*ope, json.dumps({"keywords": list(keywords)}), urp_reply(list(commands), reasoning)]
     for vote in votes:
         replies += [vote] * n
     return replies

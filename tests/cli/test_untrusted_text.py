@@ -17,7 +17,8 @@ import pytest
 
 from tests.cli.inprocess import Outcome, assert_terminal_safe, invoke
 from tests.misbehaving import MisbehavingServer
-from tests.scripted import TINY_SCENE, paper_replies, risk_answer, write_replies, write_scene
+from tests.pipeline.fakes import risk_reply
+from tests.scripted import TINY_SCENE, paper_replies, write_replies, write_scene
 
 # Rich markup, emoji codes, terminal escapes (OSC title and hyperlink, CSI clear/colour/alternate
 # screen, DCS, 8-bit CSI/OSC), lone controls, bidi overrides, and harmless look-alikes.
@@ -82,7 +83,7 @@ def _replies(names: list[str], reasoning: str, votes: list[list[str]], reason: s
         "refusal_reason": "",
         "commands": [ACTION.format(names[0])],
     }
-    replies = [risk_answer(reason=reason) for _ in names]
+    replies = [risk_reply(reason=reason) for _ in names]
     replies += [json.dumps({"keywords": [names[0]]}), json.dumps(urp)]
     for step in votes:
         replies += step
@@ -179,7 +180,7 @@ def test_the_goal_planners_trace_shows_markup_and_undecided_risk_checks(
 
 def test_the_step_planners_trace_names_its_vetoes(fresh_home: Home, tmp_path: Path) -> None:
     ope = [
-        risk_answer(5, [("child", 5)]) if name == "knife" else risk_answer() for name in TINY_SCENE["objects"]
+        risk_reply(5, [("child", 5)]) if name == "knife" else risk_reply() for name in TINY_SCENE["objects"]
     ]
     move = ACTION.format("knife").replace("user", "child")
     replies = paper_replies(ope, [move], [move, "done()"], keywords=("knife",))

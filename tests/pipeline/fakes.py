@@ -80,13 +80,13 @@ def urp_reply(commands: list[str], reasoning: str = "because", refuse: bool = Fa
     return json.dumps({"reasoning": reasoning, "refuse": refuse, "refusal_reason": why, "commands": commands})
 
 
-def risk_reply(danger: int, partners: list[tuple[str, int]] | None = None) -> str:
+def risk_reply(danger: int = 1, partners: list[tuple[str, int]] | None = None, reason: str = "r") -> str:
     """An OPE Risk Index JSON reply."""
     return json.dumps(
         {
             "object": "x",
             "dangerous": danger,
-            "reason": "r",
+            "reason": reason,
             "dangerous_with": [{"object": o, "score": sc} for o, sc in (partners or [])],
         }
     )
