@@ -21,7 +21,7 @@ from collections import Counter
 from dataclasses import replace
 
 from conceptbot.core.observe import SILENT, Observer
-from conceptbot.core.plan import DONE, Action, Feedback, InvalidActionError, parse_action
+from conceptbot.core.plan import DONE, Action, Feedback, InvalidActionError, parse_action, valid_actions
 from conceptbot.core.scene import Scene
 from conceptbot.core.trace import Veto
 from conceptbot.core.usage import Usage
@@ -206,6 +206,12 @@ class Planner:
             guidance = "\n".join([guidance, *feedback.script_lines()]).strip()
         last: list[float] = []  # the step's S_LLM, for telling which vetoes changed the choice
         vetoed: dict[str, Veto] = {}  # vetoes of moves the LLM ranked first at their step
+        # A veto depends on the move and OPE's answers only, so each move is judged once per plan.
+        vetoes = {
+            str(a): v
+            for a in valid_actions(scene, include_done=False)
+            if (v := self.hazards.veto(a.obj or "", a.target or "", properties)) is not None
+        }
 
         def llm_scores(candidates: list[Action], history: list[str], index: int) -> LLMScores:
             messages = self.messages(request, scene, properties, guidance, history)
@@ -218,7 +224,7 @@ class Planner:
             found = [affordance(a, scene, properties, history, self.gripper) for a in candidates]
             top = max(last, default=0.0)
             for i, action in enumerate(candidates):
-                veto = self._veto(action, properties)
+                veto = vetoes.get(str(action))
                 if veto is None:
                     continue
                 # Vetoed before the relative scaling, so a vetoed move is never the step's best S_prop.
@@ -238,9 +244,3 @@ class Planner:
             observer=observer,
         )
         return replace(result, vetoes=tuple(vetoed.values()))
-
-    def _veto(self, action: Action, properties: dict[str, ObjectProperties]) -> Veto | None:
-        if action.is_done:
-            return None
-        assert action.obj is not None and action.target is not None
-        return self.hazards.veto(action.obj, action.target, properties)
