@@ -33,11 +33,12 @@ def test_forced_risk() -> None:
 
 # The system prompts are part of OPE's cache keys and of the LLM response cache: a change to one
 # (its file, or a constant it is filled from) makes every cached answer stale and moves the
-# benchmarks. Update a hash only for a deliberate prompt change.
+# benchmarks. Update a hash only for a deliberate prompt change (issue 33 replaced the risk and
+# materials examples that mirrored test items).
 PROMPT_SHA256 = {
     modes.PROPERTIES: "75c8f8c622d9bb1c3258a61d09205d4e6e74a2688bccdc10634da386524710ab",
-    modes.RISK: "abc27e6e7a30b1da12c68fd382152381688e45460db91aa8b9164721299f53b9",
-    modes.MATERIALS: "0ec33ff7b12cad9227668d6a65ce0eb1bb35177a30f92641900db2d685432fea",
+    modes.RISK: "8cad876b6cf1e2e87152523602054dc43c0be9f915feb4d7eb686a1954b6a2e2",
+    modes.MATERIALS: "e427967f163b9d9f135d61d24fce48a8c9b076c3e817ae3ca55a6132dbf4a4dd",
 }
 
 
