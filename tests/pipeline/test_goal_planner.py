@@ -8,13 +8,15 @@ import json
 import pytest
 
 from conceptbot.core.scene import scene_from_dict
+from conceptbot.core.usage import Usage
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.conceptbot import ConceptBot
 from conceptbot.pipeline.decide import Decider, FactFinder
 from conceptbot.pipeline.goal_planner import GoalPlanner, is_person
+from conceptbot.pipeline.ope import ObjectProperties, OPEResult
 from conceptbot.pipeline.retrieval import RelationRetriever
 from conceptbot.pipeline.targets import ALL, TargetFinder, is_stacking, mentions
-from tests.pipeline.fakes import DictGraph
+from tests.pipeline.fakes import DictGraph, risk_reply
 
 SCENE = scene_from_dict(
     {
@@ -190,8 +192,81 @@ def test_an_unsafe_move_is_dropped_and_the_target_takes_its_next_best_object() -
     result = _planner(scores).plan("Give my son something to cut paper", SCENE)
     assert result.actions == ["pick_and_place(safety scissors, child)", "done()"]
     dropped = [r for r in result.trace.risk or () if r.dropped]
-    assert [(r.object, r.why) for r in dropped] == [("scissors", "judged dangerous")]
+    # Without OPE (an ablation) the flag cannot be checked: the move is dropped, and says so.
+    assert [(r.object, r.why, r.reason) for r in dropped] == [
+        ("scissors", "judged dangerous", "the risk question flagged it (no OPE rating to check it)")
+    ]
     assert result.steps[0].chosen == "pick_and_place(safety scissors, child)" and not result.refused
+
+
+class RatingOPE:
+    """OPE that answers the Risk Index from a table (object -> (danger, partners)) and counts calls."""
+
+    def __init__(self, ratings: dict[str, tuple[int, list[tuple[str, int]]]]) -> None:
+        self.ratings, self.rated = ratings, []
+
+    def run(self, objects, mode, request, scene_objects=None) -> OPEResult:
+        self.rated += list(objects)
+        found = {
+            o: ObjectProperties(o, "risk", json.loads(risk_reply(*self.ratings.get(o, (1, [])))))
+            for o in objects
+        }
+        return OPEResult(found, {}, Usage(calls=len(objects)))
+
+
+TOYS = scene_from_dict({"pickable_objects": ["crayons", "box cutter"], "destinations": ["toddler", "shelf"]})
+
+
+def _toddler_plan(ratings: dict) -> tuple[object, RatingOPE]:
+    scores = [
+        PRIOR,  # content-free object for "give ... to the toddler"
+        [-0.1, -3.0],  # crayons: yes
+        [-3.0, -0.1],  # box cutter: no
+        [-1.0, -3.0],  # name ranking: the request
+        [-2.0, -2.0],  # and neutral
+        PRIOR,  # risk: giving "the object" to the toddler
+        UNSAFE,  # the question flags the crayons
+    ]
+    llm = FakeLLM(scores=scores)
+    ope = RatingOPE(ratings)
+    planner = GoalPlanner(TargetFinder(llm, is_person), Decider(llm, FactFinder(None)), ope)
+    return planner.plan("The toddler is bored; give her something to draw with", TOYS), ope
+
+
+def test_a_harmless_hand_over_flagged_by_the_question_alone_is_kept() -> None:
+    # Issue 33, item 4: a move is dropped only for a reason the trace names.
+    result, ope = _toddler_plan({"crayons": (1, [])})
+    assert result.actions == ["pick_and_place(crayons, toddler)", "done()"] and not result.refused
+    [check] = result.trace.risk
+    assert not check.dropped and check.why == check.reason == "" and ope.rated == ["crayons"]
+
+
+def test_a_flagged_move_is_dropped_for_what_ope_names() -> None:
+    result, _ = _toddler_plan({"crayons": (4, []), "box cutter": (5, [])})
+    check, replacement = result.trace.risk
+    assert check.dropped and check.reason == "OPE rates the crayons 4/5 dangerous for the toddler"
+    assert replacement.object == "box cutter" and replacement.why == "vetoed"
+    assert result.refused and "OPE rates the crayons 4/5" in (result.reason or "")
+
+
+def test_a_place_move_is_dropped_for_ope_rating_it_with_the_destination() -> None:
+    scene = scene_from_dict({"pickable_objects": ["foil tray"], "destinations": ["microwave"]})
+    scores = [PRIOR, UNSAFE]  # the named move is asked about once: flagged
+    llm = FakeLLM(scores=scores)
+    ope = RatingOPE({"foil tray": (2, [("microwave", 5)])})
+    planner = GoalPlanner(TargetFinder(llm, is_person), Decider(llm, FactFinder(None)), ope)
+    result = planner.plan("Put the foil tray in the microwave", scene)
+    [check] = result.trace.risk
+    assert check.reason == "OPE rates the foil tray 5/5 dangerous with the microwave" and result.refused
+    ope.ratings["foil tray"] = (2, [("microwave", 2)])
+    llm = FakeLLM(scores=scores)
+    planner = GoalPlanner(
+        TargetFinder(llm, is_person), Decider(llm, FactFinder(None)), RatingOPE(ope.ratings)
+    )
+    assert (
+        planner.plan("Put the foil tray in the microwave", scene).actions[0]
+        == "pick_and_place(foil tray, microwave)"
+    )
 
 
 def test_a_target_taking_one_object_ranks_by_the_decision_and_the_name_ranking_together() -> None:

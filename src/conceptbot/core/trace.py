@@ -239,6 +239,10 @@ class JudgementTrace:
         score: Calibrated log-odds of Yes (3 decimals).
         facts: The graph facts put in the question.
         name_score: Its score in the name ranking, where one was made (3 decimals), else None.
+        model: The model's own calibrated log-odds (3 decimals) where ``score`` combines it with the
+            graph's evidence (:mod:`conceptbot.pipeline.combine`), else None.
+        evidence: The evidence features that are set and the statements that set them
+            (``{"features": {...}, "statements": [...]}``), where the score is combined, else None.
     """
 
     object: str
@@ -246,6 +250,8 @@ class JudgementTrace:
     score: float
     facts: tuple[str, ...] = ()
     name_score: float | None = None
+    model: float | None = None
+    evidence: Mapping[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (``name_score`` only where there is one)."""
@@ -257,6 +263,13 @@ class JudgementTrace:
         }
         if self.name_score is not None:
             data["name_score"] = self.name_score
+        if self.model is not None:
+            data["model"] = self.model
+        if self.evidence is not None:
+            data["evidence"] = {
+                "features": dict(self.evidence["features"]),
+                "statements": list(self.evidence["statements"]),
+            }
         return data
 
 
@@ -350,6 +363,8 @@ class RiskCheck:
         why: ``vetoed`` (its evidence names a hazard for the recipient, or its risk decision failed:
             ``veto`` says which), ``judged dangerous``, ``not feasible`` or "".
         veto: The veto (in the JSON: its statement), or None.
+        reason: For ``judged dangerous``: what names the danger ("OPE rates the foil tray 5/5
+            dangerous with the microwave"); "" otherwise (in the JSON only where set).
     """
 
     object: str
@@ -363,6 +378,7 @@ class RiskCheck:
     dropped: bool
     why: str
     veto: Veto | None = None
+    reason: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form."""
@@ -378,6 +394,7 @@ class RiskCheck:
             "dropped": self.dropped,
             "why": self.why,
             "veto": self.veto.statement if self.veto is not None else None,
+            **({"reason": self.reason} if self.reason else {}),
         }
 
 

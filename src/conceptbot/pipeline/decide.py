@@ -19,13 +19,15 @@ import math
 import re
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, Message, ScoreRequest
 from conceptbot.pipeline import prompts
+from conceptbot.pipeline.combine import Combination, sigmoid
+from conceptbot.pipeline.evidence import Evidence, GraphEvidence
 from conceptbot.pipeline.retrieval import RelationRetriever, edge_text
 from conceptbot.pipeline.targets import tokens, words
 
@@ -52,6 +54,9 @@ class Judgement:
         facts: The graph facts about the object put in the question.
         scoring: How the backend scored the question (``logprob``, ``chat-logprobs``, ...; "" for an
             object the request names, which is not asked about).
+        model: Where ``score`` combines the model's answer with the graph's evidence
+            (:mod:`conceptbot.pipeline.combine`): the model's own calibrated log-odds; else None.
+        evidence: The evidence that was combined, else None.
     """
 
     subject: str
@@ -60,15 +65,22 @@ class Judgement:
     score: float
     facts: tuple[str, ...] = ()
     scoring: str = ""
+    model: float | None = None
+    evidence: Evidence | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON form for the trace."""
-        return {
+        """JSON form for the trace (``model`` and ``evidence`` only where the score is combined)."""
+        data: dict[str, Any] = {
             "object": self.subject,
             "p_yes": round(self.p_yes, 4),
             "score": round(self.score, 3),
             "facts": list(self.facts),
         }
+        if self.model is not None:
+            data["model"] = round(self.model, 3)
+        if self.evidence is not None:
+            data["evidence"] = self.evidence.to_dict()
+        return data
 
 
 def _log_odds(logprobs: Sequence[float]) -> tuple[float, float]:
@@ -231,11 +243,23 @@ class Decider:
     Args:
         llm: An LLM that can score options (labelled ``decide``).
         facts: Where the graph facts come from.
+        evidence: Reads the graph's evidence for a criterion decision (:meth:`fits`); None: the
+            model's answer alone.
+        combination: The fitted combination of the model's answer and the evidence; None: the
+            model's answer alone.
     """
 
-    def __init__(self, llm: LLM, facts: FactFinder) -> None:
+    def __init__(
+        self,
+        llm: LLM,
+        facts: FactFinder,
+        evidence: GraphEvidence | None = None,
+        combination: Combination | None = None,
+    ) -> None:
         self.llm = llm
         self.facts = facts
+        self.evidence = evidence
+        self.combination = combination
 
     def _ask(self, user: str) -> tuple[float, float, Usage, str]:
         messages = (Message("system", prompts.render("decide_system")), Message("user", user))
@@ -294,14 +318,23 @@ class Decider:
         return judgements, context, usage.with_latency(time.perf_counter() - started)
 
     def fits(
-        self, request: str, what: str, objects: Sequence[str], scene: Scene, dish: str = ""
+        self,
+        request: str,
+        what: str,
+        objects: Sequence[str],
+        scene: Scene,
+        dish: str = "",
+        combine: bool = True,
     ) -> tuple[list[Judgement], tuple[str, ...], Usage]:
-        """Whether each object fits a description ("a sturdy base for a stack"), calibrated.
+        """Whether each object fits a description ("poisonous", "an ingredient of guacamole"),
+        calibrated, and where the decider has a combination, combined with the graph's evidence.
 
         Args:
             dish: The dish whose ingredients are decided: the question becomes "is the lime an
                 ingredient of guacamole?" (it ranked ingredients better than the description form
                 on the dev split) with the dish's definition in it.
+            combine: Combine with the evidence (False: the model's calibrated answer only, for a
+                description that is no property to look up, such as a good base for a stack).
 
         Returns:
             The judgements, the facts every question carried (the dish's definition), and usage.
@@ -313,7 +346,7 @@ class Decider:
         context = self.facts.context(dish, request, dish) if dish else ()
         context_text = ("Facts: " + "; ".join(context) + ".\n") if context else ""
 
-        def question(obj: str | None, facts: Sequence[str]) -> str:
+        def question(obj: str | None, facts: Sequence[str], context_text: str = context_text) -> str:
             return prompts.render(
                 "ingredient_user" if dish else "decide_user",
                 request=request,
@@ -325,7 +358,26 @@ class Decider:
             )
 
         judgements, usage = self._judge_each(objects, about, what, question)
+        if combine and self.combination is not None:
+            plain: dict[str, float] = {j.subject: j.score for j in judgements}
+            if self.combination.uses_plain and self.facts.retriever is not None:
+                # The same question without any graph facts: a second reading of the model's own.
+                bare, used = self._judge_each(
+                    objects, {o: () for o in objects}, what, lambda o, f: question(o, f, "")
+                )
+                usage = usage + used
+                plain = {j.subject: j.score for j in bare}
+            judgements = [self._combined(j, what, plain[j.subject]) for j in judgements]
         return judgements, context, usage.with_latency(time.perf_counter() - started)
+
+    def _combined(self, judgement: Judgement, criterion: str, plain: float) -> Judgement:
+        """The judgement with its score replaced by the fitted combination of the model's reading
+        and the graph's evidence (the model's own score kept beside it)."""
+        assert self.combination is not None
+        evidence = self.evidence.read(judgement.subject, criterion) if self.evidence is not None else None
+        model = judgement.score
+        score = self.combination.log_odds({"model": model, "plain": plain}, evidence)
+        return replace(judgement, p_yes=sigmoid(score), score=score, model=model, evidence=evidence)
 
     def name_scores(self, request: str, move: str, objects: Sequence[str]) -> tuple[dict[str, float], Usage]:
         """How much the request raises the probability of naming each object: "which object should

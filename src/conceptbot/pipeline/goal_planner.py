@@ -11,13 +11,16 @@
    object above ``fit``. An object two targets want goes where it scored best.
 3. Stacking orders the objects by how good a base each makes (a decision too) and puts each on the
    one below.
-4. Constraints: each move's affordance (detection confidence) and a risk decision ("is it safe to
-   give the scissors to the child?", calibrated), and for a move to a child or an animal OPE's
-   Risk Index of the object (the paper's 1-5 danger rating). A move judged unsafe is dropped and
-   the target takes its next best object; when every move is dropped the plan is a refusal. The
-   trace says why. Before any score, a move whose evidence names a hazard for its recipient is
-   vetoed (:mod:`conceptbot.pipeline.hazards`), and a risk decision that cannot be made (a backend
-   error, a non-finite score) drops the move: safety fails closed.
+4. Constraints: each move's affordance (detection confidence) and a risk decision. A move is
+   dropped only for a reason the trace names: a veto (below), or OPE's Risk Index (the paper's 1-5
+   ratings) rating the object 4/5 or more with the destination, or for a child or an animal the
+   object itself. The calibrated question "is it safe to give the scissors to the child?" decides
+   which moves OPE is asked about (besides every hand-over to a child or an animal), not whether a
+   move is dropped: alone it flagged harmless hand-overs (crayons for a toddler). A dropped move's
+   target takes its next best object; when every move is dropped the plan is a refusal. Before
+   any score, a move whose evidence names a hazard for its recipient is vetoed
+   (:mod:`conceptbot.pipeline.hazards`), and a risk decision that cannot be made (a backend error,
+   a non-finite score) drops the move: safety fails closed.
 
 The paper's step-by-step planner stays available (:mod:`conceptbot.pipeline.planner`).
 """
@@ -44,6 +47,7 @@ from conceptbot.pipeline.affordance import Gripper, affordance
 from conceptbot.pipeline.decide import Decider, Judgement
 from conceptbot.pipeline.hazards import HazardCheck, is_person, is_vulnerable
 from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
+from conceptbot.pipeline.ope_answers import RiskIndex
 from conceptbot.pipeline.targets import ALL, Target, TargetFinder, is_stacking, mentions
 from conceptbot.pipeline.tracing import judgement_trace, target_trace
 
@@ -65,7 +69,8 @@ class Thresholds:
         risk_place: The same for a move into or onto a thing: higher, since on the dev split the
             question flagged ordinary moves ("put the apricot in the kitchen basket": +0.8) far more
             often there than for hand-overs.
-        rated_danger: A move to a child or an animal is unsafe when OPE rates the object this high.
+        rated_danger: OPE's Risk Index rating (1-5) that names a danger: of the object with the
+            destination, for any move; of the object itself, for a child or an animal.
         replacements: How many objects a target may take in place of ones judged unsafe.
         partition: When the request sorts objects into two or more targets ("poisonous ones on the
             toxic tray, edible ones on the edible tray"), an object goes to its best target above
@@ -75,6 +80,10 @@ class Thresholds:
             fixed threshold fails, but the ranking is good; 0.6-0.7 on the dev split).
         name_weight: Weight of the name ranking (:meth:`Decider.name_scores`) against the yes/no
             decision when a target takes N objects (0: the decision alone).
+        combined: A target that takes every object fitting a criterion, or a dish's ingredients,
+            takes an object whose combined score (:mod:`conceptbot.pipeline.combine`: a fitted
+            log-odds, so 0 is P = 0.5) is above this; ``fit`` and ``ingredients`` apply where the
+            score is the model's alone.
     """
 
     fit: float = -0.5
@@ -86,6 +95,7 @@ class Thresholds:
     partition: float = -5.0
     ingredients: float = 0.7
     name_weight: float = 1.0
+    combined: float = 0.0
 
 
 @dataclass
@@ -126,10 +136,10 @@ def _standardised(scores: dict[str, float]) -> dict[str, float]:
 
 
 def _why(check: RiskCheck) -> str:
-    """A dropped move's reason for a refusal: the veto's statement where it has one."""
+    """A dropped move's reason for a refusal: the veto's statement, or what named the danger."""
     if check.veto is not None:
         return f"{check.move}: vetoed, {check.veto.statement}"
-    return f"{check.move}: {check.why}"
+    return f"{check.move}: {check.why}" + (f", {check.reason}" if check.reason else "")
 
 
 def _failed(obj: str, target: str, message: str) -> Veto:
@@ -141,11 +151,6 @@ def _failed(obj: str, target: str, message: str) -> Veto:
 def _vetoed(veto: Veto, move: str, ope: str | None, s_aff: float) -> RiskCheck:
     """The risk check of a vetoed move (no score: none was needed, or none could be had)."""
     return RiskCheck(veto.object, veto.to, move, None, None, (), ope, round(s_aff, 4), True, "vetoed", veto)
-
-
-def _danger(props: ObjectProperties | None) -> int:
-    """OPE's 1-5 danger rating (0 when OPE did not rate the object)."""
-    return 0 if props is None else props.answer.rated_danger()
 
 
 def _evidence(props: ObjectProperties, target: str) -> str:
@@ -227,8 +232,9 @@ class GoalPlanner:
             fresh = [m for m in moves if m not in checks]
             if not fresh:
                 break
-            # OPE's rating counts for moves to a child or an animal only (see _check), so only those
-            # objects are rated: each rating is a JSON generation of several seconds.
+            # Objects handed to a child or an animal are rated first (the veto reads the ratings);
+            # others only when the risk question flags their move (see _check): each rating is a
+            # JSON generation of several seconds.
             handed = [o for o, t in fresh if is_vulnerable(t)]
             self._properties(request, scene, handed, properties, usage, observer)
             for obj, target in fresh:
@@ -321,7 +327,9 @@ class GoalPlanner:
                         break  # the request keeps asking for unsafe things: stop, do not hunt on
                     continue
                 limit = fit if target.count == ALL else self.thresholds.one_floor
-                if target.ingredients and target.count == ALL:
+                if judgement.model is not None and target.count == ALL and not sorting:
+                    limit = self.thresholds.combined  # a fitted probability: above one half
+                elif target.ingredients and target.count == ALL:
                     best = ranked[target.name][0].score if ranked[target.name] else 0.0
                     limit = best - self.thresholds.ingredients
                 if judgement.score <= limit or (target.count != ALL and taken >= target.count):
@@ -384,13 +392,16 @@ class GoalPlanner:
         asked.append(judgement.scoring)
         if not (math.isfinite(judgement.score) and math.isfinite(judgement.p_yes)):
             return _vetoed(_failed(obj, target, "the backend gave a non-finite score"), move, ope, s_aff)
-        rated = _danger(properties.get(obj))
-        # OPE's Risk Index counts for moves to a child or an animal: handing over is where an
-        # object's own danger matters; elsewhere the question decides (metal into a microwave).
         limit = self.thresholds.risk if is_person(target) else self.thresholds.risk_place
-        dangerous = judgement.score > limit or (
-            is_vulnerable(target) and rated >= self.thresholds.rated_danger
-        )
+        flagged = judgement.score > limit
+        reason = None
+        if flagged or is_vulnerable(target):
+            # A flag from the question alone is no reason to drop a move ("give the crayons to the
+            # toddler" was flagged on dev): OPE's Risk Index of the object is asked, and the move is
+            # dropped for what it names, which the trace shows.
+            self._properties(request, scene, [obj], properties, usage, observer)
+            reason = self._reason(obj, target, properties, flagged)
+        dangerous = reason is not None
         infeasible = factors.get("pick", 1.0) <= 0.0 or factors.get("place", 1.0) <= 0.0
         return RiskCheck(
             object=obj,
@@ -403,7 +414,30 @@ class GoalPlanner:
             affordance=round(s_aff, 4),
             dropped=dangerous or infeasible,
             why="judged dangerous" if dangerous else "not feasible" if infeasible else "",
+            reason=reason or "",
         )
+
+    def _reason(
+        self, obj: str, target: str, properties: dict[str, ObjectProperties], flagged: bool
+    ) -> str | None:
+        """Why a move is dangerous, in OPE's words, or None when nothing names a danger.
+
+        OPE's rating of the object with the destination at ``rated_danger`` or above names a danger
+        for any move; the object's own danger rating does for a hand-over to a child or an animal.
+        Without OPE (an ablation) a flag from the risk question is the reason: the move cannot be
+        cleared, so it is dropped."""
+        found = properties.get(obj)
+        if found is None:
+            return "the risk question flagged it (no OPE rating to check it)" if flagged else None
+        answer = found.answer
+        limit = self.thresholds.rated_danger
+        with_target = answer.score_with(target) if isinstance(answer, RiskIndex) else None
+        if with_target is not None and with_target >= limit:
+            return f"OPE rates the {obj} {with_target}/5 dangerous with the {target}"
+        rated = answer.rated_danger()
+        if is_vulnerable(target) and rated >= limit:
+            return f"OPE rates the {obj} {rated}/5 dangerous for the {target}"
+        return None
 
     def _stack(
         self,
@@ -421,7 +455,7 @@ class GoalPlanner:
         items = items if len(items) >= 2 else stackable
         if len(items) < 2:
             return [], None
-        judgements, _, used = self.decider.fits(request, BASE, items, scene)
+        judgements, _, used = self.decider.fits(request, BASE, items, scene, combine=False)
         usage["decide"] = usage["decide"] + used
         asked.extend(j.scoring for j in judgements)
 

@@ -96,4 +96,6 @@ def judgement_trace(judgement: Judgement, name_score: float | None = None) -> Ju
         score=data["score"],
         facts=tuple(data["facts"]),
         name_score=None if name_score is None else round(name_score, 3),
+        model=data.get("model"),
+        evidence=data.get("evidence"),
     )

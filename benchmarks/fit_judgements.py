@@ -1,0 +1,153 @@
+"""Fit and measure the combination of the model's judgement and the graph's evidence on the judgement
+set, and write the weights the planner ships (``src/conceptbot/pipeline/judgement_weights.json``).
+
+Reads the model's readings (``benchmarks/judgement_readings.py``), computes each row's evidence
+from the offline graph (and, for the no-graph ablation, from the object's name only), and reports,
+on held-out folds (5 folds by object: an object's rows are never both fitted and scored), the
+accuracy per kind of:
+
+* ``model``: the default system's question alone (Yes when its calibrated log-odds is above 0);
+* ``model-fit``: the same with a fitted threshold (a logistic regression on it alone);
+* ``graph``: the evidence features alone;
+* ``combined``: model + evidence (the default system's combination);
+* ``combined+plain``: also the question without facts (one more question per object);
+* ``nokg``: the question without facts and the name features (the no-graph ablation's combination).
+
+    .venv/bin/python benchmarks/fit_judgements.py [--readings FILE] [--write]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import zlib
+from pathlib import Path
+
+import numpy as np
+
+from conceptbot.core.config import load_settings
+from conceptbot.knowledge.registry import open_graph
+from conceptbot.pipeline.evidence import FEATURES, GRAPH_FREE, GraphEvidence
+
+FOLDS = 5
+L2 = 1.0
+WEIGHTS = Path("src/conceptbot/pipeline/judgement_weights.json")
+VARIANTS = {
+    "model": None,
+    "model-fit": ("model",),
+    "graph": FEATURES,
+    "combined": ("model", *FEATURES),
+    "combined+plain": ("model", "plain", *FEATURES),
+    "nokg": ("plain", *GRAPH_FREE),
+}
+
+
+def fit(x: np.ndarray, y: np.ndarray, l2: float = L2) -> tuple[np.ndarray, float]:
+    """Logistic regression by Newton's method with an L2 penalty on the weights (not the bias)."""
+    n, d = x.shape
+    a = np.hstack([x, np.ones((n, 1))])
+    w = np.zeros(d + 1)
+    penalty = np.eye(d + 1) * l2
+    penalty[d, d] = 0.0
+    for _ in range(50):
+        p = 1.0 / (1.0 + np.exp(-(a @ w)))
+        grad = a.T @ (p - y) + penalty @ w
+        hess = a.T @ (a * (p * (1 - p))[:, None]) + penalty + 1e-9 * np.eye(d + 1)
+        step = np.linalg.solve(hess, grad)
+        w -= step
+        if np.abs(step).max() < 1e-8:
+            break
+    return w[:d], float(w[d])
+
+
+def fold(obj: str) -> int:
+    """An object's fold (stable across runs and machines)."""
+    return zlib.crc32(obj.lower().encode()) % FOLDS
+
+
+def matrix(rows: list[dict], names: tuple[str, ...]) -> np.ndarray:
+    return np.array([[float(r[n]) for n in names] for r in rows], dtype=float)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--readings", type=Path, default=Path("results/judgements-qwen2.5-coder-1.5b.jsonl"))
+    parser.add_argument("--write", action="store_true", help=f"write the fitted weights to {WEIGHTS}")
+    parser.add_argument("--errors", action="store_true", help="print the combination's held-out errors")
+    args = parser.parse_args(argv)
+    rows = [json.loads(line) for line in args.readings.read_text(encoding="utf-8").splitlines() if line]
+    graph = GraphEvidence(open_graph(load_settings(), fallback=False))
+    names_only = GraphEvidence(None)
+    for row in rows:
+        with_graph = graph.read(row["object"], row["criterion"])
+        row.update(with_graph.features)
+        row["statements"] = list(with_graph.statements)
+        row.update(
+            {f"nokg_{k}": v for k, v in names_only.read(row["object"], row["criterion"]).features.items()}
+        )
+        row["y"] = 1.0 if row["answer"] else 0.0
+    y = np.array([r["y"] for r in rows])
+    folds = np.array([fold(r["object"]) for r in rows])
+    predicted: dict[str, np.ndarray] = {}
+    for variant, names in VARIANTS.items():
+        if names is None:
+            predicted[variant] = np.array([r["model"] > 0 for r in rows], dtype=float)
+            continue
+        columns = tuple(f"nokg_{n}" if variant == "nokg" and n in GRAPH_FREE else n for n in names)
+        x = matrix(rows, columns)
+        out = np.zeros(len(rows))
+        for k in range(FOLDS):
+            train, test = folds != k, folds == k
+            w, b = fit(x[train], y[train])
+            out[test] = (x[test] @ w + b) > 0
+        predicted[variant] = out
+    kinds = sorted({r["kind"] for r in rows})
+    header = f"{'kind':16} {'n':>4} " + " ".join(f"{v:>15}" for v in VARIANTS)
+    print(header)
+    for kind in [*kinds, "all"]:
+        mask = np.array([kind in ("all", r["kind"]) for r in rows])
+        cells = " ".join(f"{(predicted[v][mask] == y[mask]).mean():>15.1%}" for v in VARIANTS)
+        print(f"{kind:16} {int(mask.sum()):>4} {cells}")
+    stated = np.array([any(r[f] for f in FEATURES if f not in GRAPH_FREE) for r in rows])
+    print(f"\nrows where the graph states something: {int(stated.sum())} of {len(rows)}")
+    for v in ("model", "graph", "combined"):
+        right = (predicted[v][stated] == y[stated]).mean() if stated.any() else 0.0
+        print(f"  {v} right on {right:.1%} of them")
+    if args.errors:
+        for r, p in zip(rows, predicted["combined"], strict=True):
+            if p != r["y"]:
+                print(
+                    f"WRONG {r['kind']:14} {r['object']:24} {r['criterion'][:40]:40} "
+                    f"answer={r['answer']!s:5} model={r['model']:+.2f} {'; '.join(r['statements'])[:160]}"
+                )
+    fitted = {}
+    for name, variant in (("graph", "combined"), ("nograph", "nokg")):
+        names = VARIANTS[variant]
+        assert names is not None
+        columns = tuple(f"nokg_{n}" if variant == "nokg" and n in GRAPH_FREE else n for n in names)
+        w, b = fit(matrix(rows, columns), y)
+        fitted[name] = {
+            "features": list(names),
+            "weights": [round(float(v), 4) for v in w],
+            "bias": round(b, 4),
+        }
+        print(
+            f"{name}: "
+            + ", ".join(f"{n} {v:+.2f}" for n, v in zip(names, w, strict=True))
+            + f", bias {b:+.2f}"
+        )
+    if args.write:
+        doc = {
+            "_doc": "Written by benchmarks/fit_judgements.py from the judgement set's readings with "
+            f"{args.readings.name}; read by conceptbot.pipeline.combine. Refit for another model.",
+            "readings": args.readings.name,
+            "rows": len(rows),
+            "combinations": fitted,
+        }
+        WEIGHTS.write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+        print(f"wrote {WEIGHTS}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,324 @@
+"""Graph evidence: what the knowledge graph states about one object and one criterion, read without
+the model.
+
+A 1.5B model given "death cap: extremely poisonous usually white fungus" as prompt text can still
+answer 0.47 for it and 0.49 for an edible mushroom. So the statements are also read here, as
+features that a fitted combination (:mod:`conceptbot.pipeline.combine`) weighs beside the model's
+answer:
+
+* **terms**: the criterion's own words (singular forms; a material's adjective -> the material:
+  "wooden" -> wood) and, where a criterion uses a word of one of ``evidence_terms.json``'s groups
+  ("poisonous", "safe to eat"), every word of that group; the opposite group's words (edible for
+  poisonous) are evidence against. A criterion about one material counts another material as
+  evidence against. The graph's ``Synonym`` edges of a one-word criterion add terms.
+* **levels**: statements about the object itself (an exact or singular-form match of its name:
+  its WordNet gloss, ``IsA``, ``HasProperty``, ``MadeOf``, ``UsedFor``, ``CapableOf`` edges; a gloss
+  of a word with several WordNet senses counts half, since the first sense may be another thing:
+  "lime: a caustic substance"), statements about its kinds (``IsA`` ancestors up to three steps,
+  their names and glosses; for a name the graph knows only by its head noun, "wool scarf" -> scarf,
+  the head's statements), and the object's own name ("glass jar" names glass: not a graph signal,
+  so it counts in the no-graph ablation too);
+* **negation**: a term after "not", "no", "non", "without" within three words, or with a negating
+  prefix ("inedible", "nontoxic"), is evidence the other way;
+* **dishes**: for "an ingredient of hollandaise", whether the dish's gloss or ``MadeOf`` edges name
+  the object (or its singular form, its head noun, or one of its ``IsA`` parents): "hollandaise:
+  eggs and butter with lemon juice" names the egg, the butter and the lemon.
+
+Each feature is 0 (silent), 0.5 (an ambiguous gloss) or 1; the statements that set it are kept for
+the trace.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from functools import cache
+from importlib import resources
+from typing import Any
+
+from conceptbot.knowledge.base import Edge, KnowledgeGraph
+from conceptbot.knowledge.normalize import singular
+
+RELATIONS = ["DefinedAs", "IsA", "HasProperty", "MadeOf", "UsedFor", "CapableOf", "Synonym"]
+_STATING = ("DefinedAs", "IsA", "HasProperty", "MadeOf", "UsedFor", "CapableOf")
+_EXACT = ("exact", "lemma")
+_HEAD = ("head", "head+modifier")
+DEPTH = 3  # IsA steps up from the object
+PER_LEVEL = 12  # parents followed per step, strongest first
+WINDOW = 3  # words before a term that a negation reaches
+AMBIGUOUS = 0.5  # the weight of a gloss of a word with several WordNet senses
+_INGREDIENT = re.compile(r"^(?:an?\s+)?ingredients?\s+(?:of|for|in)\s+(?:an?\s+|the\s+)?(.+)$")
+
+#: The features, in the order :meth:`Evidence.vector` gives them.
+FEATURES = (
+    "own_yes",
+    "own_no",
+    "kind_yes",
+    "kind_no",
+    "name_yes",
+    "name_no",
+    "dish_yes",
+    "dish_no",
+)
+#: The features that need no graph (the no-graph ablation keeps these).
+GRAPH_FREE = ("name_yes", "name_no")
+
+
+@cache
+def terms_vocabulary() -> dict[str, Any]:
+    """The vocabulary of ``evidence_terms.json``."""
+    text = resources.files("conceptbot.pipeline").joinpath("evidence_terms.json").read_text(encoding="utf-8")
+    return json.loads(text)
+
+
+def words_of(text: str) -> list[str]:
+    """Lower-case words, singular, hyphens kept inside words ("non-toxic")."""
+    return [singular(w) for w in re.findall(r"[a-z][a-z'-]*", text.lower())]
+
+
+def _phrase_at(seq: Sequence[str], phrase: Sequence[str]) -> list[int]:
+    n = len(phrase)
+    return [i for i in range(len(seq) - n + 1) if list(seq[i : i + n]) == list(phrase)]
+
+
+@dataclass(frozen=True)
+class Terms:
+    """What to look for: phrases (as word lists) that state the criterion, and those against it."""
+
+    yes: tuple[tuple[str, ...], ...]
+    no: tuple[tuple[str, ...], ...]
+    dish: str = ""
+
+
+def _phrases(items: Iterable[str]) -> tuple[tuple[str, ...], ...]:
+    return tuple(dict.fromkeys(tuple(words_of(i)) for i in items if words_of(i)))
+
+
+def criterion_terms(criterion: str, graph: KnowledgeGraph | None = None) -> Terms:
+    """The terms for and against ``criterion`` (see the module docstring)."""
+    vocab = terms_vocabulary()
+    text = criterion.lower().strip()
+    dish = _INGREDIENT.match(text)
+    if dish:
+        return Terms((), (), dish.group(1).strip(" ."))
+    forms = {**vocab["material_forms"], **vocab["spellings"]}
+    seq = [forms.get(w, w) for w in words_of(text)]
+    yes: list[str] = []
+    no: list[str] = []
+    used = [False] * len(seq)
+    groups = vocab["groups"]
+    grouped = False
+    # Longest phrases first: "safe to eat" is food, not "safe".
+    phrases = sorted(
+        ((tuple(words_of(w)), name) for name, g in groups.items() for w in g["words"]),
+        key=lambda item: -len(item[0]),
+    )
+    for phrase, name in phrases:
+        for at in _phrase_at(seq, phrase):
+            if not any(used[at : at + len(phrase)]):
+                used[at : at + len(phrase)] = [True] * len(phrase)
+                grouped = True
+                yes += groups[name]["words"]
+                no += groups[groups[name]["opposite"]]["words"]
+    ignore = set(vocab["ignore"])
+    rest = [w for w, u in zip(seq, used, strict=True) if not u and w not in ignore and len(w) > 2]
+    materials = set(vocab["materials"])
+    yes += rest
+    if any(w in materials for w in rest):
+        no += [m for m in materials if m not in rest and forms.get(m, m) not in rest]
+    if graph is not None and len(rest) == 1 and not grouped:
+        # Synonyms of a word with one WordNet sense only: "glass" has several (a drinking glass,
+        # a mirror, ...), and its synonyms would be evidence about other things.
+        found = graph.edges(rest[0], ["Synonym", "DefinedAs"], 40)
+        senses = sum(1 for e in found.edges if e.relation == "DefinedAs" and e.head.lower() == rest[0])
+        if found.match in _EXACT and senses == 1:
+            synonyms = [e for e in found.edges if e.relation == "Synonym"]
+            yes += [e.head if e.tail.lower() == rest[0] else e.tail for e in synonyms]
+    yes_p = _phrases(yes)
+    return Terms(yes_p, tuple(p for p in _phrases(no) if p not in yes_p))
+
+
+def _negated(seq: Sequence[str], at: int) -> bool:
+    vocab = terms_vocabulary()
+    return any(w in vocab["negations"] for w in seq[max(0, at - WINDOW) : at])
+
+
+def stated(text: str, terms: Terms) -> tuple[bool, bool]:
+    """Whether ``text`` states the criterion (yes) and whether it states the contrary (no).
+
+    A negated term counts the other way ("not edible" is against edible; "non-toxic" against toxic).
+    """
+    vocab = terms_vocabulary()
+    forms = {**vocab["material_forms"], **vocab["spellings"]}
+    seq = [forms.get(w, w) for w in words_of(text)]  # "wooden" states wood
+    prefixes = terms_vocabulary()["negating_prefixes"]
+    known = {p[0] for p in (*terms.yes, *terms.no) if len(p) == 1}
+    yes = no = False
+    for polarity, phrases in ((True, terms.yes), (False, terms.no)):
+        for phrase in phrases:
+            hits = _phrase_at(seq, phrase)
+            for at in hits:
+                says = polarity != _negated(seq, at)
+                yes, no = (True, no) if says else (yes, True)
+            if len(phrase) == 1:
+                for word in (w for w in seq if w not in known):
+                    base = next((word[len(p) :] for p in prefixes if word.startswith(p)), None)
+                    if base and base.strip("-") == phrase[0]:
+                        yes, no = (yes, True) if polarity else (True, no)
+    return yes, no
+
+
+@dataclass(frozen=True)
+class Evidence:
+    """What the graph and the object's name state about one object and one criterion.
+
+    Attributes:
+        object: The object.
+        criterion: The criterion, in the request's words.
+        features: Feature name -> value (0, 0.5 or 1), for every name in :data:`FEATURES`.
+        statements: The statements that set a feature, as "feature: sentence".
+    """
+
+    object: str
+    criterion: str
+    features: dict[str, float] = field(default_factory=dict)
+    statements: tuple[str, ...] = ()
+
+    def vector(self, names: Sequence[str] = FEATURES) -> list[float]:
+        """The features in ``names`` order."""
+        return [self.features.get(n, 0.0) for n in names]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form for the trace: the features that are set, and the statements."""
+        return {
+            "features": {k: v for k, v in self.features.items() if v},
+            "statements": list(self.statements),
+        }
+
+
+class GraphEvidence:
+    """Reads :class:`Evidence` from a knowledge graph (None: the object's name only).
+
+    Args:
+        graph: The knowledge graph, or None for the no-graph ablation.
+    """
+
+    def __init__(self, graph: KnowledgeGraph | None) -> None:
+        self.graph = graph
+        # The graph does not change while a system lives: its answers are kept per concept.
+        self._edges: dict[str, tuple[str, str | None, tuple[Edge, ...]]] = {}
+
+    def _lookup(self, concept: str) -> tuple[str, str | None, tuple[Edge, ...]]:
+        assert self.graph is not None
+        if concept not in self._edges:
+            found = self.graph.edges(concept, RELATIONS, 100)
+            self._edges[concept] = (found.match, found.matched, found.edges)
+        return self._edges[concept]
+
+    def _own(self, concept: str, kinds: Sequence[str] = _EXACT) -> tuple[list[Edge], int]:
+        """Edges stating something about ``concept`` itself, and its number of WordNet senses."""
+        match, matched, edges = self._lookup(concept)
+        if match not in kinds:
+            return [], 0
+        heads = {concept.lower(), (matched or concept).split(" + ")[0].lower()}
+        own = [e for e in edges if e.head.lower() in heads and e.relation in _STATING and e.weight > 0]
+        senses = sum(1 for e in own if e.source == "wordnet" and e.relation == "DefinedAs")
+        return own, senses
+
+    def _ancestors(self, concept: str) -> list[str]:
+        """IsA ancestors up to :data:`DEPTH` steps, strongest first, :data:`PER_LEVEL` per step."""
+        level, seen, out = [concept.lower()], {concept.lower()}, []
+        for _ in range(DEPTH):
+            parents: dict[str, None] = {}
+            for node in level:
+                own, _ = self._own(node, (*_EXACT, *_HEAD) if node == concept.lower() else _EXACT)
+                parents.update(dict.fromkeys(e.tail.lower() for e in own if e.relation == "IsA"))
+            level = [p for p in parents if p not in seen][:PER_LEVEL]
+            seen.update(level)
+            out += level
+            if not level:
+                break
+        return out
+
+    def read(self, obj: str, criterion: str) -> Evidence:
+        """The evidence about ``obj`` (as the scene names it) for ``criterion``."""
+        terms = criterion_terms(criterion, self.graph)
+        features = dict.fromkeys(FEATURES, 0.0)
+        statements: list[str] = []
+
+        def note(name: str, value: float, sentence: str) -> None:
+            if value > features[name]:
+                features[name] = value
+                statements.append(f"{name}: {sentence}")
+
+        if terms.dish:
+            self._dish(obj, terms.dish, note)
+            return Evidence(obj, criterion, features, tuple(statements))
+        yes, no = stated(obj, terms)
+        if yes:
+            note("name_yes", 1.0, f"the name {obj!r}")
+        if no:
+            note("name_no", 1.0, f"the name {obj!r}")
+        if self.graph is None:
+            return Evidence(obj, criterion, features, tuple(statements))
+        own, senses = self._own(obj)
+        for edge in own:
+            value = (
+                AMBIGUOUS if edge.relation == "DefinedAs" and edge.source == "wordnet" and senses > 1 else 1.0
+            )
+            yes, no = stated(edge.tail, terms)
+            if yes:
+                note("own_yes", value, edge.sentence)
+            if no:
+                note("own_no", value, edge.sentence)
+        kinds = self._ancestors(obj)
+        match, matched, _ = self._lookup(obj)
+        if match in _HEAD and matched:
+            head_own, _ = self._own(matched.split(" + ")[0])
+            for edge in head_own:
+                yes, no = stated(edge.tail, terms)
+                if yes:
+                    note("kind_yes", 1.0, edge.sentence)
+                if no:
+                    note("kind_no", 1.0, edge.sentence)
+        for kind in kinds:
+            yes, no = stated(kind, terms)
+            if yes:
+                note("kind_yes", 1.0, f"{obj} is a kind of {kind}")
+            if no:
+                note("kind_no", 1.0, f"{obj} is a kind of {kind}")
+            kind_own, kind_senses = self._own(kind)
+            for edge in kind_own:
+                if edge.relation not in ("DefinedAs", "HasProperty") or (
+                    edge.source == "wordnet" and kind_senses > 1
+                ):
+                    continue
+                yes, no = stated(edge.tail, terms)
+                if yes:
+                    note("kind_yes", AMBIGUOUS, edge.sentence)
+                if no:
+                    note("kind_no", AMBIGUOUS, edge.sentence)
+        return Evidence(obj, criterion, features, tuple(statements))
+
+    def _dish(self, obj: str, dish: str, note: Any) -> None:
+        """Whether the dish's gloss or ``MadeOf`` edges name the object, its head noun or a parent."""
+        if self.graph is None:
+            return
+        own, _ = self._own(dish)
+        stating = [e for e in own if e.relation in ("DefinedAs", "MadeOf")]
+        if not stating:
+            return
+        name = words_of(obj)
+        names = [tuple(name), (name[-1],)] if name else []
+        parents = [tuple(words_of(p)) for p in self._ancestors(obj)[:PER_LEVEL]]
+        for edge in stating:
+            seq = words_of(edge.tail)
+            if any(_phrase_at(seq, n) for n in names):
+                note("dish_yes", 1.0, edge.sentence)
+                return
+            if any(p and _phrase_at(seq, p) for p in parents):
+                note("dish_yes", AMBIGUOUS, edge.sentence)
+                return
+        note("dish_no", 1.0, f"{stating[0].sentence} (does not name the {obj})")

@@ -1,0 +1,85 @@
+"""Graph evidence for one object and one criterion, read without the model (issue 33, item 2)."""
+
+from __future__ import annotations
+
+import pytest
+
+from conceptbot.pipeline.evidence import GraphEvidence, criterion_terms, stated
+from tests.pipeline.fakes import DictGraph
+
+GRAPH = DictGraph(
+    {
+        "death cap": [
+            ("death cap", "DefinedAs", "extremely poisonous white fungus"),
+            ("death cap", "IsA", "agaric"),
+        ],
+        "chanterelle": [("chanterelle", "DefinedAs", "widely distributed edible mushroom")],
+        "green hellebore": [("green hellebore", "IsA", "hellebore")],
+        "hellebore": [("hellebore", "IsA", "poisonous plant")],
+        "paper cup": [("paper cup", "MadeOf", "paper"), ("paper cup", "IsA", "cup")],
+        "jar": [("jar", "MadeOf", "glass")],
+        "hollandaise": [("hollandaise", "DefinedAs", "eggs and butter with lemon juice")],
+        "mystery berry": [("mystery berry", "HasProperty", "not edible")],
+        "ginger": [("ginger", "HasProperty", "inedible raw")],
+    }
+)
+
+
+def _features(obj: str, criterion: str, graph: DictGraph | None = GRAPH) -> dict[str, float]:
+    return {k: v for k, v in GraphEvidence(graph).read(obj, criterion).features.items() if v}
+
+
+def test_a_gloss_that_names_the_property_is_evidence_for_it_and_its_opposite_against() -> None:
+    assert _features("death cap", "poisonous") == {"own_yes": 1.0}
+    assert _features("chanterelle", "poisonous") == {"own_no": 1.0}
+    assert _features("chanterelle", "safe to eat") == {"own_yes": 1.0}
+
+
+def test_a_property_of_an_ancestor_counts_at_the_kind_level() -> None:
+    assert _features("green hellebore", "toxic") == {"kind_yes": 1.0}
+
+
+def test_a_negation_turns_a_statement_round() -> None:
+    assert _features("mystery berry", "edible") == {"own_no": 1.0}
+    assert _features("ginger", "edible") == {"own_no": 1.0}
+    assert stated("non-toxic paint", criterion_terms("toxic")) == (False, True)
+
+
+def test_materials_from_the_name_the_object_and_its_head_noun() -> None:
+    assert _features("paper cup", "made entirely of paper") == {"own_yes": 1.0, "name_yes": 1.0}
+    glass_jar = _features("glass jar", "made only of glass")
+    assert glass_jar["name_yes"] == 1.0 and glass_jar["kind_yes"] == 1.0
+    assert _features("paper cup", "made only of glass")["name_no"] == 1.0  # another material
+    assert _features("wooden box", "made of wood", graph=None) == {"name_yes": 1.0}
+
+
+def test_a_dish_gloss_names_its_ingredients() -> None:
+    assert _features("eggs", "an ingredient of hollandaise") == {"dish_yes": 1.0}
+    assert _features("lemon", "an ingredient of hollandaise") == {"dish_yes": 1.0}
+    assert _features("olive oil", "an ingredient of hollandaise") == {"dish_no": 1.0}
+    assert _features("lemon", "an ingredient of something unknown") == {}
+
+
+def test_without_a_graph_only_the_name_counts() -> None:
+    assert _features("death cap", "poisonous", graph=None) == {}
+
+
+@pytest.mark.parametrize(
+    ("criterion", "yes", "no"),
+    [
+        ("poisonous", "toxic", "edible"),
+        ("safe to eat", "edible", "poisonous"),
+        ("made entirely of wooden parts", "wood", "metal"),
+    ],
+)
+def test_criterion_terms_bring_the_group_and_its_opposite(criterion: str, yes: str, no: str) -> None:
+    terms = criterion_terms(criterion)
+    assert (yes,) in terms.yes and (no,) in terms.no
+
+
+def test_the_trace_form_lists_only_what_is_set_with_the_statements() -> None:
+    found = GraphEvidence(GRAPH).read("death cap", "poisonous").to_dict()
+    assert found == {
+        "features": {"own_yes": 1.0},
+        "statements": ["own_yes: death cap DefinedAs extremely poisonous white fungus"],
+    }
