@@ -156,6 +156,7 @@ class Target:
             "made entirely of glass"), when the request sorts by a property; "" otherwise.
         dish: The dish the request asks to be made ("hollandaise"), when the graph says it is one.
         ingredients: The objects that go are the ingredients of food to prepare.
+        rest: It takes whatever no other target takes ("the rest", "everything else").
     """
 
     name: str
@@ -166,6 +167,7 @@ class Target:
     criterion: str = ""
     dish: str = ""
     ingredients: bool = False
+    rest: bool = False
 
     def to_dict(self) -> dict:
         """JSON form for the trace."""
@@ -178,6 +180,7 @@ class Target:
             "criterion": self.criterion,
             "dish": self.dish,
             "ingredients": self.ingredients,
+            "rest": self.rest,
         }
 
 

@@ -1,0 +1,142 @@
+"""A goal as the goal planner's targets (:class:`~conceptbot.pipeline.targets.Target`).
+
+Where the goal names a destination the target is ``how="named"``. Where it leaves the destination
+open (``to`` None) a :data:`Chooser` settles it; :class:`ScoredChooser` asks the model the question
+``TargetFinder``'s scored path asks ("should the robot put things in the X?", against a content-free
+request). Without a chooser a need goes to the scene's user (the speaker), as ``TargetFinder`` does.
+
+What each kind of target becomes (chosen to keep the planner's behaviour where today's reader was
+right):
+
+* ``named``: the named objects, their count.
+* ``criterion`` taking all: ``criterion`` is the request's words; a place in a sort without words of
+  its own gets "belongs in the <place>" (with the key: "belongs in the glass bin, by material").
+  Taking a number ("something to write with"): no criterion, as ``TargetFinder`` gives none: the
+  planner then asks the move question and ranks names, which it was tuned on.
+* ``remainder``: ``rest=True``, every object left.
+* ``ingredients``: ``ingredients=True``, ``dish`` and the criterion "an ingredient of <dish>".
+* ``need``: one object (``TargetFinder``'s rule for a need of the speaker's: right on 13 of the 14
+  dev needs; "brush my teeth" needs two).
+* ``all``: every object. A stacking goal gives no targets: the planner piles the objects itself.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from conceptbot.core.scene import Scene
+from conceptbot.core.usage import Usage
+from conceptbot.pipeline.goal.types import ALL as GOAL_ALL
+from conceptbot.pipeline.goal.types import Goal, GoalTarget
+from conceptbot.pipeline.targets import ALL, CONTENT_FREE_REQUEST, Target, TargetFinder
+
+#: Chooses the destinations of a target whose goal names none: ``(destination, score)`` pairs, best
+#: first (the score is kept in :attr:`Target.score`).
+Chooser = Callable[[GoalTarget, Scene], list[tuple[str, float]]]
+
+
+def _users(scene: Scene) -> list[str]:
+    return [d for d in scene.destinations if d.lower() == "user"]
+
+
+def _criterion(target: GoalTarget, name: str, dish: str) -> str:
+    if target.takes == "ingredients":
+        return f"an ingredient of {dish or 'the food the person asked for'}"
+    if target.takes != "criterion" or target.count != GOAL_ALL:
+        return ""
+    if not target.criterion:
+        return f"belongs in the {name}"
+    if target.criterion.startswith("by "):
+        return f"belongs in the {name}, {target.criterion}"
+    return target.criterion
+
+
+def to_targets(goal: Goal, scene: Scene, choose: Chooser | None = None) -> list[Target]:
+    """The goal planner's targets for ``goal`` (see the module docstring).
+
+    Args:
+        goal: The goal read from the request.
+        scene: Its scene.
+        choose: Chooses destinations for targets the goal leaves open; None: a need goes to the
+            scene's user, and any other open target is an error.
+
+    Returns:
+        The targets, in the goal's order (a chosen target's places best first).
+
+    Raises:
+        ValueError: A target has no destination and nothing can choose one (pass ``choose``).
+    """
+    if goal.stack:
+        return []
+    dish = goal.dish or ""
+    targets = []
+    for target in goal.targets:
+        if target.to is not None:
+            places, how = [(target.to, 0.0)], "named"
+        elif choose is not None:
+            places, how = choose(target, scene), "scored"
+        elif target.takes == "need" and _users(scene):
+            places, how = [(_users(scene)[0], 0.0)], "speaker"
+        else:
+            raise ValueError(
+                f"the goal's {target.takes} target names no destination and nothing chooses one: "
+                "pass choose= (for instance ScoredChooser(finder, request))"
+            )
+        count = 1 if target.takes == "need" else ALL if target.count == GOAL_ALL else int(target.count)
+        for name, score in places:
+            targets.append(
+                Target(
+                    name,
+                    count,
+                    how,
+                    list(target.named),
+                    score,
+                    _criterion(target, name, dish),
+                    dish if target.takes == "ingredients" else "",
+                    target.takes == "ingredients",
+                    target.takes == "remainder",
+                )
+            )
+    return targets
+
+
+class ScoredChooser:
+    """Chooses an open target's destinations with the model, as ``TargetFinder`` does for a request
+    that names none: each destination scored "should the robot put things in the X?" minus the same
+    for a content-free request; the best, and (except for a dish, made in one place) those above the
+    finder's threshold. A need goes to the user where the scene has one (the speaker).
+
+    Args:
+        finder: Its LLM, ``is_person``, threshold and food knowledge are used.
+        request: The request the goal was read from.
+
+    Attributes:
+        usage: The model calls made so far.
+    """
+
+    def __init__(self, finder: TargetFinder, request: str) -> None:
+        self.finder = finder
+        self.request = request
+        self.usage = Usage(calls=0)
+
+    def __call__(self, target: GoalTarget, scene: Scene) -> list[tuple[str, float]]:
+        """The destinations of ``target``, best first, with their calibrated scores."""
+        if target.takes == "need" and _users(scene):
+            return [(_users(scene)[0], 0.0)]
+        candidates = list(scene.destinations)
+        making = target.takes == "ingredients"
+        if making and self.finder.food is not None:
+            candidates = self.finder.food.prep_places(candidates) or candidates
+        scores = {}
+        for dest in candidates:
+            # TargetFinder's own scored question (one method, so that both readers ask the same).
+            odds, used = self.finder._log_odds(self.request, dest)
+            prior, used_prior = self.finder._log_odds(CONTENT_FREE_REQUEST, dest)
+            self.usage = self.usage + used + used_prior
+            scores[dest] = odds - prior
+        ranked = sorted(scores, key=lambda d: -scores[d])
+        return [
+            (d, scores[d])
+            for i, d in enumerate(ranked)
+            if i == 0 or (scores[d] > self.finder.threshold and not making)
+        ]

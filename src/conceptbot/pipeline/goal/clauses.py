@@ -1,0 +1,380 @@
+"""One chunk of a request read as a clause: its form, verb, destinations and theme (steps 2-4 of
+:mod:`conceptbot.pipeline.goal.parse`)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+from spacy.tokens import Doc, Token
+
+from conceptbot.pipeline.goal.mentions import Mention
+from conceptbot.pipeline.goal.parse import Chunk, Clause, Place, clause_verbs, vocabulary
+
+_NP_START = {"DT", "PDT", "PRP$", "CD", "JJ", "NN", "NNS", "NNP", "NNPS"}
+_PRONOUN_THEMES = {"it", "them", "they", "him", "her", "one"}
+
+
+def _lower(token: Token) -> str:
+    return token.text.lower()
+
+
+def _opened(doc: Doc, chunk: Chunk) -> tuple[int, bool]:
+    """The index after the chunk's opening words ("and", "please", "could you", "let's"), and
+    whether they were "let's"."""
+    vocab = vocabulary()
+    i, lets = chunk.start, False
+    while i < chunk.end:
+        word = _lower(doc[i])
+        nxt = _lower(doc[i + 1]) if i + 1 < chunk.end else ""
+        if word in vocab["question"] and nxt == "you":
+            i += 2
+        elif word == "let" and nxt in ("'s", "’s", "us"):
+            i, lets = i + 2, True
+        elif word in vocab["openers"] or doc[i].is_punct:
+            i += 1
+        else:
+            break
+    return i, lets
+
+
+def _closed(doc: Doc, chunk: Chunk) -> int:
+    """One past the chunk's last token that is not punctuation or "please"."""
+    end = chunk.end
+    while end > chunk.start and (doc[end - 1].is_punct or _lower(doc[end - 1]) in ("please", "thanks")):
+        end -= 1
+    return end
+
+
+def _mention_at(mentions: Sequence[Mention], index: int) -> Mention | None:
+    return next((m for m in mentions if m.covers(index)), None)
+
+
+def _imperative(doc: Doc, at: int, end: int, mentions: Sequence[Mention]) -> tuple[int, bool]:
+    """The index of the verb an imperative opens with at ``at`` (-1: none), and whether it is
+    negated ("don't touch")."""
+    vocab = vocabulary()
+    negated = False
+    if at + 2 < end and _lower(doc[at]) == "do" and _lower(doc[at + 1]) in ("n't", "not"):
+        at, negated = at + 2, True
+    if at >= end or _mention_at(mentions, at) is not None:
+        return -1, negated
+    token = doc[at]
+    word = _lower(token)
+    closed = {
+        *vocab["determiners"],
+        *vocab["quantifiers"],
+        *vocab["restrictors"],
+        *vocab["personal"],
+        *vocab["one"],
+    }
+    if word in closed or token.dep_ in ("nsubj", "nsubjpass"):
+        return -1, negated
+    if (
+        token.dep_ == "conj"
+        and token.head.dep_ not in ("relcl", "acl")
+        and any(c.dep_ in ("nsubj", "nsubjpass") and _lower(c) != "you" for c in token.head.children)
+    ):
+        return -1, negated  # "I fell off my bike | and scraped my knee": the subject is shared
+    if token.tag_ in ("VB", "VBP", "VBD", "VBG"):
+        return at, negated
+    nxt = doc[at + 1] if at + 1 < end else None
+    opens_phrase = nxt is not None and (
+        nxt.tag_ in ("DT", "PDT", "PRP", "PRP$", "WP", "WDT", "CD", "RP") or _lower(nxt) in ("away", "up")
+    )
+    if token.pos_ in ("NOUN", "PROPN", "ADV", "ADJ", "VERB") and opens_phrase:
+        return at, negated  # the tagger's "Sort/RB what I foraged"
+    return -1, negated
+
+
+def _particles(doc: Doc, verb: int, end: int) -> list[int]:
+    """The verb's particles and the "of" of "get rid of", "dispose of"."""
+    vocab = vocabulary()
+    found = []
+    i = verb + 1
+    if i < end and _lower(doc[i]) == "rid":
+        found.append(i)
+        i += 1
+    if i < end and _lower(doc[i]) == "of":
+        found.append(i)
+    for token in doc[verb + 1 : end]:
+        # only the verb's own: "back" in "something that will cut back the branches" is the
+        # relative clause's ("up" before a destination's preposition goes with the destination)
+        own = token.head.i == verb and (token.dep_ in ("prt", "advmod") or token.tag_ == "RP")
+        if own and _lower(token) in vocab["particles"]:
+            found.append(token.i)
+    return found
+
+
+def _determiners_before(doc: Doc, start: int, floor: int, mentions: Sequence[Mention]) -> int:
+    """The first index of the determiners and adjectives before ``start`` ("the", "my", "bored")."""
+    vocab = vocabulary()
+    j = start
+    while j - 1 >= floor and _mention_at(mentions, j - 1) is None:
+        before = doc[j - 1]
+        if _lower(before) in vocab["determiners"] or before.tag_ in ("PRP$", "JJ", "PDT"):
+            j -= 1
+        else:
+            break
+    return j
+
+
+def _is_for(doc: Doc, at: int, end: int) -> int:
+    """After a subject destination: the index of "for" in "is (only) for", else -1."""
+    if at < end and doc[at].lemma_ == "be":
+        j = at + 1
+        while j < end and _lower(doc[j]) in vocabulary()["restrictors"]:
+            j += 1
+        if j < end and _lower(doc[j]) == "for":
+            return j
+    return -1
+
+
+def place_role(
+    doc: Doc,
+    mention: Mention,
+    chunk: Chunk,
+    bounds: tuple[int, int],
+    verb: int,
+    mentions: Sequence[Mention],
+    is_person: Callable[[str], bool],
+) -> tuple[int, ...] | None:
+    """The frame tokens of a mention in a destination role (its preposition, determiners and
+    itself), or None where it is not one (see :mod:`conceptbot.pipeline.goal.parse`, step 3)."""
+    vocab = vocabulary()
+    first, end = bounds
+    person = mention.kind == "person" or any(is_person(n) for n in mention.names)
+    j = _determiners_before(doc, mention.start, first, mentions)
+    frame = list(range(j, mention.end))
+    rest = [i for i in range(first, end) if i not in frame and not doc[i].is_punct]
+    if not rest:
+        return tuple(frame)  # "coffee table" alone: a fragment naming a place
+    prev = doc[j - 1] if j - 1 >= first else None
+    nxt = doc[mention.end] if mention.end < end else None
+    if prev is not None and _lower(prev) in vocab["spatial"]:
+        frame.append(j - 1)
+        k = j - 2
+        while k >= first and _lower(doc[k]) in vocab["particles"] + ["next"]:
+            frame.append(k)  # "up to", "over to", "next to"
+            k -= 1
+        return tuple(frame)
+    if prev is not None and _lower(prev) == "of" and j - 2 >= first and doc[j - 2].tag_.startswith("NN"):
+        # "on the edge of the bathtub": the part's preposition makes the whole a place
+        k = _determiners_before(doc, j - 2, first, mentions)
+        if k - 1 >= first and _lower(doc[k - 1]) in vocab["spatial"]:
+            return (*frame, *range(k - 1, j))
+    if person and prev is not None and _lower(prev) in ("with", "for") and (nxt is None or nxt.tag_ != "TO"):
+        return (*frame, j - 1)  # "share it with the dog"; not "for me to read"
+    dative = doc[mention.start].dep_ == "dative"
+    before_object = verb >= 0 and j - 1 == verb and nxt is not None and nxt.tag_ in _NP_START | {"PRP"}
+    if person and (dative or before_object):
+        return tuple(frame)  # "give the dog a treat"
+    if j == first and _is_for(doc, mention.end, end) >= 0:
+        return tuple(frame)
+    return None
+
+
+def _key(doc: Doc, first: int, end: int, mentions: Sequence[Mention]) -> tuple[str, list[int]]:
+    """A "by <key>" phrase ("by material", "according to colour") and its tokens."""
+    for i in range(first, end):
+        word = _lower(doc[i])
+        size = 2 if word == "according" and i + 1 < end and _lower(doc[i + 1]) == "to" else 1
+        if word not in ("by", "according") or (word == "according" and size == 1):
+            continue
+        j = i + size
+        while j < end and _lower(doc[j]) in ("the", "their", "its", "what"):
+            j += 1
+        k = j
+        while k < end and doc[k].tag_ in ("NN", "NNS") and _mention_at(mentions, k) is None:
+            k += 1
+        if k > j:
+            return "by " + " ".join(_lower(t) for t in doc[j:k]), list(range(i, k))
+    return "", []
+
+
+def _chain(doc: Doc, verb: Token, first: int, end: int) -> list[int]:
+    """A subject-form verb with its auxiliaries ("should be thrown", "need to go")."""
+    chain = {verb.i}
+    heads = [verb]
+    if verb.dep_ == "xcomp" and first <= verb.head.i < end:
+        heads.append(verb.head)
+        chain.add(verb.head.i)
+    for head in heads:
+        chain |= {c.i for c in head.children if c.dep_ in ("aux", "auxpass", "neg") and first <= c.i < end}
+    return sorted(chain)
+
+
+def _subject_verb(
+    doc: Doc, first: int, end: int, places: list[Place], mentions: Sequence[Mention]
+) -> Token | None:
+    """The verb of a "X go(es) in A" / "X should be thrown away" clause, or None."""
+    vocab = vocabulary()
+    place_tokens = {i for p in places for i in p.frame}
+    for token in doc[first:end]:
+        if _mention_at(mentions, token.i) is not None or not token.tag_.startswith("VB"):
+            continue
+        auxes = [c for c in token.children if c.dep_ in ("aux", "auxpass")]
+        if token.dep_ == "xcomp" and token.head.lemma_ in ("need", "have"):
+            auxes += [token.head]
+        obliged = any(_lower(a) in vocab["obligation"] or a.lemma_ in vocab["obligation"] for a in auxes)
+        if token.lemma_ in vocab["motion"]:
+            after = token.i + 1
+            while after < end and _lower(doc[after]) in vocab["particles"]:
+                after += 1
+            if after in place_tokens or (obliged and token.lemma_ == "go"):
+                return token
+        if token.tag_ == "VBN" and any(a.dep_ == "auxpass" for a in auxes) and obliged:
+            return token
+    return None
+
+
+def _personal_subject(doc: Doc, first: int, end: int) -> Token | None:
+    """A personal pronoun that is the subject of the chunk's own verb ("I'm freezing")."""
+    personal = set(vocabulary()["personal"]) - {"you"}
+    for token in doc[first:end]:
+        if token.dep_ in ("nsubj", "nsubjpass", "expl") and _lower(token) in personal | {"there"}:
+            after_verb = token.i > 0 and doc[token.i - 1].tag_.startswith("VB") and _lower(token) == "it"
+            if token.head.dep_ not in ("relcl", "acl") and not after_verb:  # "swallowed it": an object
+                return token
+    return None
+
+
+def _runs(indices: Sequence[int], frame: set[int], doc: Doc) -> list[tuple[int, ...]]:
+    """Maximal runs of non-frame tokens, without punctuation and joining words at their edges."""
+    runs: list[list[int]] = []
+    current: list[int] = []
+    for i in indices:
+        if i in frame or (doc[i].is_punct and _lower(doc[i]) not in ("-",)):
+            if current:
+                runs.append(current)
+            current = []
+        else:
+            current.append(i)
+    if current:
+        runs.append(current)
+    trimmed = []
+    edge = {"and", "or", "but", "so", "then", "please", "also", "now", ",", "with"}
+    for run in runs:
+        while run and (_lower(doc[run[0]]) in edge or doc[run[0]].is_punct):
+            run = run[1:]
+        while run and (_lower(doc[run[-1]]) in edge or doc[run[-1]].is_punct):
+            run = run[:-1]
+        if run:
+            trimmed.append(tuple(run))
+    return trimmed
+
+
+def nominal(doc: Doc, run: Sequence[int]) -> bool:
+    """Whether a run can be a theme: it has a noun, an indefinite or demonstrative pronoun, or an
+    adjective used as one ("everything poisonous"), and is not only a personal pronoun."""
+    vocab = vocabulary()
+    words = [_lower(doc[i]) for i in run]
+    if all(w in _PRONOUN_THEMES for w in words):
+        return False
+    pronouns = {*vocab["quantifiers"], *vocab["one"], "these", "those", "this", "what", "whatever"}
+    return any(doc[i].tag_ in ("NN", "NNS", "NNP", "NNPS") or _lower(doc[i]) in pronouns for i in run) or any(
+        doc[i].tag_ == "JJ" for i in run
+    )
+
+
+def analyse(doc: Doc, chunk: Chunk, mentions: Sequence[Mention], is_person: Callable[[str], bool]) -> Clause:
+    """Read one chunk (see :mod:`conceptbot.pipeline.goal.parse`)."""
+    vocab = vocabulary()
+    first, lets = _opened(doc, chunk)
+    end = _closed(doc, chunk)
+    mine = [m for m in mentions if first <= m.start < end]
+    verb, negated = _imperative(doc, first, end, mine)
+    frame: set[int] = set(range(chunk.start, first))
+    if negated:
+        frame |= {verb - 2, verb - 1}
+    if verb >= 0 and doc[verb].lemma_ in vocab["helping"]:
+        # "help me make a salad": the verb is the one helped
+        inner = next((t.i for t in doc[verb + 1 : end] if t.tag_ == "VB"), -1)
+        if inner >= 0:
+            frame |= set(range(verb, inner))
+            verb = inner
+    places: list[Place] = []
+    for mention in mine:
+        if mention.kind == "object":
+            continue
+        role = place_role(doc, mention, chunk, (first, end), verb, mine, is_person)
+        if role is not None:
+            places.append(Place(mention, role))
+    key, key_tokens = _key(doc, first, end, mine)
+    frame |= {i for p in places for i in p.frame} | set(key_tokens)
+    indices = list(range(first, end))
+    if verb >= 0:
+        frame |= {verb, *_particles(doc, verb, end)}
+        runs = _runs([i for i in indices if i > verb], frame, doc)
+        theme = next((r for r in runs if nominal(doc, r)), ())
+        return Clause(chunk, "imperative", doc[verb].lemma_.lower(), verb, places, theme, key, negated, runs)
+    if places and places[0].mention.start <= first + 1:
+        at_for = _is_for(doc, places[0].mention.end, end)
+        if at_for >= 0:
+            frame |= set(range(places[0].mention.end, at_for + 1))
+            runs = _runs(indices, frame, doc)
+            theme = next((r for r in runs if r[0] > at_for and nominal(doc, r)), ())
+            return Clause(chunk, "for", "be", at_for, places, theme, key, False, runs)
+    moving = _subject_verb(doc, first, end, places, mine)
+    if moving is not None:
+        chain = _chain(doc, moving, first, end)
+        frame |= set(chain) | set(_particles(doc, moving.i, end))
+        before = _runs([i for i in indices if i < chain[0]], frame, doc)
+        if before and nominal(doc, before[-1]) and _personal_subject(doc, first, chain[0]) is None:
+            runs = _runs(indices, frame, doc)
+            return Clause(
+                chunk, "subject", moving.lemma_.lower(), moving.i, places, before[-1], key, False, runs
+            )
+    desire = _desire(doc, first, end, lets)
+    if desire is not None:
+        return desire_clause(doc, chunk, desire, first, end, places, frame)
+    runs = _runs(indices, frame, doc)
+    if _personal_subject(doc, first, end) is not None:
+        return Clause(chunk, "statement", "", -1, [], (), key, False, runs)
+    verbs = clause_verbs(doc, first, end, mine)
+    if places or not verbs:
+        theme = next((r for r in runs if nominal(doc, r)), ())
+        return Clause(chunk, "fragment", "", -1, places, theme, key, False, runs)
+    return Clause(chunk, "statement", "", -1, [], (), key, False, runs)
+
+
+def _desire(doc: Doc, first: int, end: int, lets: bool) -> Token | None:
+    """The verb (or "about", or the copula) of a wish: "I'd love X", "we should have X", "how about
+    X", "X would be lovely"; None for anything else."""
+    vocab = vocabulary()
+    for token in doc[first:end]:
+        subject = [c for c in token.children if c.dep_ == "nsubj"]
+        speaker = any(_lower(c) in ("i", "we") for c in subject) or (lets and token.i == first)
+        if token.lemma_ in vocab["desire"] and token.tag_.startswith("VB") and speaker:
+            if token.lemma_ == "have":
+                modal = any(_lower(c) in ("should", "could", "can", "shall") for c in token.children)
+                if not (lets or (modal and any(_lower(c) == "we" for c in subject))):
+                    continue
+            return token
+        if _lower(token) == "about" and token.i > first and _lower(doc[token.i - 1]) == "how":
+            return token
+        conditional = any(_lower(c) in ("would", "could") for c in token.children)
+        praised = any(c.dep_ == "acomp" for c in token.children)
+        thing = bool(subject) and not any(_lower(c) in vocab["personal"] for c in subject)
+        if token.lemma_ == "be" and conditional and praised and thing:
+            return token
+    return None
+
+
+def desire_clause(
+    doc: Doc, chunk: Chunk, verb: Token, first: int, end: int, places: list[Place], frame: set[int]
+) -> Clause:
+    """A wish as a clause: its theme is what is wished for (the subject of "X would be lovely", the
+    object otherwise); for "I want to make X" the verb is the wished activity's ("make")."""
+    if verb.lemma_ == "be":
+        subject = next(c for c in verb.children if c.dep_ == "nsubj")
+        theme = tuple(i for i in range(subject.left_edge.i, subject.i + 1) if i not in frame)
+        return Clause(chunk, "desire", "be", verb.i, [], theme, "", False, [theme])
+    activity = next((c for c in verb.children if c.dep_ in ("xcomp", "ccomp") and c.tag_ == "VB"), None)
+    at = activity if activity is not None else verb
+    frame = frame | set(range(first, at.i + 1))
+    runs = _runs(list(range(at.i + 1, end)), frame, doc)
+    theme = next((r for r in runs if nominal(doc, r)), ())
+    lemma = at.lemma_.lower() if activity is not None else "want"
+    if activity is None and verb.lemma_ in ("need",):
+        lemma = "need"
+    return Clause(chunk, "desire", lemma, at.i, [], theme, "", False, runs)

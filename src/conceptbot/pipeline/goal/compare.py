@@ -1,0 +1,99 @@
+"""Whether two goals are the same: the exact match of ``benchmarks/bench_goal_reading.py``.
+
+Two goals match when they agree on ``stack``, on the dish (its words compared as below, or both
+none), on whether there is a need (its words are not compared: any wording of "my phone is almost
+dead" is the same need), and on their targets taken as a multiset: equal ``to``, ``takes``,
+``named`` (as sets) and ``count``, and criteria equal as word sequences after lemmatising and
+dropping punctuation, stop words and the generic nouns "one", "thing", "item", "object", "stuff"
+(so "the broken ones" == "broken" == "ones that are broken"). spaCy's stop words include words that
+change a criterion's meaning ("whole", "several", "not", "empty"); those are kept.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+from conceptbot.pipeline.goal.types import Goal, GoalTarget
+
+#: spaCy stop words that carry a criterion's meaning.
+MEANINGFUL = frozenset(
+    {"not", "no", "n't", "nothing", "none", "never", "without", "neither", "nor", "whole", "several",
+     "empty", "full", "more", "most", "less", "least", "few", "many", "much"}
+)  # fmt: skip
+GENERIC = frozenset({"one", "ones", "thing", "things", "item", "items", "object", "objects", "stuff"})
+
+
+@dataclass(frozen=True)
+class GoalMatch:
+    """The comparison's result, with the first difference found.
+
+    Attributes:
+        ok: The goals match.
+        reason: What differs ("" when they match).
+    """
+
+    ok: bool
+    reason: str = ""
+
+
+@lru_cache(maxsize=4096)
+def words(text: str) -> tuple[str, ...]:
+    """A criterion's or dish's content words: lemmas, lower case, without punctuation, stop words
+    (but :data:`MEANINGFUL`) and :data:`GENERIC` nouns."""
+    from spacy.lang.en.stop_words import STOP_WORDS
+
+    from conceptbot.knowledge.triples import load_model
+
+    kept = []
+    for token in load_model()(text.lower()):
+        lemma = token.lemma_.lower().strip(".,;:!?'\"()-")
+        word = token.text.lower().strip(".,;:!?'\"()-")
+        if not lemma or token.is_punct:
+            continue
+        if word in GENERIC or lemma in GENERIC:
+            continue
+        if (word in STOP_WORDS or lemma in STOP_WORDS) and word not in MEANINGFUL and lemma not in MEANINGFUL:
+            continue
+        kept.append(lemma)
+    return tuple(kept)
+
+
+def _key(target: GoalTarget) -> tuple:
+    return (
+        target.to or "",
+        target.takes,
+        tuple(sorted(target.named)),
+        words(target.criterion),
+        str(target.count),
+    )
+
+
+def _show(target: GoalTarget) -> str:
+    named = f" {list(target.named)}" if target.named else ""
+    criterion = f" {target.criterion!r}" if target.criterion else ""
+    return f"{target.takes}{named}{criterion} x{target.count} -> {target.to}"
+
+
+def same_goal(read: Goal, gold: Goal) -> GoalMatch:
+    """Compare a goal read from a request with the gold one (see the module docstring).
+
+    Returns:
+        The match, with the first difference as its reason when they differ.
+    """
+    if read.stack != gold.stack:
+        return GoalMatch(False, f"stack: read {read.stack}, gold {gold.stack}")
+    read_dish = words(read.dish) if read.dish else None
+    gold_dish = words(gold.dish) if gold.dish else None
+    if read_dish != gold_dish:
+        return GoalMatch(False, f"dish: read {read.dish!r}, gold {gold.dish!r}")
+    if (read.need is None) != (gold.need is None):
+        return GoalMatch(False, f"need: read {read.need!r}, gold {gold.need!r}")
+    left = [_key(t) for t in read.targets]
+    right = [_key(t) for t in gold.targets]
+    extra = [t for t, k in zip(read.targets, left, strict=True) if left.count(k) > right.count(k)]
+    missing = [t for t, k in zip(gold.targets, right, strict=True) if right.count(k) > left.count(k)]
+    if extra or missing:
+        parts = [f"extra {_show(t)}" for t in extra] + [f"missing {_show(t)}" for t in missing]
+        return GoalMatch(False, "; ".join(parts))
+    return GoalMatch(True)

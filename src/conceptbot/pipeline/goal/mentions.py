@@ -1,0 +1,175 @@
+"""Where a request names the scene's objects, destinations and people, as noun phrases.
+
+A scene name matches a run of tokens spelling it (case-insensitive; its last word also in the plural:
+"bins" for "bin") only where that run ends a noun phrase: "dog" does not match in "the dog biscuit",
+nor "toddler" in "the toddler's reach" (a possessor is not a destination). Longer names are matched
+first and each token belongs to one mention ("non-toxic tray" before "toxic tray"). A plural head
+names several destinations: "the wood, metal and fabric bins" the bins whose other words it has,
+"the recycling bins" (no such words) every bin.
+
+People: "me" names the destination ``user`` where the scene has one, a people word ("my son", "the
+kids") the scene's person destination of that kind (``people`` in ``words.json``), and "her"/"him"
+the person the request spoke of last.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+from spacy.tokens import Doc, Token
+
+from conceptbot.core.scene import Scene
+
+
+@dataclass(frozen=True)
+class Mention:
+    """Scene names a run of tokens speaks of.
+
+    Attributes:
+        names: The scene names (several for a plural head: "the paper and plastic bins").
+        start: The first token's index.
+        end: One past the last token's index.
+        kind: ``place`` (a destination), ``object`` (a pickable object), ``both`` (a name that is
+            both; the role decides) or ``person`` ("me", "my son", "her").
+    """
+
+    names: tuple[str, ...]
+    start: int
+    end: int
+    kind: str
+
+    def covers(self, index: int) -> bool:
+        """Whether the token at ``index`` is part of the mention."""
+        return self.start <= index < self.end
+
+
+def _forms(word: str) -> set[str]:
+    """A name's last word and its plurals."""
+    return {word, word + "s", word + "es", word[:-1] + "ies" if word.endswith("y") else word}
+
+
+def _ends_phrase(doc: Doc, end: int) -> bool:
+    """Whether the noun phrase ends at token ``end - 1``: not followed by a noun it modifies, nor by a
+    possessive "'s"."""
+    if end >= len(doc):
+        return True
+    after = doc[end]
+    if after.tag_ == "POS" or (after.text.lower() in ("'s", "’s") and after.dep_ == "case"):
+        return False
+    return not (after.pos_ in ("NOUN", "PROPN") and doc[end - 1].head.i >= end)
+
+
+def _names(doc: Doc, scene: Scene, spelled: dict[str, list[str]], used: list[bool]) -> list[Mention]:
+    """Mentions of the scene's own names, longest first, each token used once."""
+    kinds = {}
+    for obj in scene.objects:
+        kinds[obj.name] = (
+            "both" if obj.pickable and obj.destination else "place" if obj.destination else "object"
+        )
+    lower = [t.text.lower() for t in doc]
+    found: list[Mention] = []
+    for name in sorted(kinds, key=lambda n: (-len(spelled[n]), n)):
+        key = spelled[name]
+        if not key or kinds[name] not in ("place", "object", "both"):
+            continue
+        for start in range(len(doc) - len(key) + 1):
+            end = start + len(key)
+            if any(used[start:end]) or lower[start : end - 1] != key[:-1]:
+                continue
+            head_ok = lower[end - 1] in _forms(key[-1]) or doc[end - 1].lemma_.lower() == key[-1]
+            if head_ok and _ends_phrase(doc, end):
+                found.append(Mention((name,), start, end, kinds[name]))
+                used[start:end] = [True] * len(key)
+    return found
+
+
+def _groups(doc: Doc, scene: Scene, spelled: dict[str, list[str]], used: list[bool]) -> list[Mention]:
+    """Plural heads naming several destinations ("the wood, metal and fabric bins", "the bins")."""
+    heads: dict[str, list[str]] = {}
+    for name in scene.destinations:
+        if spelled[name]:
+            heads.setdefault(spelled[name][-1], []).append(name)
+    found = []
+    for token in doc:
+        group = heads.get(token.lemma_.lower())
+        if used[token.i] or not group or token.text.lower() == token.lemma_.lower():
+            continue
+        if not _ends_phrase(doc, token.i + 1):
+            continue
+        start = token.i
+        while start > 0 and not used[start - 1] and _modifies(doc[start - 1]):
+            start -= 1
+        modifiers = {t.text.lower() for t in doc[start : token.i]}
+        described = [n for n in group if len(spelled[n]) > 1 and set(spelled[n][:-1]) <= modifiers]
+        if not described and modifiers & {w for n in group for w in spelled[n][:-1]}:
+            continue  # "the red bins" where no bin is red: not these bins
+        found.append(Mention(tuple(described or group), start, token.i + 1, "place"))
+        used[start : token.i + 1] = [True] * (token.i + 1 - start)
+    return found
+
+
+def _modifies(token: Token) -> bool:
+    """Whether a token before a plural head is one of its modifiers ("wood", ",", "and")."""
+    if token.tag_ in ("DT", "PDT", "PRP$", "IN", "TO", "VB", "MD", "PRP"):
+        return False
+    return token.pos_ in ("NOUN", "PROPN", "ADJ", "CCONJ") or token.text == "," or token.tag_ == "VBG"
+
+
+def _people(
+    doc: Doc, scene: Scene, people: dict[str, list[str]], used: list[bool], is_person: Callable[[str], bool]
+) -> list[Mention]:
+    """People words ("me", "my son") naming the scene's person destinations."""
+    found = []
+    for name in scene.destinations:
+        person_words = people.get(name.lower(), [])
+        for token in doc:
+            if used[token.i] or token.text.lower() not in person_words or token.tag_ == "PRP$":
+                continue
+            if token.pos_ != "PRON" and not _ends_phrase(doc, token.i + 1):
+                continue
+            found.append(Mention((name,), token.i, token.i + 1, "person"))
+            used[token.i] = True
+    return found
+
+
+def _pronouns(
+    doc: Doc, known: list[Mention], pronouns: Sequence[str], is_person: Callable[[str], bool]
+) -> list[Mention]:
+    """ "her", "him" as the person the request spoke of last (or, with none before, first after)."""
+    people = [m for m in known if m.kind == "person" or any(is_person(n) for n in m.names)]
+    found = []
+    for token in doc:
+        if token.text.lower() not in pronouns or token.tag_ != "PRP" or not people:
+            continue
+        before = [m for m in people if m.end <= token.i]
+        who = before[-1] if before else people[0]
+        found.append(Mention(who.names, token.i, token.i + 1, "person"))
+    return found
+
+
+def scene_mentions(
+    doc: Doc,
+    scene: Scene,
+    spelled: dict[str, list[str]],
+    people: dict[str, list[str]],
+    pronouns: Sequence[str],
+    is_person: Callable[[str], bool],
+) -> list[Mention]:
+    """Every mention of the scene in the parsed request, in text order (see the module docstring).
+
+    Args:
+        doc: The parsed request.
+        scene: The scene.
+        spelled: Each scene name's tokens, lower case.
+        people: Person destination name -> the words that name such a person.
+        pronouns: The pronouns that refer back to a person ("her", "him").
+        is_person: Whether a destination is a person or an animal.
+    """
+    used = [False] * len(doc)
+    found = _groups(doc, scene, spelled, used)  # before single names: "the paper and plastic bins"
+    found += _names(doc, scene, spelled, used)
+    found += _people(doc, scene, people, used, is_person)
+    found = sorted(found, key=lambda m: m.start)
+    found += _pronouns(doc, found, pronouns, is_person)
+    return sorted(found, key=lambda m: m.start)

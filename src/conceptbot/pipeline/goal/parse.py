@@ -1,0 +1,213 @@
+"""The request's clauses, read off spaCy's parse: where each one sends things and what it sends.
+
+The small English model misparses imperatives often enough ("Sort" as an adverb, "finds" as a verb,
+"objects" as a verb) that the reader leans on the parse for what it gets right: tags, dependency
+labels near a word, sentence ends; and on the order of words for the rest.
+
+1. **Chunks.** The request splits at sentence ends, ";" and ":" (hard boundaries) and at ",", "and",
+   "but", "then", "so", "because", "since" (soft ones), never inside a mention. A soft chunk that has
+   neither a clause verb nor a destination continues the one before ("hand me the ruler | and the
+   eraser"); a chunk naming no destination followed by one that has a destination but no verb is one
+   phrase ("put the hammer | and the screwdriver in the toolbox"). A chunk with a destination and no
+   verb after one with a destination is a gapped clause ("the poisonous ones go on the toxic tray, |
+   the ones that are safe to eat on the edible tray").
+2. **Clauses.** Each chunk's form: ``imperative`` (it opens with a verb, after "could you", "please",
+   "let's"), ``subject`` ("X go(es)/belong(s) in A", "X should be thrown away"), ``for`` ("A is for
+   X"), ``desire`` ("I need/want/'d love X", "X would be lovely", "how about X"), ``fragment`` (no
+   verb of its own: "TV remote: coffee table") or ``statement`` (anything else: "I'm freezing here
+   on the sofa").
+3. **Places.** A destination mention is where things go only in a destination role: after a spatial
+   preposition ("in", "onto", "up to", "on the edge of"), as the indirect object of the verb ("give
+   the dog a treat"), as the subject of "is for", alone in a fragment; a person also after "with"
+   or "for" ("share it with the dog"). Never as a possessor, a subject of a statement, or after
+   "out of"/"from".
+4. **Theme.** What is sent: the tokens left once the frame is taken out (opening words, the verb
+   and its particles, modal and auxiliary verbs, destinations with their prepositions, recipients,
+   a "by <key>" phrase), the run before the verb for the ``subject`` form, after "for" for ``for``,
+   else the first run after the verb that has a noun in it.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from functools import cache
+from importlib import resources
+
+from spacy.tokens import Doc, Token
+
+from conceptbot.pipeline.goal.mentions import Mention
+
+HARD = {".", "!", "?", ";", ":"}
+SOFT = {",", "and", "but", "then", "so", "because", "since", "while", "whereas"}
+CLAUSE_DEPS = {"ROOT", "conj", "ccomp", "parataxis", "advcl", "dep", "xcomp"}
+NOMINAL_TAGS = {"NN", "NNS", "NNP", "NNPS", "CD"}
+
+
+@cache
+def vocabulary() -> dict:
+    """The vocabulary of ``words.json``."""
+    text = resources.files("conceptbot.pipeline.goal").joinpath("words.json").read_text(encoding="utf-8")
+    return json.loads(text)
+
+
+@dataclass
+class Chunk:
+    """A run of tokens read as one clause.
+
+    Attributes:
+        start: The first token's index.
+        end: One past the last token's index.
+        after: The boundary before it: ``""`` (the first), ``hard`` (".", ";"), ``colon`` or ``soft``.
+    """
+
+    start: int
+    end: int
+    after: str
+
+
+@dataclass
+class Place:
+    """A destination of a clause: one mention (several names for a plural head)."""
+
+    mention: Mention
+    frame: tuple[int, ...]  # the mention's tokens with its preposition and determiners
+
+
+@dataclass
+class Clause:
+    """What one chunk says (see the module docstring).
+
+    Attributes:
+        chunk: Its tokens.
+        form: ``imperative``, ``subject``, ``for``, ``desire``, ``fragment`` or ``statement``.
+        verb: The main verb's lemma ("" for a fragment).
+        places: Its destinations in a destination role.
+        theme: The token indices of what it sends (empty: none).
+        key: "by material" when it sorts by a key, else "".
+        negated: The verb is negated ("don't touch").
+        runs: Every run of non-frame tokens (for the dish and need readings).
+    """
+
+    chunk: Chunk
+    form: str
+    verb: str = ""
+    verb_at: int = -1
+    places: list[Place] = field(default_factory=list)
+    theme: tuple[int, ...] = ()
+    key: str = ""
+    negated: bool = False
+    runs: list[tuple[int, ...]] = field(default_factory=list)
+
+
+def _in_mention(mentions: Sequence[Mention], index: int) -> Mention | None:
+    return next((m for m in mentions if m.covers(index)), None)
+
+
+def clause_verbs(doc: Doc, start: int, end: int, mentions: Sequence[Mention]) -> list[Token]:
+    """The verbs heading a clause of their own in ``doc[start:end]``: not inside a relative clause
+    or a noun phrase ("the ones that are safe"), not a "to" infinitive ("to make a stronger
+    cleaner"), not part of a scene name ("throw pillow")."""
+    found = []
+    for token in doc[start:end]:
+        if not token.tag_.startswith("VB") and token.tag_ != "MD":
+            continue
+        if _in_mention(mentions, token.i) or token.dep_ in ("aux", "auxpass"):
+            continue
+        if token.dep_ not in CLAUSE_DEPS and start <= token.head.i < end:
+            continue
+        if token.dep_ == "xcomp" and start <= token.head.i < end:
+            continue
+        if token.i > 0 and doc[token.i - 1].tag_ == "TO":
+            continue
+        if token.tag_ in ("VBN", "VBG") and token.dep_ not in ("ROOT", "conj", "ccomp", "parataxis", "advcl"):
+            continue
+        found.append(token)
+    return found
+
+
+def chunks(doc: Doc, mentions: Sequence[Mention]) -> list[Chunk]:
+    """The request's chunks (step 1 of the module docstring)."""
+    pieces: list[Chunk] = []
+    start, after = 0, ""
+    sentence_starts = {s.start for s in doc.sents}
+    for token in doc:
+        i = token.i
+        word = token.text.lower()
+        if i in sentence_starts and i > start:
+            pieces.append(Chunk(start, i, after))
+            start, after = i, "hard"
+        if _in_mention(mentions, i):
+            continue
+        if word in HARD:
+            if i > start:
+                pieces.append(Chunk(start, i, after))
+            start, after = i + 1, "colon" if word == ":" else "hard"
+        elif _soft(token) and i > start and not all(doc[j].text.lower() in SOFT for j in range(start, i)):
+            # a run of boundary words (", and then") stays at the head of the next chunk
+            pieces.append(Chunk(start, i, after))
+            start, after = i, "soft"
+    if start < len(doc):
+        pieces.append(Chunk(start, len(doc), after))
+    pieces = [p for p in pieces if any(not doc[i].is_punct for i in range(p.start, p.end))]
+    return _merged(doc, pieces, mentions)
+
+
+def _soft(token: Token) -> bool:
+    """Whether a token is a soft boundary: a comma, a coordinating "and"/"but", "then", or a
+    subordinating "so", "because", "since" ("I'm so thirsty" is not one)."""
+    word = token.text.lower()
+    if word == ",":
+        return True
+    if word in ("and", "but"):
+        return token.tag_ == "CC"
+    if word == "then":
+        return token.tag_ in ("RB", "CC")
+    return word in SOFT and token.tag_ in ("IN", "CC") and token.dep_ in ("mark", "cc", "prep", "advmod")
+
+
+def _has_place(chunk: Chunk, mentions: Sequence[Mention]) -> bool:
+    return any(chunk.start <= m.start < chunk.end and m.kind in ("place", "both", "person") for m in mentions)
+
+
+def _merged(doc: Doc, pieces: list[Chunk], mentions: Sequence[Mention]) -> list[Chunk]:
+    """Soft chunks joined back where they are one phrase (step 1 of the module docstring)."""
+    out: list[Chunk] = []
+    for piece in pieces:
+        verbs = clause_verbs(doc, piece.start, piece.end, mentions)
+        place = _has_place(piece, mentions)
+        prev = out[-1] if out else None
+        if prev is not None and piece.after == "soft":
+            prev_place = _has_place(prev, mentions)
+            if not verbs and not place:
+                prev.end = piece.end  # "and the eraser", "please"
+                continue
+            if not verbs and place and not prev_place and not _statement_like(doc, prev, mentions):
+                prev.end = piece.end  # "put the hammer | and the screwdriver in the toolbox"
+                continue
+        out.append(piece)
+    # A first chunk that is a bare noun phrase is the subject of the next ("The cotton socks | and
+    # the beach towel need to go ...").
+    while len(out) > 1 and out[1].after == "soft" and _bare_phrase(doc, out[0], mentions):
+        out[1] = Chunk(out[0].start, out[1].end, out[0].after)
+        out.pop(0)
+    return out
+
+
+def _statement_like(doc: Doc, chunk: Chunk, mentions: Sequence[Mention]) -> bool:
+    """Whether a chunk has a personal pronoun as the subject of its own verb ("I need ...")."""
+    personal = set(vocabulary()["personal"])
+    for token in doc[chunk.start : chunk.end]:
+        subject = token.dep_ in ("nsubj", "nsubjpass") and token.text.lower() in personal - {"you"}
+        if subject and token.head.dep_ not in ("relcl", "acl"):
+            return True
+    return False
+
+
+def _bare_phrase(doc: Doc, chunk: Chunk, mentions: Sequence[Mention]) -> bool:
+    """A chunk of a noun phrase alone (no verb, no destination, not opened by a preposition)."""
+    first = doc[chunk.start]
+    if first.tag_ in ("IN", "TO", "WRB") or _has_place(chunk, mentions):
+        return False
+    return not clause_verbs(doc, chunk.start, chunk.end, mentions)

@@ -1,0 +1,384 @@
+"""The goal reader: a request and a scene in, a :class:`~conceptbot.pipeline.goal.types.Goal` out.
+
+Clauses (:mod:`conceptbot.pipeline.goal.parse`) become targets:
+
+* A clause with destinations sends its theme there; a plural head ("into the recycling bins") or a
+  destination-only continuation ("into the paper bin | and the plastic bin") makes a **sort**: each
+  place takes the objects that belong in it, by the request's key ("by material") or by its name
+  (criterion ""). A place the request also gives a clause of its own leaves the sort ("anything made
+  of several materials goes in the mixed bin").
+* "TV remote: coffee table" and "Kitchen basket: everything that's safe to eat" pair a theme with a
+  place across a colon; "fetch one game ... and set it on the coffee table" gives the first
+  clause's theme to the second's place.
+* A sorting clause with no place before others that have places only says what is sorted ("Sort the
+  potted plants: ..."); "leave X", "don't touch X", "X stays" send nothing.
+* An instruction with no place ("throw away just the poisonous mushrooms", "X should be locked
+  away") is a target with ``to`` None: the planner chooses where.
+* "I need/want something ..." (or a scene object) sends it to the user where the scene has one.
+* With no target: a dish when the request asks for one ("I want to make guacamole", "I'd love an
+  omelette", "pancakes would be lovely", "a bowl of guacamole" is guacamole); the dish's
+  ingredients go to a place the planner chooses. ``is_dish`` (a graph check) can reject a dish, and
+  then the thing wished for goes to the user.
+* With neither: a need ("my phone battery is almost empty"), met by what the planner chooses.
+* Stacking ("stack", "pile ... up", "into one pile", "on top of each other") makes ``stack`` true and
+  one target, to None, of what is stacked (every object unless the request says otherwise).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+from spacy.language import Language
+from spacy.tokens import Doc
+
+from conceptbot.core.scene import Scene
+from conceptbot.pipeline.goal.clauses import analyse
+from conceptbot.pipeline.goal.mentions import Mention, scene_mentions
+from conceptbot.pipeline.goal.parse import Clause, chunks, vocabulary
+from conceptbot.pipeline.goal.themes import Reading, criterion_text, head_of, objects_in, read_theme
+from conceptbot.pipeline.goal.types import ALL, Goal, GoalTarget
+from conceptbot.pipeline.hazards import is_person as default_is_person
+
+
+@dataclass
+class _Item:
+    """A theme sent to places (None: the planner chooses), before it becomes targets."""
+
+    clause: Clause
+    places: list[tuple[str, ...]]  # one entry per mention: a plural head gives several names
+    theme: tuple[int, ...]
+    key: str = ""
+    shared: bool = False  # the theme is shared with the item before ("and the plastic bin")
+
+
+class GoalReader:
+    """Reads the goal of a request (see the module docstring and :mod:`conceptbot.pipeline.goal`).
+
+    Args:
+        nlp: A spaCy pipeline with a parser and a lemmatizer (default: the project's
+            ``en_core_web_sm``, loaded on first use).
+        is_dish: Whether a phrase names a dish to prepare (a graph check); None: trust the parse.
+        is_person: Whether a destination is a person or an animal (things are handed to it).
+    """
+
+    def __init__(
+        self,
+        nlp: Language | None = None,
+        is_dish: Callable[[str], bool] | None = None,
+        is_person: Callable[[str], bool] = default_is_person,
+    ) -> None:
+        self._nlp = nlp
+        self.is_dish = is_dish
+        self.is_person = is_person
+        self._spelled: dict[str, list[str]] = {}
+
+    @property
+    def nlp(self) -> Language:
+        """The spaCy pipeline (loaded on first use)."""
+        if self._nlp is None:
+            from conceptbot.knowledge.triples import load_model
+
+            self._nlp = load_model()
+        return self._nlp
+
+    def _spell(self, names: Sequence[str]) -> dict[str, list[str]]:
+        for name in names:
+            if name not in self._spelled:
+                self._spelled[name] = [t.text.lower() for t in self.nlp.tokenizer(name)]
+        return {n: self._spelled[n] for n in names}
+
+    def read(self, request: str, scene: Scene) -> Goal:
+        """The goal of ``request`` in ``scene``.
+
+        Args:
+            request: What the person asked.
+            scene: What the robot sees (its names are the goal's).
+
+        Returns:
+            The goal: targets with scene names, ``to`` None where the planner must choose.
+        """
+        vocab = vocabulary()
+        doc = self.nlp(request)
+        spelled = self._spell(scene.names)
+        mentions = scene_mentions(
+            doc, scene, spelled, vocab["people"], vocab["recipient_pronouns"], self.is_person
+        )
+        clauses = [analyse(doc, c, mentions, self.is_person) for c in chunks(doc, mentions)]
+        stack = is_stacking(doc)
+        users = [d for d in scene.destinations if d.lower() == "user"]
+        items = _items(doc, clauses, mentions, stack, users)
+        targets = _targets(doc, items, mentions)
+        dish: str | None = None
+        need: str | None = None
+        if stack:
+            targets = [_stacked(doc, clauses, mentions)]
+        if not targets and not stack:
+            targets, dish = self._wished(doc, clauses, mentions, scene)
+        if not targets and not stack:
+            need = request.strip().rstrip(".!?")
+            targets = [GoalTarget(None, "need")]
+        return Goal(stack, dish, need, tuple(targets))
+
+    def _wished(
+        self, doc: Doc, clauses: list[Clause], mentions: list[Mention], scene: Scene
+    ) -> tuple[list[GoalTarget], str | None]:
+        """Targets of a wish: a dish's ingredients, or what is wished for, to the user."""
+        vocab = vocabulary()
+        users = [d for d in scene.destinations if d.lower() == "user"]
+        for clause in clauses:
+            if clause.form == "imperative" and clause.verb in vocab["making"] and not clause.places:
+                wished, making = clause.theme, True
+            elif clause.form == "desire" and (
+                clause.verb in vocab["making"] or clause.verb in ("want", "need", "be")
+            ):
+                wished, making = clause.theme, clause.verb in vocab["making"]
+            elif clause.form == "imperative" and clause.verb in vocab["desire"] and not clause.places:
+                wished, making = clause.theme, False
+            else:
+                continue
+            if not wished:
+                continue
+            reading = read_theme(doc, wished, mentions)
+            if not making and (_names_itself(doc, wished, mentions) or _indefinite(doc, wished)):
+                return [_to(users, reading)], None
+            dish = dish_words(doc, wished)
+            if dish and (self.is_dish is None or self.is_dish(dish)):
+                named = objects_in(wished, mentions)
+                return [GoalTarget(None, "ingredients", named, "", ALL)], dish
+            if not making:
+                return [_to(users, reading)], None
+        return [], None
+
+
+def _names_itself(doc: Doc, run: Sequence[int], mentions: list[Mention]) -> bool:
+    """Whether a phrase is a scene object ("the watering can"), not a thing made of some ("a tomato
+    and cucumber salad")."""
+    head = head_of(doc, run)
+    return head is not None and any(m.kind in ("object", "both") and m.covers(head.i) for m in mentions)
+
+
+def _indefinite(doc: Doc, run: Sequence[int]) -> bool:
+    """Whether a wished-for phrase is "something ...", "anything ..." (not a dish)."""
+    skip = {"a", "an", "the", "some", "really", "just"}
+    first = next((i for i in run if doc[i].text.lower() not in skip), run[0])
+    return doc[first].text.lower() in ("something", "anything", "someone", "somebody")
+
+
+def _to(users: list[str], reading: Reading) -> GoalTarget:
+    """A wished-for thing, to the user (None where the scene has no user)."""
+    return GoalTarget(
+        users[0] if users else None, reading.takes, reading.named, reading.criterion, reading.count
+    )
+
+
+def dish_words(doc: Doc, run: Sequence[int]) -> str:
+    """The dish a wished-for phrase names: its words up to the head noun and an "of" phrase, without
+    determiners or a following "for breakfast", "to go with ..."; "a bowl of guacamole" is
+    guacamole (a measure noun before "of": ``measure`` in ``words.json``)."""
+    vocab = vocabulary()
+    words = []
+    for i in run:
+        token = doc[i]
+        word = token.text.strip(".,;:!?")
+        lower = word.lower()
+        if not words and lower in (*vocab["determiners"], *vocab["restrictors"], "really", "some"):
+            continue
+        if words and (token.tag_ in ("TO", "WDT", "RB") or (token.tag_ == "IN" and lower != "of")):
+            break
+        if words and token.tag_ == "DT":
+            break
+        words.append(word)
+    if len(words) >= 3 and words[1].lower() == "of" and words[0].lower() in vocab["measure"]:
+        words = words[2:]
+    return " ".join(w for w in words if w)
+
+
+def is_stacking(doc: Doc) -> bool:
+    """Whether the request asks for a pile: "stack"/"pile" as its verb, "into one pile", "make a
+    stack", "on top of each other" (``stack`` in ``words.json``); "sort this pile" is not one."""
+    words = vocabulary()["stack"]
+    text = " ".join(t.text.lower() for t in doc)
+    if any(p in text for p in words["phrases"]):
+        return True
+    for token in doc:
+        lemma = token.lemma_.lower()
+        if (
+            lemma in words["verbs"]
+            and token.pos_ == "VERB"
+            and token.dep_ in ("ROOT", "conj", "xcomp", "ccomp")
+        ):
+            return True
+        if lemma in words["nouns"] and token.pos_ == "NOUN":
+            head = token.head
+            if token.dep_ == "pobj" and head.text.lower() in ("into", "in", "as"):
+                return True
+            if token.dep_ == "dobj" and head.lemma_ in ("make", "build", "form", "create"):
+                return True
+    return False
+
+
+def _stacked(doc: Doc, clauses: list[Clause], mentions: list[Mention]) -> GoalTarget:
+    """What a pile is made of: every object, unless the stacking clause names or describes some."""
+    nouns = vocabulary()["stack"]["nouns"]
+    for clause in clauses:
+        if clause.form == "imperative" and clause.theme:
+            # what is stacked, without "into one pile", "on top of each other"
+            run = _stacked_things(doc, list(clause.theme), nouns)
+            reading = read_theme(doc, run, mentions) if run else Reading("all")
+            if reading.takes in ("named", "criterion") and reading.criterion.lower() not in (
+                "",
+                "pile",
+                "stack",
+            ):
+                return GoalTarget(None, reading.takes, reading.named, reading.criterion, reading.count)
+    return GoalTarget(None, "all")
+
+
+def _stacked_things(doc: Doc, run: list[int], nouns: Sequence[str]) -> list[int]:
+    """What a stacking clause's theme stacks: "all of these" in "all of these into one pile", "a
+    single stack out of all of these" or "these on top of each other"."""
+    at = next((k for k, i in enumerate(run) if doc[i].lemma_.lower() in nouns), None)
+    if (at is not None and doc[run[0]].text.lower() in ("a", "an", "one")) or at == 0:
+        # the pile comes first: what it is made of follows "out of", "of", "from", "with"
+        after = next(
+            (k for k in range(at + 1, len(run)) if doc[run[k]].text.lower() in ("of", "from", "with")), None
+        )
+        return run[after + 1 :] if after is not None else []
+    cut = next(
+        (
+            k
+            for k, i in enumerate(run)
+            if doc[i].tag_ == "IN"
+            and (doc[i].text.lower() == "on" or any(t.lemma_.lower() in nouns for t in doc[i].subtree))
+        ),
+        len(run),
+    )
+    return run[:cut]
+
+
+def _items(
+    doc: Doc, clauses: list[Clause], mentions: list[Mention], stack: bool, users: list[str]
+) -> list[_Item]:
+    """Each clause's theme and places, with colon pairs, pronoun themes and sort headers resolved."""
+    vocab = vocabulary()
+    items: list[_Item] = []
+    for n, clause in enumerate(clauses):
+        places = [p.mention.names for p in clause.places]
+        prev = clauses[n - 1] if n else None
+        stay = (clause.verb in vocab["stay"] and not places) or (
+            clause.negated and clause.verb in (*vocab["untouched"], *vocab["stay"])
+        )
+        if clause.form == "desire" and clause.theme and clause.verb in ("want", "need"):
+            if _names_itself(doc, clause.theme, mentions) or _indefinite(doc, clause.theme):
+                items.append(_Item(clause, [tuple(users)] if users else [], clause.theme))
+            continue
+        if stay or clause.form in ("statement", "desire"):
+            continue
+        if clause.form == "imperative" and not places:
+            if clause.verb in (*vocab["making"], *vocab["desire"], *vocab["helping"]):
+                continue
+            if clause.verb in vocab["stack"]["verbs"] or stack:
+                continue
+            if clause.theme:
+                items.append(_Item(clause, [], clause.theme, clause.key))
+            continue
+        if clause.form == "fragment" and places and not clause.theme:
+            if (
+                prev is not None
+                and clause.chunk.after == "colon"
+                and prev.form == "fragment"
+                and not prev.places
+            ):
+                if items and items[-1].clause is prev:
+                    items.pop()
+                items.append(_Item(clause, places, prev.theme, clause.key))
+                continue
+            if clause.chunk.after == "soft" and items and items[-1].places:
+                items.append(_Item(clause, places, items[-1].theme, items[-1].key, shared=True))
+                continue
+            nxt = clauses[n + 1] if n + 1 < len(clauses) else None
+            if nxt is not None and nxt.chunk.after == "colon" and nxt.form == "fragment" and not nxt.places:
+                items.append(_Item(clause, places, nxt.theme, clause.key))
+                continue
+            continue
+        if clause.form == "fragment" and not places:
+            paired = prev is not None and clause.chunk.after == "colon" and prev.form == "fragment"
+            if clause.theme and paired and prev.places and not prev.theme:
+                continue  # paired with the place before (handled there)
+            if clause.theme:
+                items.append(_Item(clause, [], clause.theme, clause.key))
+            continue
+        theme = clause.theme
+        if (
+            places
+            and _pronoun_only(doc, theme)
+            and items
+            and not items[-1].places
+            and clause.chunk.after == "soft"
+        ):
+            theme = items.pop().theme  # "fetch one game ... and set it on the coffee table"
+        items.append(_Item(clause, places, theme, clause.key))
+    return _without_headers(items, vocab)
+
+
+def _pronoun_only(doc: Doc, run: Sequence[int]) -> bool:
+    return not run or all(doc[i].text.lower() in ("it", "them", "one", "these", "those") for i in run)
+
+
+def _without_headers(items: list[_Item], vocab: dict) -> list[_Item]:
+    """Drops what says only which objects are sorted ("Sort the potted plants:"), and place-less
+    fragments that no place was paired with ("Dinner's ready")."""
+    placed = any(i.places for i in items)
+    kept = []
+    for item in items:
+        if not item.places and placed:
+            clause = item.clause
+            if clause.form == "fragment" or clause.verb in vocab["sort"]:
+                continue
+        if not item.places and item.clause.form == "fragment":
+            continue
+        kept.append(item)
+    return kept
+
+
+def _targets(doc: Doc, items: list[_Item], mentions: list[Mention]) -> list[GoalTarget]:
+    """The items as targets: sorts split into one target per place (see the module docstring)."""
+    groups: list[list[_Item]] = []
+    for item in items:
+        if item.shared and groups:
+            groups[-1].append(item)
+        else:
+            groups.append([item])
+    targets: list[GoalTarget] = []
+    for group in groups:
+        names = list(dict.fromkeys(n for item in group for p in item.places for n in p))
+        theme = group[0].theme
+        if len(names) > 1:
+            # A sort: each place takes what belongs in it, except a place with a clause of its own.
+            own = {
+                p[0] for other in groups if other is not group for i in other for p in i.places if len(p) == 1
+            }
+            key = next((i.key for i in group if i.key), "")
+            targets += [GoalTarget(n, "criterion", (), key, ALL) for n in names if n not in own]
+            continue
+        reading = read_theme(doc, theme, mentions) if theme else Reading("all")
+        criterion = reading.criterion or (criterion_text(doc, theme) if reading.takes == "criterion" else "")
+        to = names[0] if names else None
+        targets.append(GoalTarget(to, reading.takes, reading.named, criterion, reading.count))
+    return _merged_named(targets)
+
+
+def _merged_named(targets: list[GoalTarget]) -> list[GoalTarget]:
+    """Targets naming objects for the same place, as one ("hand me the tape; hand me the glue")."""
+    out: list[GoalTarget] = []
+    for target in targets:
+        same = next(
+            (t for t in out if t.to == target.to and t.to and t.takes == target.takes == "named"), None
+        )
+        if same is None:
+            out.append(target)
+            continue
+        named = tuple(dict.fromkeys((*same.named, *target.named)))
+        out[out.index(same)] = GoalTarget(same.to, "named", named, "", len(named))
+    return out
