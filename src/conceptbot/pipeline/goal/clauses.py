@@ -49,9 +49,10 @@ def _mention_at(mentions: Sequence[Mention], index: int) -> Mention | None:
     return next((m for m in mentions if m.covers(index)), None)
 
 
-def _imperative(doc: Doc, at: int, end: int, mentions: Sequence[Mention]) -> tuple[int, bool]:
+def _imperative(doc: Doc, at: int, end: int, mentions: Sequence[Mention], opening: bool) -> tuple[int, bool]:
     """The index of the verb an imperative opens with at ``at`` (-1: none), and whether it is
-    negated ("don't touch")."""
+    negated ("don't touch"). A participle opens one only after another clause ("..., putting X in
+    A"); opening the request it describes the speaker ("Sitting here on the sofa, I'm freezing")."""
     vocab = vocabulary()
     negated = False
     if at + 2 < end and _lower(doc[at]) == "do" and _lower(doc[at + 1]) in ("n't", "not"):
@@ -75,8 +76,10 @@ def _imperative(doc: Doc, at: int, end: int, mentions: Sequence[Mention]) -> tup
         and any(c.dep_ in ("nsubj", "nsubjpass") and _lower(c) != "you" for c in token.head.children)
     ):
         return -1, negated  # "I fell off my bike | and scraped my knee": the subject is shared
-    if token.tag_ in ("VB", "VBP", "VBD", "VBG"):
+    if token.tag_ in ("VB", "VBP", "VBD") or (token.tag_ == "VBG" and not opening):
         return at, negated
+    if token.tag_ in ("NNS", "NNPS", "VBG"):
+        return -1, negated  # a plural noun is no imperative ("Houseplants that are ...")
     nxt = doc[at + 1] if at + 1 < end else None
     opens_phrase = nxt is not None and (
         nxt.tag_ in ("DT", "PDT", "PRP", "PRP$", "WP", "WDT", "CD", "RP") or _lower(nxt) in ("away", "up")
@@ -119,12 +122,13 @@ def _determiners_before(doc: Doc, start: int, floor: int, mentions: Sequence[Men
 
 
 def _is_for(doc: Doc, at: int, end: int) -> int:
-    """After a subject destination: the index of "for" in "is (only) for", else -1."""
+    """After a subject destination: the index of "for" in "is (only) for" or of "where" in "is
+    where", else -1."""
     if at < end and doc[at].lemma_ == "be":
         j = at + 1
         while j < end and _lower(doc[j]) in vocabulary()["restrictors"]:
             j += 1
-        if j < end and _lower(doc[j]) == "for":
+        if j < end and _lower(doc[j]) in ("for", "where"):
             return j
     return -1
 
@@ -162,15 +166,35 @@ def place_role(
         k = _determiners_before(doc, j - 2, first, mentions)
         if k - 1 >= first and _lower(doc[k - 1]) in vocab["spatial"]:
             return (*frame, *range(k - 1, j))
-    if person and prev is not None and _lower(prev) in ("with", "for") and (nxt is None or nxt.tag_ != "TO"):
-        return (*frame, j - 1)  # "share it with the dog"; not "for me to read"
+        if k == first and _is_for(doc, mention.end, end) >= 0:
+            return (*frame, *range(k, j))  # "the edge of the bathtub is where ..."
+    if person and prev is not None and _lower(prev) in ("with", "for"):
+        # "share it with the dog"; "find something for me to read" (the words stay the
+        # criterion's); not "too small for me to read"
+        if nxt is None or nxt.tag_ != "TO":
+            return (*frame, j - 1)
+        if verb >= 0:
+            return ()
     dative = doc[mention.start].dep_ == "dative"
     before_object = verb >= 0 and j - 1 == verb and nxt is not None and nxt.tag_ in _NP_START | {"PRP"}
     if person and (dative or before_object):
         return tuple(frame)  # "give the dog a treat"
-    if j == first and _is_for(doc, mention.end, end) >= 0:
-        return tuple(frame)
+    if j == first and (_is_for(doc, mention.end, end) >= 0 or _receives(doc, mention.end, end) >= 0):
+        return tuple(frame)  # "the toxic tray is for ...", "the dog would like a treat"
     return None
+
+
+def _receives(doc: Doc, at: int, end: int) -> int:
+    """After a subject destination: the index of a verb saying it should get something ("the mixed
+    bin takes X", "the dog would like X", "the coffee table needs X"), else -1."""
+    j = at
+    while j < end and (doc[j].tag_ in ("MD", "RB") or doc[j].dep_ in ("aux", "neg")):
+        j += 1
+    if j + 1 < end and doc[j].lemma_.lower() in vocabulary()["receiving"] and doc[j].tag_.startswith("VB"):
+        after = doc[j + 1]
+        if after.tag_ in _NP_START or _lower(after) in vocabulary()["one"]:
+            return j
+    return -1
 
 
 def _key(doc: Doc, first: int, end: int, mentions: Sequence[Mention]) -> tuple[str, list[int]]:
@@ -210,7 +234,8 @@ def _subject_verb(
     vocab = vocabulary()
     place_tokens = {i for p in places for i in p.frame}
     for token in doc[first:end]:
-        if _mention_at(mentions, token.i) is not None or not token.tag_.startswith("VB"):
+        phrasal = token.lemma_ in vocab["motion"] and token.i + 1 < end and _lower(doc[token.i + 1]) == "up"
+        if _mention_at(mentions, token.i) is not None or not (token.tag_.startswith("VB") or phrasal):
             continue
         auxes = [c for c in token.children if c.dep_ in ("aux", "auxpass")]
         if token.dep_ == "xcomp" and token.head.lemma_ in ("need", "have"):
@@ -224,6 +249,12 @@ def _subject_verb(
                 return token
         if token.tag_ == "VBN" and any(a.dep_ == "auxpass" for a in auxes) and obliged:
             return token
+        if token.tag_ == "VBG" and token.dep_ == "xcomp" and token.head.lemma_ == "need":
+            # "the leftovers need heating up in the microwave", "X needs locking away"; not "this
+            # baguette needs slicing" (a need: nothing says where)
+            away = any(_lower(c) == "away" for c in token.children)
+            if away or any(i in place_tokens for i in range(token.i + 1, end)):
+                return token
     return None
 
 
@@ -252,9 +283,9 @@ def _runs(indices: Sequence[int], frame: set[int], doc: Doc) -> list[tuple[int, 
     if current:
         runs.append(current)
     trimmed = []
-    edge = {"and", "or", "but", "so", "then", "please", "also", "now", ",", "with"}
+    edge = {"and", "or", "but", "so", "then", "please", "also", "now", ","}
     for run in runs:
-        while run and (_lower(doc[run[0]]) in edge or doc[run[0]].is_punct):
+        while run and (_lower(doc[run[0]]) in edge | {"with"} or doc[run[0]].is_punct):
             run = run[1:]
         while run and (_lower(doc[run[-1]]) in edge or doc[run[-1]].is_punct):
             run = run[:-1]
@@ -282,7 +313,7 @@ def analyse(doc: Doc, chunk: Chunk, mentions: Sequence[Mention], is_person: Call
     first, lets = _opened(doc, chunk)
     end = _closed(doc, chunk)
     mine = [m for m in mentions if first <= m.start < end]
-    verb, negated = _imperative(doc, first, end, mine)
+    verb, negated = _imperative(doc, first, end, mine, chunk.after == "")
     frame: set[int] = set(range(chunk.start, first))
     if negated:
         frame |= {verb - 2, verb - 1}
@@ -307,23 +338,33 @@ def analyse(doc: Doc, chunk: Chunk, mentions: Sequence[Mention], is_person: Call
         runs = _runs([i for i in indices if i > verb], frame, doc)
         theme = next((r for r in runs if nominal(doc, r)), ())
         return Clause(chunk, "imperative", doc[verb].lemma_.lower(), verb, places, theme, key, negated, runs)
-    if places and places[0].mention.start <= first + 1:
+    if places and places[0].frame and min(places[0].frame) == first:
         at_for = _is_for(doc, places[0].mention.end, end)
+        if at_for < 0:
+            at_for = _receives(doc, places[0].mention.end, end)
         if at_for >= 0:
             frame |= set(range(places[0].mention.end, at_for + 1))
             runs = _runs(indices, frame, doc)
             theme = next((r for r in runs if r[0] > at_for and nominal(doc, r)), ())
             return Clause(chunk, "for", "be", at_for, places, theme, key, False, runs)
+    asked = _existential(doc, first, end, mine)
+    if asked is not None:
+        theme, place = asked
+        return Clause(chunk, "imperative", "give", -1, [place], theme, key, False, [theme])
     moving = _subject_verb(doc, first, end, places, mine)
     if moving is not None:
         chain = _chain(doc, moving, first, end)
         frame |= set(chain) | set(_particles(doc, moving.i, end))
-        before = _runs([i for i in indices if i < chain[0]], frame, doc)
-        if before and nominal(doc, before[-1]) and _personal_subject(doc, first, chain[0]) is None:
+        before = [r for r in _runs([i for i in indices if i < chain[0]], frame, doc) if nominal(doc, r)]
+        if before and _personal_subject(doc, first, chain[0]) is None:
+            # the phrase naming objects, else the first: "The fabric items, and nothing else, go ..."
+            named = [r for r in before if any(m.kind in ("object", "both") and m.start in r for m in mine)]
+            theme = (named or before)[0]
             runs = _runs(indices, frame, doc)
-            return Clause(
-                chunk, "subject", moving.lemma_.lower(), moving.i, places, before[-1], key, False, runs
-            )
+            return Clause(chunk, "subject", moving.lemma_.lower(), moving.i, places, theme, key, False, runs)
+    wished = cleft(doc, first, end)
+    if wished is not None:
+        return Clause(chunk, "desire", wished[0], -1, [], wished[1], "", False, [wished[1]])
     desire = _desire(doc, first, end, lets)
     if desire is not None:
         return desire_clause(doc, chunk, desire, first, end, places, frame)
@@ -344,6 +385,14 @@ def _desire(doc: Doc, first: int, end: int, lets: bool) -> Token | None:
     for token in doc[first:end]:
         subject = [c for c in token.children if c.dep_ == "nsubj"]
         speaker = any(_lower(c) in ("i", "we") for c in subject) or (lets and token.i == first)
+        particle = any(c.dep_ == "prt" for c in token.children)  # "make out this tiny print"
+        if token.lemma_ in vocab["making"] and token.tag_.startswith("VB") and speaker and not particle:
+            return token  # "we're making a green salad"
+        wishing = any(c.dep_ == "prep" and _lower(c) == "for" for c in token.children) and any(
+            _lower(c) in ("could", "would", "'d") for c in token.children
+        )
+        if token.lemma_ == "go" and speaker and wishing:
+            return token  # "I could really go for a PB&J"
         if token.lemma_ in vocab["desire"] and token.tag_.startswith("VB") and speaker:
             if token.lemma_ == "have":
                 modal = any(_lower(c) in ("should", "could", "can", "shall") for c in token.children)
@@ -369,12 +418,74 @@ def desire_clause(
         subject = next(c for c in verb.children if c.dep_ == "nsubj")
         theme = tuple(i for i in range(subject.left_edge.i, subject.i + 1) if i not in frame)
         return Clause(chunk, "desire", "be", verb.i, [], theme, "", False, [theme])
+    vocab = vocabulary()
     activity = next((c for c in verb.children if c.dep_ in ("xcomp", "ccomp") and c.tag_ == "VB"), None)
     at = activity if activity is not None else verb
-    frame = frame | set(range(first, at.i + 1))
+    frame = (
+        frame
+        | set(range(first, at.i + 1))
+        | {c.i for c in at.children if c.dep_ == "prep" and at.lemma_ == "go"}
+    )
+    if places and activity is None:
+        # "I'd like the tweezers put in the first aid kit": a request to move them there
+        frame |= {
+            t.i
+            for t in doc[at.i + 1 : end]
+            if t.tag_ in ("VBN", "VBD") and t.dep_ in ("ccomp", "xcomp", "acl")
+        }
+        runs = _runs(list(range(at.i + 1, end)), frame, doc)
+        theme = next((r for r in runs if nominal(doc, r)), ())
+        return Clause(chunk, "imperative", "put", at.i, places, theme, "", False, runs)
     runs = _runs(list(range(at.i + 1, end)), frame, doc)
     theme = next((r for r in runs if nominal(doc, r)), ())
-    lemma = at.lemma_.lower() if activity is not None else "want"
-    if activity is None and verb.lemma_ in ("need",):
+    lemma = "want"
+    if activity is not None or at.lemma_ in vocab["making"]:
+        lemma = at.lemma_.lower()
+    elif verb.lemma_ == "need":
         lemma = "need"
     return Clause(chunk, "desire", lemma, at.i, [], theme, "", False, runs)
+
+
+def cleft(doc: Doc, first: int, end: int) -> tuple[str, tuple[int, ...]] | None:
+    """ "Guacamole is what I want to make", "What I'd love for breakfast is an omelette": the wished
+    activity's verb ("make", or "want") and what is wished for; None for anything else."""
+    vocab = vocabulary()
+    wishes = {*vocab["desire"], *vocab["making"]}
+    for be in doc[first:end]:
+        if be.lemma_ != "be":
+            continue
+        for clause in be.children:
+            inside = {t.i for t in clause.subtree}
+            if not clause.tag_.startswith("VB") or not any(_lower(doc[i]) == "what" for i in inside):
+                continue
+            verbs = [
+                doc[i] for i in sorted(inside) if doc[i].lemma_ in wishes and doc[i].tag_.startswith("VB")
+            ]
+            if not verbs or not any(_lower(doc[i]) in ("i", "we") for i in inside):
+                continue
+            other = next((c for c in be.children if c.dep_ in ("nsubj", "attr") and c.i not in inside), None)
+            if other is None:
+                continue
+            theme = tuple(t.i for t in other.subtree if first <= t.i < end and not t.is_punct)
+            making = next((v.lemma_ for v in verbs if v.lemma_ in vocab["making"]), "want")
+            return making, theme
+    return None
+
+
+def _existential(
+    doc: Doc, first: int, end: int, mentions: Sequence[Mention]
+) -> tuple[tuple[int, ...], Place] | None:
+    """ "Is there something for my sore throat you could hand me?": the thing asked for and the
+    person a relative clause asks "you" to hand it to; else None."""
+    if first + 1 >= end or doc[first].lemma_ != "be" or _lower(doc[first + 1]) != "there":
+        return None
+    for asking in doc[first + 2 : end]:
+        you = next((c for c in asking.children if _lower(c) == "you" and c.dep_ == "nsubj"), None)
+        if asking.dep_ != "relcl" or you is None:
+            continue
+        for child in asking.children:
+            person = next((m for m in mentions if m.kind == "person" and m.covers(child.i)), None)
+            if person is not None and child.dep_ in ("dobj", "dative"):
+                theme = tuple(i for i in range(first + 2, you.i) if not doc[i].is_punct)
+                return (theme, Place(person, tuple(range(you.i, end)))) if theme else None
+    return None

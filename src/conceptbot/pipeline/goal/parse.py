@@ -186,13 +186,45 @@ def _merged(doc: Doc, pieces: list[Chunk], mentions: Sequence[Mention]) -> list[
             if not verbs and place and not prev_place and not _statement_like(doc, prev, mentions):
                 prev.end = piece.end  # "put the hammer | and the screwdriver in the toolbox"
                 continue
+            subjects = [c for v in verbs for c in v.children if c.dep_ in ("nsubj", "nsubjpass")]
+            if subjects and all(prev.start <= c.i < prev.end for c in subjects):
+                prev.end = piece.end  # "I'd like the tweezers | and the thermometer put in the kit"
+                continue
         out.append(piece)
     # A first chunk that is a bare noun phrase is the subject of the next ("The cotton socks | and
     # the beach towel need to go ...").
-    while len(out) > 1 and out[1].after == "soft" and _bare_phrase(doc, out[0], mentions):
+    while (
+        len(out) > 1
+        and out[1].after == "soft"
+        and doc[out[1].start].text.lower() in ("and", "or", ",")
+        and _bare_phrase(doc, out[0], mentions)
+    ):
         out[1] = Chunk(out[0].start, out[1].end, out[0].after)
         out.pop(0)
+    # A bare noun phrase before a verb with no subject of its own is that verb's subject ("...; the
+    # shampoo bottle | then goes in the high cabinet").
+    n = 0
+    while n + 1 < len(out):
+        if (
+            out[n + 1].after == "soft"
+            and _bare_phrase(doc, out[n], mentions)
+            and _finite_first(doc, out[n + 1])
+        ):
+            out[n] = Chunk(out[n].start, out[n + 1].end, out[n].after)
+            out.pop(n + 1)
+        else:
+            n += 1
     return out
+
+
+def _finite_first(doc: Doc, chunk: Chunk) -> bool:
+    """Whether a chunk's first word after its boundary words is a finite verb without a subject."""
+    i = chunk.start
+    while i < chunk.end and (doc[i].text.lower() in SOFT or doc[i].is_punct):
+        i += 1
+    if i >= chunk.end or doc[i].tag_ not in ("VBZ", "VBP", "VBD", "MD"):
+        return False
+    return not any(c.dep_ in ("nsubj", "nsubjpass") for c in doc[i].children)
 
 
 def _statement_like(doc: Doc, chunk: Chunk, mentions: Sequence[Mention]) -> bool:

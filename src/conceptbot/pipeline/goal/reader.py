@@ -263,6 +263,7 @@ def _items(
     """Each clause's theme and places, with colon pairs, pronoun themes and sort headers resolved."""
     vocab = vocabulary()
     items: list[_Item] = []
+    pending = ""  # a key said on its own ("By material, sort ...")
     for n, clause in enumerate(clauses):
         places = [p.mention.names for p in clause.places]
         prev = clauses[n - 1] if n else None
@@ -270,7 +271,9 @@ def _items(
             clause.negated and clause.verb in (*vocab["untouched"], *vocab["stay"])
         )
         if clause.form == "desire" and clause.theme and clause.verb in ("want", "need"):
-            if _names_itself(doc, clause.theme, mentions) or _indefinite(doc, clause.theme):
+            # a need is for a thing ("I need a tool that drives in nails"), a wish maybe for a dish
+            thing = clause.verb == "need" or _indefinite(doc, clause.theme)
+            if thing or _names_itself(doc, clause.theme, mentions):
                 items.append(_Item(clause, [tuple(users)] if users else [], clause.theme))
             continue
         if stay or clause.form in ("statement", "desire"):
@@ -302,6 +305,9 @@ def _items(
                 items.append(_Item(clause, places, nxt.theme, clause.key))
                 continue
             continue
+        if clause.form == "fragment" and not places and clause.key and not clause.theme:
+            pending = clause.key
+            continue
         if clause.form == "fragment" and not places:
             paired = prev is not None and clause.chunk.after == "colon" and prev.form == "fragment"
             if clause.theme and paired and prev.places and not prev.theme:
@@ -310,15 +316,15 @@ def _items(
                 items.append(_Item(clause, [], clause.theme, clause.key))
             continue
         theme = clause.theme
-        if (
-            places
-            and _pronoun_only(doc, theme)
-            and items
-            and not items[-1].places
-            and clause.chunk.after == "soft"
-        ):
-            theme = items.pop().theme  # "fetch one game ... and set it on the coffee table"
-        items.append(_Item(clause, places, theme, clause.key))
+        if places and _pronoun_only(doc, theme) and items:
+            before = items[-1]
+            if before.places == places:
+                continue  # "the dog would like a treat; give him one": said twice
+            theme = before.theme
+            if not before.places:
+                items.pop()  # "fetch one game ... and set it on the coffee table"
+        items.append(_Item(clause, places, theme, clause.key or pending))
+        pending = ""
     return _without_headers(items, vocab)
 
 

@@ -55,6 +55,8 @@ def _remainder(doc: Doc, run: Sequence[int]) -> bool:
             continue
         if token.head.dep_ in ("relcl", "acl") and token.head.i in run and token.head.i < token.i:
             continue
+        if token.i > 0 and _lower(doc[token.i - 1]) in ("nothing", "no", "none"):
+            continue  # "the fabric items, and nothing else": only they go
         return True
     return False
 
