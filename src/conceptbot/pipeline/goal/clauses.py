@@ -8,14 +8,13 @@ from collections.abc import Callable, Sequence
 from spacy.tokens import Doc, Token
 
 from conceptbot.pipeline.goal.mentions import Mention
-from conceptbot.pipeline.goal.parse import Chunk, Clause, Place, clause_verbs, vocabulary
+from conceptbot.pipeline.goal.parse import Chunk, Clause, Place, asks_you_to, clause_verbs, vocabulary
+from conceptbot.pipeline.goal.runs import lower as _lower
+from conceptbot.pipeline.goal.runs import nominal
+from conceptbot.pipeline.goal.runs import runs as _runs
+from conceptbot.pipeline.goal.wishes import cleft, desire_clause, desire_verb, existential
 
 _NP_START = {"DT", "PDT", "PRP$", "CD", "JJ", "NN", "NNS", "NNP", "NNPS"}
-_PRONOUN_THEMES = {"it", "them", "they", "him", "her", "one"}
-
-
-def _lower(token: Token) -> str:
-    return token.text.lower()
 
 
 def _opened(doc: Doc, chunk: Chunk) -> tuple[int, bool]:
@@ -26,7 +25,10 @@ def _opened(doc: Doc, chunk: Chunk) -> tuple[int, bool]:
     while i < chunk.end:
         word = _lower(doc[i])
         nxt = _lower(doc[i + 1]) if i + 1 < chunk.end else ""
-        if word in vocab["question"] and nxt == "you":
+        asked = asks_you_to(doc, i, chunk.end)
+        if asked >= 0:
+            i = asked  # "I'd like you to put ..."
+        elif word in vocab["question"] and nxt == "you":
             i += 2
         elif word == "let" and nxt in ("'s", "’s", "us"):
             i, lets = i + 2, True
@@ -82,9 +84,13 @@ def _imperative(doc: Doc, at: int, end: int, mentions: Sequence[Mention], openin
         return -1, negated  # a plural noun is no imperative ("Houseplants that are ...")
     nxt = doc[at + 1] if at + 1 < end else None
     opens_phrase = nxt is not None and (
-        nxt.tag_ in ("DT", "PDT", "PRP", "PRP$", "WP", "WDT", "CD", "RP") or _lower(nxt) in ("away", "up")
+        nxt.tag_ in ("DT", "PDT", "PRP", "PRP$", "WP", "WDT", "CD", "RP")
+        or _lower(nxt) in ("away", "up", *vocab["restrictors"])
     )
-    if token.pos_ in ("NOUN", "PROPN", "ADV", "ADJ", "VERB") and opens_phrase:
+    tagged_verb = token.pos_ in ("NOUN", "PROPN", "ADV", "ADJ", "VERB") or (
+        token.pos_ == "INTJ" and any(c.dep_ == "dobj" for c in token.children)  # "Bin/UH just the ..."
+    )
+    if tagged_verb and opens_phrase:
         return at, negated  # the tagger's "Sort/RB what I foraged"
     return -1, negated
 
@@ -124,6 +130,12 @@ def _determiners_before(doc: Doc, start: int, floor: int, mentions: Sequence[Men
 def _is_for(doc: Doc, at: int, end: int) -> int:
     """After a subject destination: the index of "for" in "is (only) for" or of "where" in "is
     where", else -1."""
+    if (
+        at < end
+        and _lower(doc[at]) == "for"
+        and not any(t.tag_.startswith("VB") for t in doc[at:end] if t.dep_ == "ROOT")
+    ):
+        return at  # a fragment: "toxic tray for the poisonous ones"
     if at < end and doc[at].lemma_ == "be":
         j = at + 1
         while j < end and _lower(doc[j]) in vocabulary()["restrictors"]:
@@ -191,7 +203,10 @@ def _receives(doc: Doc, at: int, end: int) -> int:
     while j < end and (doc[j].tag_ in ("MD", "RB") or doc[j].dep_ in ("aux", "neg")):
         j += 1
     if j + 1 < end and doc[j].lemma_.lower() in vocabulary()["receiving"] and doc[j].tag_.startswith("VB"):
-        after = doc[j + 1]
+        k = j + 1
+        while k + 1 < end and _lower(doc[k]) in vocabulary()["restrictors"]:
+            k += 1  # "takes only the paper"
+        after = doc[k]
         if after.tag_ in _NP_START or _lower(after) in vocabulary()["one"]:
             return j
     return -1
@@ -247,8 +262,11 @@ def _subject_verb(
                 after += 1
             if after in place_tokens or (obliged and token.lemma_ == "go"):
                 return token
-        if token.tag_ == "VBN" and any(a.dep_ == "auxpass" for a in auxes) and obliged:
-            return token
+        placed = any(_lower(c) in ("away", "out") for c in token.children) or any(
+            i in place_tokens for i in range(token.i + 1, end)
+        )
+        if token.tag_ == "VBN" and any(a.dep_ == "auxpass" for a in auxes) and obliged and placed:
+            return token  # "X should be thrown away"; not "this baguette needs to be sliced" (a need)
         if token.tag_ == "VBG" and token.dep_ == "xcomp" and token.head.lemma_ == "need":
             # "the leftovers need heating up in the microwave", "X needs locking away"; not "this
             # baguette needs slicing" (a need: nothing says where)
@@ -269,44 +287,6 @@ def _personal_subject(doc: Doc, first: int, end: int) -> Token | None:
     return None
 
 
-def _runs(indices: Sequence[int], frame: set[int], doc: Doc) -> list[tuple[int, ...]]:
-    """Maximal runs of non-frame tokens, without punctuation and joining words at their edges."""
-    runs: list[list[int]] = []
-    current: list[int] = []
-    for i in indices:
-        if i in frame or (doc[i].is_punct and _lower(doc[i]) not in ("-",)):
-            if current:
-                runs.append(current)
-            current = []
-        else:
-            current.append(i)
-    if current:
-        runs.append(current)
-    trimmed = []
-    edge = {"and", "or", "but", "so", "then", "please", "also", "now", ","}
-    for run in runs:
-        while run and (_lower(doc[run[0]]) in edge | {"with"} or doc[run[0]].is_punct):
-            run = run[1:]
-        while run and (_lower(doc[run[-1]]) in edge or doc[run[-1]].is_punct):
-            run = run[:-1]
-        if run:
-            trimmed.append(tuple(run))
-    return trimmed
-
-
-def nominal(doc: Doc, run: Sequence[int]) -> bool:
-    """Whether a run can be a theme: it has a noun, an indefinite or demonstrative pronoun, or an
-    adjective used as one ("everything poisonous"), and is not only a personal pronoun."""
-    vocab = vocabulary()
-    words = [_lower(doc[i]) for i in run]
-    if all(w in _PRONOUN_THEMES for w in words):
-        return False
-    pronouns = {*vocab["quantifiers"], *vocab["one"], "these", "those", "this", "what", "whatever"}
-    return any(doc[i].tag_ in ("NN", "NNS", "NNP", "NNPS") or _lower(doc[i]) in pronouns for i in run) or any(
-        doc[i].tag_ == "JJ" for i in run
-    )
-
-
 def analyse(doc: Doc, chunk: Chunk, mentions: Sequence[Mention], is_person: Callable[[str], bool]) -> Clause:
     """Read one chunk (see :mod:`conceptbot.pipeline.goal.parse`)."""
     vocab = vocabulary()
@@ -316,28 +296,32 @@ def analyse(doc: Doc, chunk: Chunk, mentions: Sequence[Mention], is_person: Call
     verb, negated = _imperative(doc, first, end, mine, chunk.after == "")
     frame: set[int] = set(range(chunk.start, first))
     if negated:
-        frame |= {verb - 2, verb - 1}
-    if verb >= 0 and doc[verb].lemma_ in vocab["helping"]:
+        frame |= {verb - 2, verb - 1}  # "do n't"
+    places: list[Place] = []
+    let = let_have(doc, verb, end, mine) if verb >= 0 else None
+    if let is not None:
+        frame |= set(range(verb, let[0]))
+        verb, places = let[0], [let[1]]  # "let the toddler have X": give X to the toddler
+    elif verb >= 0 and doc[verb].lemma_ in vocab["helping"]:
         # "help me make a salad": the verb is the one helped
         inner = next((t.i for t in doc[verb + 1 : end] if t.tag_ == "VB"), -1)
         if inner >= 0:
             frame |= set(range(verb, inner))
             verb = inner
-    places: list[Place] = []
-    for mention in mine:
+    for mention in mine if let is None else []:
         if mention.kind == "object":
             continue
         role = place_role(doc, mention, chunk, (first, end), verb, mine, is_person)
         if role is not None:
             places.append(Place(mention, role))
+    if verb >= 0 and not places:
+        inverted = inverted_place(doc, verb, end, mine, frame)
+        places = [inverted] if inverted is not None else []
     key, key_tokens = _key(doc, first, end, mine)
     frame |= {i for p in places for i in p.frame} | set(key_tokens)
     indices = list(range(first, end))
     if verb >= 0:
-        frame |= {verb, *_particles(doc, verb, end)}
-        runs = _runs([i for i in indices if i > verb], frame, doc)
-        theme = next((r for r in runs if nominal(doc, r)), ())
-        return Clause(chunk, "imperative", doc[verb].lemma_.lower(), verb, places, theme, key, negated, runs)
+        return imperative_clause(doc, chunk, verb, (first, end), places, frame, key, mine)
     if places and places[0].frame and min(places[0].frame) == first:
         at_for = _is_for(doc, places[0].mention.end, end)
         if at_for < 0:
@@ -347,7 +331,7 @@ def analyse(doc: Doc, chunk: Chunk, mentions: Sequence[Mention], is_person: Call
             runs = _runs(indices, frame, doc)
             theme = next((r for r in runs if r[0] > at_for and nominal(doc, r)), ())
             return Clause(chunk, "for", "be", at_for, places, theme, key, False, runs)
-    asked = _existential(doc, first, end, mine)
+    asked = existential(doc, first, end, mine)
     if asked is not None:
         theme, place = asked
         return Clause(chunk, "imperative", "give", -1, [place], theme, key, False, [theme])
@@ -365,7 +349,7 @@ def analyse(doc: Doc, chunk: Chunk, mentions: Sequence[Mention], is_person: Call
     wished = cleft(doc, first, end)
     if wished is not None:
         return Clause(chunk, "desire", wished[0], -1, [], wished[1], "", False, [wished[1]])
-    desire = _desire(doc, first, end, lets)
+    desire = desire_verb(doc, first, end, lets)
     if desire is not None:
         return desire_clause(doc, chunk, desire, first, end, places, frame)
     runs = _runs(indices, frame, doc)
@@ -378,114 +362,58 @@ def analyse(doc: Doc, chunk: Chunk, mentions: Sequence[Mention], is_person: Call
     return Clause(chunk, "statement", "", -1, [], (), key, False, runs)
 
 
-def _desire(doc: Doc, first: int, end: int, lets: bool) -> Token | None:
-    """The verb (or "about", or the copula) of a wish: "I'd love X", "we should have X", "how about
-    X", "X would be lovely"; None for anything else."""
-    vocab = vocabulary()
-    for token in doc[first:end]:
-        subject = [c for c in token.children if c.dep_ == "nsubj"]
-        speaker = any(_lower(c) in ("i", "we") for c in subject) or (lets and token.i == first)
-        particle = any(c.dep_ == "prt" for c in token.children)  # "make out this tiny print"
-        if token.lemma_ in vocab["making"] and token.tag_.startswith("VB") and speaker and not particle:
-            return token  # "we're making a green salad"
-        wishing = any(c.dep_ == "prep" and _lower(c) == "for" for c in token.children) and any(
-            _lower(c) in ("could", "would", "'d") for c in token.children
-        )
-        if token.lemma_ == "go" and speaker and wishing:
-            return token  # "I could really go for a PB&J"
-        if token.lemma_ in vocab["desire"] and token.tag_.startswith("VB") and speaker:
-            if token.lemma_ == "have":
-                modal = any(_lower(c) in ("should", "could", "can", "shall") for c in token.children)
-                if not (lets or (modal and any(_lower(c) == "we" for c in subject))):
-                    continue
-            return token
-        if _lower(token) == "about" and token.i > first and _lower(doc[token.i - 1]) == "how":
-            return token
-        conditional = any(_lower(c) in ("would", "could") for c in token.children)
-        praised = any(c.dep_ == "acomp" for c in token.children)
-        thing = bool(subject) and not any(_lower(c) in vocab["personal"] for c in subject)
-        if token.lemma_ == "be" and conditional and praised and thing:
-            return token
-    return None
-
-
-def desire_clause(
-    doc: Doc, chunk: Chunk, verb: Token, first: int, end: int, places: list[Place], frame: set[int]
+def imperative_clause(
+    doc: Doc,
+    chunk: Chunk,
+    verb: int,
+    bounds: tuple[int, int],
+    places: list[Place],
+    frame: set[int],
+    key: str,
+    mentions: Sequence[Mention],
 ) -> Clause:
-    """A wish as a clause: its theme is what is wished for (the subject of "X would be lovely", the
-    object otherwise); for "I want to make X" the verb is the wished activity's ("make")."""
-    if verb.lemma_ == "be":
-        subject = next(c for c in verb.children if c.dep_ == "nsubj")
-        theme = tuple(i for i in range(subject.left_edge.i, subject.i + 1) if i not in frame)
-        return Clause(chunk, "desire", "be", verb.i, [], theme, "", False, [theme])
-    vocab = vocabulary()
-    activity = next((c for c in verb.children if c.dep_ in ("xcomp", "ccomp") and c.tag_ == "VB"), None)
-    at = activity if activity is not None else verb
-    frame = (
-        frame
-        | set(range(first, at.i + 1))
-        | {c.i for c in at.children if c.dep_ == "prep" and at.lemma_ == "go"}
-    )
-    if places and activity is None:
-        # "I'd like the tweezers put in the first aid kit": a request to move them there
-        frame |= {
-            t.i
-            for t in doc[at.i + 1 : end]
-            if t.tag_ in ("VBN", "VBD") and t.dep_ in ("ccomp", "xcomp", "acl")
-        }
-        runs = _runs(list(range(at.i + 1, end)), frame, doc)
-        theme = next((r for r in runs if nominal(doc, r)), ())
-        return Clause(chunk, "imperative", "put", at.i, places, theme, "", False, runs)
-    runs = _runs(list(range(at.i + 1, end)), frame, doc)
+    """An imperative's clause: its theme is the first phrase after the verb with a noun in it, and
+    the objects named in later phrases joined by "and" ("put the teddy bear in the toy chest, and the
+    toy car too"); "load the tote bag with the groceries" sends the groceries to the tote bag."""
+    end = bounds[1]
+    negated = verb - 2 in frame and _lower(doc[verb - 1]) in ("n't", "not")
+    frame |= {verb, *_particles(doc, verb, end)}
+    runs = _runs(list(range(verb + 1, end)), frame, doc)
     theme = next((r for r in runs if nominal(doc, r)), ())
-    lemma = "want"
-    if activity is not None or at.lemma_ in vocab["making"]:
-        lemma = at.lemma_.lower()
-    elif verb.lemma_ == "need":
-        lemma = "need"
-    return Clause(chunk, "desire", lemma, at.i, [], theme, "", False, runs)
+    if places and theme and theme[0] < min(places[0].frame or (end,)):
+        joined = [r for r in runs if r[0] > theme[-1] and _lower(doc[r[0] - 1]) in ("and", ",")]
+        theme = (*theme, *(i for r in joined for i in r if _names_object(r, mentions)))
+    lemma = doc[verb].lemma_.lower()
+    children = {_lower(c) for c in doc[verb].children}
+    if any(lemma == a and b in children for a, b in vocabulary()["making_phrases"]):
+        lemma = "make"  # "put together a salad"
+    return Clause(chunk, "imperative", lemma, verb, places, tuple(theme), key, negated, runs)
 
 
-def cleft(doc: Doc, first: int, end: int) -> tuple[str, tuple[int, ...]] | None:
-    """ "Guacamole is what I want to make", "What I'd love for breakfast is an omelette": the wished
-    activity's verb ("make", or "want") and what is wished for; None for anything else."""
-    vocab = vocabulary()
-    wishes = {*vocab["desire"], *vocab["making"]}
-    for be in doc[first:end]:
-        if be.lemma_ != "be":
+def _names_object(run: Sequence[int], mentions: Sequence[Mention]) -> bool:
+    return any(m.kind in ("object", "both") and m.start in run for m in mentions)
+
+
+def inverted_place(
+    doc: Doc, verb: int, end: int, mentions: Sequence[Mention], frame: set[int]
+) -> Place | None:
+    """ "Load the tote bag with the groceries", "reward the dog with a treat": the verb's object is
+    the destination when "with" and what is sent follow it."""
+    for mention in mentions:
+        if mention.kind == "object":
             continue
-        for clause in be.children:
-            inside = {t.i for t in clause.subtree}
-            if not clause.tag_.startswith("VB") or not any(_lower(doc[i]) == "what" for i in inside):
-                continue
-            verbs = [
-                doc[i] for i in sorted(inside) if doc[i].lemma_ in wishes and doc[i].tag_.startswith("VB")
-            ]
-            if not verbs or not any(_lower(doc[i]) in ("i", "we") for i in inside):
-                continue
-            other = next((c for c in be.children if c.dep_ in ("nsubj", "attr") and c.i not in inside), None)
-            if other is None:
-                continue
-            theme = tuple(t.i for t in other.subtree if first <= t.i < end and not t.is_punct)
-            making = next((v.lemma_ for v in verbs if v.lemma_ in vocab["making"]), "want")
-            return making, theme
+        j = _determiners_before(doc, mention.start, verb + 1, mentions)
+        if j == verb + 1 and mention.end + 1 < end and _lower(doc[mention.end]) == "with":
+            return Place(mention, (*range(j, mention.end + 1),))
     return None
 
 
-def _existential(
-    doc: Doc, first: int, end: int, mentions: Sequence[Mention]
-) -> tuple[tuple[int, ...], Place] | None:
-    """ "Is there something for my sore throat you could hand me?": the thing asked for and the
-    person a relative clause asks "you" to hand it to; else None."""
-    if first + 1 >= end or doc[first].lemma_ != "be" or _lower(doc[first + 1]) != "there":
+def let_have(doc: Doc, verb: int, end: int, mentions: Sequence[Mention]) -> tuple[int, Place] | None:
+    """ "Let the toddler have X": the verb "have" and the person, who is where X goes."""
+    inner = next((t.i for t in doc[verb + 1 : end] if t.tag_ == "VB"), -1)
+    if _lower(doc[verb]) != "let" or inner < 0 or doc[inner].lemma_ not in ("have", "get", "keep"):
         return None
-    for asking in doc[first + 2 : end]:
-        you = next((c for c in asking.children if _lower(c) == "you" and c.dep_ == "nsubj"), None)
-        if asking.dep_ != "relcl" or you is None:
-            continue
-        for child in asking.children:
-            person = next((m for m in mentions if m.kind == "person" and m.covers(child.i)), None)
-            if person is not None and child.dep_ in ("dobj", "dative"):
-                theme = tuple(i for i in range(first + 2, you.i) if not doc[i].is_punct)
-                return (theme, Place(person, tuple(range(you.i, end)))) if theme else None
-    return None
+    person = next((m for m in mentions if verb < m.start < inner and m.kind != "object"), None)
+    if person is None:
+        return None
+    return inner, Place(person, tuple(range(verb + 1, inner)))

@@ -227,9 +227,27 @@ def _finite_first(doc: Doc, chunk: Chunk) -> bool:
     return not any(c.dep_ in ("nsubj", "nsubjpass") for c in doc[i].children)
 
 
+def asks_you_to(doc: Doc, at: int, end: int) -> int:
+    """After "I'd like you to", "I want you to", "we need you to" at ``at``: the index of the verb
+    asked for; else -1 (the request is then the imperative that follows)."""
+    words = [t.text.lower() for t in doc[at : min(end, at + 6)]]
+    if not words or words[0] not in ("i", "we"):
+        return -1
+    k = 1 + (len(words) > 1 and words[1] in ("'d", "would", "really"))
+    if (
+        len(words) > k + 2
+        and doc[at + k].lemma_ in ("like", "want", "need")
+        and words[k + 1 : k + 3] == ["you", "to"]
+    ):
+        return at + k + 3
+    return -1
+
+
 def _statement_like(doc: Doc, chunk: Chunk, mentions: Sequence[Mention]) -> bool:
     """Whether a chunk has a personal pronoun as the subject of its own verb ("I need ...")."""
     personal = set(vocabulary()["personal"])
+    if asks_you_to(doc, chunk.start, chunk.end) >= 0:
+        return False
     for token in doc[chunk.start : chunk.end]:
         subject = token.dep_ in ("nsubj", "nsubjpass") and token.text.lower() in personal - {"you"}
         if subject and token.head.dep_ not in ("relcl", "acl"):

@@ -127,8 +127,11 @@ class GoalReader:
         vocab = vocabulary()
         users = [d for d in scene.destinations if d.lower() == "user"]
         for clause in clauses:
-            if clause.form == "imperative" and clause.verb in vocab["making"] and not clause.places:
-                wished, making = clause.theme, True
+            personal = all(p.mention.kind == "person" for p in clause.places)
+            if clause.form == "imperative" and clause.verb in vocab["making"] and personal:
+                wished, making = clause.theme, True  # "make me a PB&J"
+            elif clause.form == "fragment" and not clause.places and _polite(doc, clause) and clause.theme:
+                return [_to(users, read_theme(doc, clause.theme, mentions))], None  # "A drink, please."
             elif clause.form == "desire" and (
                 clause.verb in vocab["making"] or clause.verb in ("want", "need", "be")
             ):
@@ -140,7 +143,10 @@ class GoalReader:
             if not wished:
                 continue
             reading = read_theme(doc, wished, mentions)
-            if not making and (_names_itself(doc, wished, mentions) or _indefinite(doc, wished)):
+            thing = (
+                _names_itself(doc, wished, mentions) or _indefinite(doc, wished) or _described(doc, wished)
+            )
+            if not making and thing:
                 return [_to(users, reading)], None
             dish = dish_words(doc, wished)
             if dish and (self.is_dish is None or self.is_dish(dish)):
@@ -148,7 +154,48 @@ class GoalReader:
                 return [GoalTarget(None, "ingredients", named, "", ALL)], dish
             if not making:
                 return [_to(users, reading)], None
+        made = making_anywhere(doc, mentions)
+        if made and (self.is_dish is None or self.is_dish(dish_words(doc, made))):
+            return [GoalTarget(None, "ingredients", objects_in(made, mentions), "", ALL)], dish_words(
+                doc, made
+            )
         return [], None
+
+
+def _polite(doc: Doc, clause: Clause) -> bool:
+    """Whether a verbless chunk is a request by its politeness ("A drink, please.")."""
+    return any(t.text.lower() in ("please", "thanks") for t in doc[clause.chunk.start : clause.chunk.end])
+
+
+def _described(doc: Doc, run: Sequence[int]) -> bool:
+    """Whether a wished-for phrase describes a thing by its use ("a tool for driving in nails", "a
+    tool that drives in nails"): a thing to hand over, not a dish."""
+    inside = set(run)
+    for i in run:
+        token = doc[i]
+        if token.text.lower() == "for" and i + 1 in inside and doc[i + 1].tag_ == "VBG":
+            return True
+        if token.dep_ == "relcl" and token.head.i in inside and any(c.tag_ == "WDT" for c in token.children):
+            return True
+    return False
+
+
+def making_anywhere(doc: Doc, mentions: list[Mention]) -> tuple[int, ...]:
+    """The object of a making verb anywhere in the request ("Time to make some guacamole!", "let's
+    put together a salad"), for a request with no other target; () if none."""
+    vocab = vocabulary()
+    for token in doc:
+        phrasal = any(
+            token.lemma_.lower() == a and any(c.text.lower() == b for c in token.children)
+            for a, b in vocab["making_phrases"]
+        )
+        plain = token.lemma_.lower() in vocab["making"] and not any(c.dep_ == "prt" for c in token.children)
+        if not token.tag_.startswith("VB") or not (plain or phrasal):
+            continue
+        made = next((c for c in token.children if c.dep_ == "dobj"), None)
+        if made is not None and made.lemma_.lower() not in vocab["stack"]["nouns"]:
+            return tuple(t.i for t in made.subtree if not t.is_punct)
+    return ()
 
 
 def _names_itself(doc: Doc, run: Sequence[int], mentions: list[Mention]) -> bool:
@@ -278,6 +325,12 @@ def _items(
             continue
         if stay or clause.form in ("statement", "desire"):
             continue
+        if (
+            clause.form == "imperative"
+            and clause.verb in vocab["making"]
+            and not _names_itself(doc, clause.theme, mentions)
+        ):
+            continue  # "make me a PB&J": a dish, not a thing to hand over
         if clause.form == "imperative" and not places:
             if clause.verb in (*vocab["making"], *vocab["desire"], *vocab["helping"]):
                 continue
@@ -316,6 +369,8 @@ def _items(
                 items.append(_Item(clause, [], clause.theme, clause.key))
             continue
         theme = clause.theme
+        if places and _pronoun_only(doc, theme) and not items and n:
+            theme = antecedent(doc, clauses[n - 1]) or theme  # "I'm looking for X; pass it to me"
         if places and _pronoun_only(doc, theme) and items:
             before = items[-1]
             if before.places == places:
@@ -326,6 +381,18 @@ def _items(
         items.append(_Item(clause, places, theme, clause.key or pending))
         pending = ""
     return _without_headers(items, vocab)
+
+
+def antecedent(doc: Doc, clause: Clause) -> tuple[int, ...]:
+    """What "it" refers back to in the clause before: its last noun phrase that is not a person
+    ("I'm looking for something to write with"), as the phrase's tokens."""
+    found: tuple[int, ...] = ()
+    chunk = clause.chunk
+    for token in doc[chunk.start : chunk.end]:
+        role = token.dep_ in ("dobj", "pobj", "nsubj", "attr") and token.tag_.startswith("NN")
+        if role and token.text.lower() not in vocabulary()["personal"]:
+            found = tuple(t.i for t in token.subtree if chunk.start <= t.i < chunk.end and not t.is_punct)
+    return found
 
 
 def _pronoun_only(doc: Doc, run: Sequence[int]) -> bool:

@@ -1,0 +1,154 @@
+"""Wishes: "I'd love an omelette", "we should have a fruit salad", "guacamole is what I want to
+make", "is there something for my sore throat you could hand me?" (step 2 of
+:mod:`conceptbot.pipeline.goal.parse`, the ``desire`` form)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from spacy.tokens import Doc, Token
+
+from conceptbot.pipeline.goal.mentions import Mention
+from conceptbot.pipeline.goal.parse import Chunk, Clause, Place, vocabulary
+from conceptbot.pipeline.goal.runs import lower as _lower
+from conceptbot.pipeline.goal.runs import nominal
+from conceptbot.pipeline.goal.runs import runs as _runs
+
+
+def desire_verb(doc: Doc, first: int, end: int, lets: bool) -> Token | None:
+    """The verb (or "about", or the copula) of a wish: "I'd love X", "we should have X", "how about
+    X", "X would be lovely"; None for anything else."""
+    vocab = vocabulary()
+    for token in doc[first:end]:
+        subject = [c for c in token.children if c.dep_ == "nsubj"]
+        speaker = any(_lower(c) in ("i", "we") for c in subject) or (lets and token.i == first)
+        particle = any(c.dep_ == "prt" for c in token.children)  # "make out this tiny print"
+        if token.lemma_ in vocab["making"] and token.tag_.startswith("VB") and speaker and not particle:
+            return token  # "we're making a green salad"
+        wishing = any(c.dep_ == "prep" and _lower(c) == "for" for c in token.children) and any(
+            _lower(c) in ("could", "would", "'d") for c in token.children
+        )
+        if token.lemma_ == "go" and speaker and wishing:
+            return token  # "I could really go for a PB&J"
+        if token.lemma_ in vocab["desire"] and token.tag_.startswith("VB") and speaker:
+            if token.lemma_ == "have" and not _wishes_to_have(token, subject, lets):
+                continue
+            return token
+        phrase = _wishing_phrase(doc, token, end)
+        if phrase is not None and any(_lower(t) in ("i", "we") for t in doc[first:end] if t.dep_ == "nsubj"):
+            return phrase  # "I'm in the mood for an omelette": the phrase's preposition
+        if _lower(token) == "about" and token.i > first and _lower(doc[token.i - 1]) == "how":
+            return token
+        conditional = any(_lower(c) in ("would", "could") for c in token.children)
+        praised = any(c.dep_ == "acomp" for c in token.children)
+        thing = bool(subject) and not any(_lower(c) in vocab["personal"] for c in subject)
+        if token.lemma_ == "be" and conditional and praised and thing:
+            return token
+    return None
+
+
+def _wishes_to_have(token: Token, subject: list[Token], lets: bool) -> bool:
+    """ "have" as a wish: "let's have", "we should/could have", "we're having", "could I have"."""
+    modals = {_lower(c) for c in token.children if c.tag_ == "MD"}
+    we = any(_lower(c) == "we" for c in subject)
+    speaker_i = any(_lower(c) == "i" for c in subject)
+    if lets or (we and (modals & {"should", "could", "can", "shall"} or token.tag_ == "VBG")):
+        return True
+    return speaker_i and bool(modals & {"could", "can", "may"})
+
+
+def _wishing_phrase(doc: Doc, token: Token, end: int) -> Token | None:
+    """The last word of a wishing phrase starting at ``token`` ("in the mood for", "feel like")
+    when a noun phrase follows it."""
+    for phrase in vocabulary()["wishing_phrases"]:
+        last = token.i + len(phrase) - 1
+        if last + 1 >= end or [_lower(t) for t in doc[token.i : last + 1]] != phrase:
+            continue
+        after = doc[last + 1]
+        if after.tag_ in ("DT", "NN", "NNS", "JJ", "CD") or _lower(after) in ("some", "something"):
+            return doc[last]
+    return None
+
+
+def desire_clause(
+    doc: Doc, chunk: Chunk, verb: Token, first: int, end: int, places: list[Place], frame: set[int]
+) -> Clause:
+    """A wish as a clause: its theme is what is wished for (the subject of "X would be lovely", the
+    object otherwise); for "I want to make X" the verb is the wished activity's ("make")."""
+    if verb.lemma_ == "be":
+        subject = next(c for c in verb.children if c.dep_ == "nsubj")
+        theme = tuple(i for i in range(subject.left_edge.i, subject.right_edge.i + 1) if i not in frame)
+        return Clause(chunk, "desire", "be", verb.i, [], theme, "", False, [theme])
+    vocab = vocabulary()
+    activity = next((c for c in verb.children if c.dep_ in ("xcomp", "ccomp") and c.tag_ == "VB"), None)
+    if verb.tag_ == "IN":
+        activity = None  # "in the mood for": what follows the preposition
+    at = activity if activity is not None else verb
+    frame = (
+        frame
+        | set(range(first, at.i + 1))
+        | {c.i for c in at.children if c.dep_ == "prep" and at.lemma_ == "go"}
+    )
+    if places and activity is None:
+        # "I'd like the tweezers put in the first aid kit": a request to move them there
+        frame |= {
+            t.i
+            for t in doc[at.i + 1 : end]
+            if t.tag_ in ("VBN", "VBD") and t.dep_ in ("ccomp", "xcomp", "acl")
+        }
+        runs = _runs(list(range(at.i + 1, end)), frame, doc)
+        theme = next((r for r in runs if nominal(doc, r)), ())
+        return Clause(chunk, "imperative", "put", at.i, places, theme, "", False, runs)
+    runs = _runs(list(range(at.i + 1, end)), frame, doc)
+    theme = next((r for r in runs if nominal(doc, r)), ())
+    lemma = "want"
+    if activity is not None or at.lemma_ in vocab["making"]:
+        lemma = at.lemma_.lower()
+    elif verb.lemma_ == "need":
+        lemma = "need"
+    return Clause(chunk, "desire", lemma, at.i, [], theme, "", False, runs)
+
+
+def cleft(doc: Doc, first: int, end: int) -> tuple[str, tuple[int, ...]] | None:
+    """ "Guacamole is what I want to make", "What I'd love for breakfast is an omelette": the wished
+    activity's verb ("make", or "want") and what is wished for; None for anything else."""
+    vocab = vocabulary()
+    wishes = {*vocab["desire"], *vocab["making"]}
+    for be in doc[first:end]:
+        if be.lemma_ != "be":
+            continue
+        for clause in be.children:
+            inside = {t.i for t in clause.subtree}
+            if not clause.tag_.startswith("VB") or not any(_lower(doc[i]) == "what" for i in inside):
+                continue
+            verbs = [
+                doc[i] for i in sorted(inside) if doc[i].lemma_ in wishes and doc[i].tag_.startswith("VB")
+            ]
+            if not verbs or not any(_lower(doc[i]) in ("i", "we") for i in inside):
+                continue
+            other = next((c for c in be.children if c.dep_ in ("nsubj", "attr") and c.i not in inside), None)
+            if other is None:
+                continue
+            theme = tuple(t.i for t in other.subtree if first <= t.i < end and not t.is_punct)
+            making = next((v.lemma_ for v in verbs if v.lemma_ in vocab["making"]), "want")
+            return making, theme
+    return None
+
+
+def existential(
+    doc: Doc, first: int, end: int, mentions: Sequence[Mention]
+) -> tuple[tuple[int, ...], Place] | None:
+    """ "Is there something for my sore throat you could hand me?": the thing asked for and the
+    person a relative clause asks "you" to hand it to; else None."""
+    if first + 1 >= end or doc[first].lemma_ != "be" or _lower(doc[first + 1]) != "there":
+        return None
+    for asking in doc[first + 2 : end]:
+        you = next((c for c in asking.children if _lower(c) == "you" and c.dep_ == "nsubj"), None)
+        if asking.dep_ != "relcl" or you is None:
+            continue
+        for child in asking.children:
+            person = next((m for m in mentions if m.kind == "person" and m.covers(child.i)), None)
+            if person is not None and child.dep_ in ("dobj", "dative"):
+                theme = tuple(i for i in range(first + 2, you.i) if not doc[i].is_punct)
+                return (theme, Place(person, tuple(range(you.i, end)))) if theme else None
+    return None
