@@ -38,6 +38,15 @@ class GoalMatch:
 
 
 @lru_cache(maxsize=4096)
+def _lemma(word: str) -> str:
+    """A word's lemma, taken alone: the same word gets the same lemma in any phrase ("broken" is an
+    adjective in "the broken ones" and a verb on its own)."""
+    from conceptbot.knowledge.triples import load_model
+
+    return load_model()(word)[0].lemma_.lower().strip(".,;:!?'\"()-")
+
+
+@lru_cache(maxsize=4096)
 def words(text: str) -> tuple[str, ...]:
     """A criterion's or dish's content words: lemmas, lower case, without punctuation, stop words
     (but :data:`MEANINGFUL`) and :data:`GENERIC` nouns."""
@@ -46,11 +55,11 @@ def words(text: str) -> tuple[str, ...]:
     from conceptbot.knowledge.triples import load_model
 
     kept = []
-    for token in load_model()(text.lower()):
-        lemma = token.lemma_.lower().strip(".,;:!?'\"()-")
-        word = token.text.lower().strip(".,;:!?'\"()-")
-        if not lemma or token.is_punct:
+    for token in load_model().tokenizer(text.lower()):
+        word = token.text.strip(".,;:!?'\"()-")
+        if not word or token.is_punct or (token.text in STOP_WORDS and token.text not in MEANINGFUL):  # "'s"
             continue
+        lemma = _lemma(word)
         if word in GENERIC or lemma in GENERIC:
             continue
         if (word in STOP_WORDS or lemma in STOP_WORDS) and word not in MEANINGFUL and lemma not in MEANINGFUL:

@@ -1,0 +1,79 @@
+from __future__ import annotations
+
+import pytest
+
+from conceptbot.models.fake import FakeLLM
+from conceptbot.pipeline.goal import Goal, GoalTarget, to_targets
+from conceptbot.pipeline.goal.adapter import ScoredChooser
+from conceptbot.pipeline.hazards import is_person
+from conceptbot.pipeline.targets import ALL, TargetFinder
+from tests.pipeline.goal.scenes import PANTRY, SHELLS, WORKSHOP
+
+
+def test_named_places_become_named_targets() -> None:
+    goal = Goal(
+        targets=(
+            GoalTarget("shoe box", "named", ("conch shell",), "", 1),
+            GoalTarget("biscuit tin", "remainder"),
+        )
+    )
+    named, rest = to_targets(goal, SHELLS)
+    assert (named.name, named.how, named.named, named.count, named.rest) == (
+        "shoe box",
+        "named",
+        ["conch shell"],
+        1,
+        False,
+    )
+    assert (rest.name, rest.count, rest.rest, rest.criterion) == ("biscuit tin", ALL, True, "")
+    assert rest.to_dict()["rest"] is True
+
+
+def test_criteria_become_what_the_planner_asks_about() -> None:
+    goal = Goal(
+        targets=(
+            GoalTarget("wood crate", "criterion", (), "by material"),
+            GoalTarget("metal crate", "criterion", (), ""),
+            GoalTarget("odds crate", "criterion", (), "made of several materials"),
+        )
+    )
+    criteria = [t.criterion for t in to_targets(goal, WORKSHOP)]
+    assert criteria == [
+        "belongs in the wood crate, by material",
+        "belongs in the metal crate",
+        "made of several materials",
+    ]
+    # a target taking a number is decided by the move question, as TargetFinder's are
+    (counted,) = to_targets(
+        Goal(targets=(GoalTarget("user", "criterion", (), "something to write with", 1),)), SHELLS
+    )
+    assert (counted.count, counted.criterion) == (1, "")
+
+
+def test_open_targets_need_a_chooser_except_a_need() -> None:
+    (need,) = to_targets(Goal(need="I'm cold", targets=(GoalTarget(None, "need"),)), SHELLS)
+    assert (need.name, need.how, need.count) == ("user", "speaker", 1)
+    with pytest.raises(ValueError, match="choose="):
+        to_targets(Goal(targets=(GoalTarget(None, "criterion", (), "poisonous"),)), SHELLS)
+    chosen = to_targets(
+        Goal(dish="guacamole", targets=(GoalTarget(None, "ingredients"),)),
+        PANTRY,
+        choose=lambda target, scene: [("serving bowl", 2.5)],
+    )
+    assert [(t.name, t.how, t.score, t.ingredients, t.dish, t.criterion) for t in chosen] == [
+        ("serving bowl", "scored", 2.5, True, "guacamole", "an ingredient of guacamole")
+    ]
+    assert to_targets(Goal(stack=True, targets=(GoalTarget(None, "all"),)), SHELLS) == []
+
+
+def test_the_scored_chooser_asks_the_target_finder_s_question() -> None:
+    # per destination: the request's yes/no log-probs, then the content-free request's
+    llm = FakeLLM(scores=[[-0.1, -2.0], [-1.0, -1.0], [-1.0, -1.0], [-1.0, -1.0], [-3.0, -0.1], [-1.0, -1.0]])
+    chooser = ScoredChooser(TargetFinder(llm, is_person), "Throw away the broken shells.")
+    places = chooser(GoalTarget(None, "criterion", (), "broken shells"), SHELLS)
+    assert places == [("shoe box", pytest.approx(1.9))]
+    assert (
+        len(llm.score_requests) == 6
+        and "Throw away the broken shells." in llm.score_requests[0].messages[1].content
+    )
+    assert chooser(GoalTarget(None, "need"), SHELLS) == [("user", 0.0)]
