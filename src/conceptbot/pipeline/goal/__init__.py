@@ -1,7 +1,8 @@
 """Reading the goal of a request: which objects go where, from the request's structure.
 
-:class:`GoalReader` parses the request with spaCy (:mod:`.parse`: chunks and clauses; :mod:`.clauses`:
-each clause's form, destinations and theme; :mod:`.themes`: what a theme sends) and returns a typed
+:class:`GoalReader` (:mod:`.reader`) parses the request with spaCy (:mod:`.mentions`: the scene's
+names as noun phrases; :mod:`.parse`: chunks; :mod:`.clauses` and :mod:`.wishes`: each clause's
+form, destinations and theme; :mod:`.themes`: what a theme sends) and returns a typed
 :class:`Goal` (:mod:`.types`). Where the words leave a choice open - the request names no
 destination, states a need, or asks for a dish - the goal says so (``to`` None, ``takes`` "need" or
 "ingredients") and the planner settles it with the model; :func:`to_targets` (:mod:`.adapter`) turns
@@ -25,9 +26,17 @@ decides). ``count`` is what the words set: 1 for "a", "something" or a definite 
 a number, else "all" (plurals, "all", mass nouns, a remainder, ingredients, a need). The reader uses
 no word lists tied to requests: ``words.json`` holds closed word classes of English and a few verb
 classes (making, wishing, sorting, staying).
+
+In the goal planner, in place of ``TargetFinder.find`` (the same ``Target`` list, scored where the
+words leave the place open)::
+
+    goal = GoalReader(is_dish=...).read(request, scene)  # is_dish: optional graph check
+    chooser = ScoredChooser(target_finder, request)
+    targets = to_targets(goal, scene, choose=chooser)  # [] for a stack (goal.stack)
+    usage = chooser.usage
 """
 
-from conceptbot.pipeline.goal.adapter import Chooser, to_targets
+from conceptbot.pipeline.goal.adapter import Chooser, ScoredChooser, to_targets
 from conceptbot.pipeline.goal.compare import GoalMatch, same_goal
 from conceptbot.pipeline.goal.reader import GoalReader
 from conceptbot.pipeline.goal.types import ALL, TAKES, Goal, GoalTarget
@@ -40,6 +49,7 @@ __all__ = [
     "GoalMatch",
     "GoalReader",
     "GoalTarget",
+    "ScoredChooser",
     "same_goal",
     "to_targets",
 ]

@@ -4,8 +4,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-
-from spacy.tokens import Doc, Token
+from typing import TYPE_CHECKING
 
 from conceptbot.pipeline.goal.mentions import Mention
 from conceptbot.pipeline.goal.parse import Chunk, Clause, Place, asks_you_to, clause_verbs, vocabulary
@@ -13,6 +12,9 @@ from conceptbot.pipeline.goal.runs import lower as _lower
 from conceptbot.pipeline.goal.runs import nominal
 from conceptbot.pipeline.goal.runs import runs as _runs
 from conceptbot.pipeline.goal.wishes import cleft, desire_clause, desire_verb, existential
+
+if TYPE_CHECKING:  # spaCy is loaded with the model, on first use (pipeline/goal imports light)
+    from spacy.tokens import Doc, Token
 
 _NP_START = {"DT", "PDT", "PRP$", "CD", "JJ", "NN", "NNS", "NNP", "NNPS"}
 

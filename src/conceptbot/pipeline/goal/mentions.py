@@ -16,10 +16,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-
-from spacy.tokens import Doc, Token
+from typing import TYPE_CHECKING
 
 from conceptbot.core.scene import Scene
+
+if TYPE_CHECKING:  # spaCy is loaded with the model, on first use (pipeline/goal imports light)
+    from spacy.tokens import Doc, Token
 
 
 @dataclass(frozen=True)
@@ -116,9 +118,7 @@ def _modifies(token: Token) -> bool:
     return token.pos_ in ("NOUN", "PROPN", "ADJ", "CCONJ") or token.text == "," or token.tag_ == "VBG"
 
 
-def _people(
-    doc: Doc, scene: Scene, people: dict[str, list[str]], used: list[bool], is_person: Callable[[str], bool]
-) -> list[Mention]:
+def _people(doc: Doc, scene: Scene, people: dict[str, list[str]], used: list[bool]) -> list[Mention]:
     """People words ("me", "my son") naming the scene's person destinations."""
     found = []
     for name in scene.destinations:
@@ -169,7 +169,7 @@ def scene_mentions(
     used = [False] * len(doc)
     found = _groups(doc, scene, spelled, used)  # before single names: "the paper and plastic bins"
     found += _names(doc, scene, spelled, used)
-    found += _people(doc, scene, people, used, is_person)
+    found += _people(doc, scene, people, used)
     found = sorted(found, key=lambda m: m.start)
     found += _pronouns(doc, found, pronouns, is_person)
     return sorted(found, key=lambda m: m.start)

@@ -8,14 +8,19 @@ labels near a word, sentence ends; and on the order of words for the rest.
    "but", "then", "so", "because", "since" (soft ones), never inside a mention. A soft chunk that has
    neither a clause verb nor a destination continues the one before ("hand me the ruler | and the
    eraser"); a chunk naming no destination followed by one that has a destination but no verb is one
-   phrase ("put the hammer | and the screwdriver in the toolbox"). A chunk with a destination and no
-   verb after one with a destination is a gapped clause ("the poisonous ones go on the toxic tray, |
-   the ones that are safe to eat on the edible tray").
-2. **Clauses.** Each chunk's form: ``imperative`` (it opens with a verb, after "could you", "please",
-   "let's"), ``subject`` ("X go(es)/belong(s) in A", "X should be thrown away"), ``for`` ("A is for
-   X"), ``desire`` ("I need/want/'d love X", "X would be lovely", "how about X"), ``fragment`` (no
-   verb of its own: "TV remote: coffee table") or ``statement`` (anything else: "I'm freezing here
-   on the sofa").
+   phrase ("put the hammer | and the screwdriver in the toolbox"), and so is a chunk whose verb has
+   its subject in the one before ("I'd like the tweezers | and the thermometer put in the kit") or
+   a bare noun phrase before a verb with no subject ("the shampoo bottle | then goes in ..."). A
+   chunk with a destination and no verb after one with a destination is a gapped clause ("the
+   poisonous ones go on the toxic tray, | the ones that are safe to eat on the edible tray").
+2. **Clauses** (:mod:`.clauses`, :mod:`.wishes`). Each chunk's form: ``imperative`` (it opens with
+   a verb, after "could you", "please", "let's", "I'd like you to"; also "let X have Y", "load A
+   with X", "is there X you could hand me?"), ``subject`` ("X go(es)/belong(s)/end(s) up in A", "X
+   should be thrown away", "X need(s) heating up in A"), ``for`` ("A is for X", "A is where X
+   go(es)", "A takes/needs/would like X", the fragment "A for X"), ``desire`` ("I need/want/'d love
+   X", "we're having X", "I could go for X", "X would be lovely", "how about X", "guacamole is what
+   I want to make"), ``fragment`` (no verb of its own: "TV remote: coffee table") or ``statement``
+   (anything else: "I'm freezing here on the sofa").
 3. **Places.** A destination mention is where things go only in a destination role: after a spatial
    preposition ("in", "onto", "up to", "on the edge of"), as the indirect object of the verb ("give
    the dog a treat"), as the subject of "is for", alone in a fragment; a person also after "with"
@@ -34,10 +39,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cache
 from importlib import resources
-
-from spacy.tokens import Doc, Token
+from typing import TYPE_CHECKING
 
 from conceptbot.pipeline.goal.mentions import Mention
+
+if TYPE_CHECKING:  # spaCy is loaded with the model, on first use (pipeline/goal imports light)
+    from spacy.tokens import Doc, Token
 
 HARD = {".", "!", "?", ";", ":"}
 SOFT = {",", "and", "but", "then", "so", "because", "since", "while", "whereas"}

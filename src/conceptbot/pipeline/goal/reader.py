@@ -28,9 +28,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-
-from spacy.language import Language
-from spacy.tokens import Doc
+from typing import TYPE_CHECKING
 
 from conceptbot.core.scene import Scene
 from conceptbot.pipeline.goal.clauses import analyse
@@ -39,6 +37,10 @@ from conceptbot.pipeline.goal.parse import Clause, chunks, vocabulary
 from conceptbot.pipeline.goal.themes import Reading, criterion_text, head_of, objects_in, read_theme
 from conceptbot.pipeline.goal.types import ALL, Goal, GoalTarget
 from conceptbot.pipeline.hazards import is_person as default_is_person
+
+if TYPE_CHECKING:  # spaCy is loaded with the model, on first use (pipeline/goal imports light)
+    from spacy.language import Language
+    from spacy.tokens import Doc
 
 
 @dataclass

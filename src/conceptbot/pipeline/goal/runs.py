@@ -4,10 +4,12 @@ and whether a run can be what a clause sends."""
 from __future__ import annotations
 
 from collections.abc import Sequence
-
-from spacy.tokens import Doc, Token
+from typing import TYPE_CHECKING
 
 from conceptbot.pipeline.goal.parse import vocabulary
+
+if TYPE_CHECKING:  # spaCy is loaded with the model, on first use (pipeline/goal imports light)
+    from spacy.tokens import Doc, Token
 
 _PRONOUN_THEMES = {"it", "them", "they", "him", "her", "one"}
 

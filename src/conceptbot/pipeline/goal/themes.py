@@ -5,13 +5,15 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-
-from spacy.tokens import Doc, Token
+from typing import TYPE_CHECKING
 
 from conceptbot.pipeline.goal.mentions import Mention
 from conceptbot.pipeline.goal.parse import vocabulary
 from conceptbot.pipeline.goal.types import ALL, Count
 from conceptbot.pipeline.vocabulary import MATERIALS
+
+if TYPE_CHECKING:  # spaCy is loaded with the model, on first use (pipeline/goal imports light)
+    from spacy.tokens import Doc, Token
 
 _STOP_HEAD = {"IN", "TO", "WDT", "WP", "VBN", "VBG", "VBZ", "VBD", "VBP", "VB", "MD", "RB", ",", "PRP"}
 

@@ -5,14 +5,16 @@ make", "is there something for my sore throat you could hand me?" (step 2 of
 from __future__ import annotations
 
 from collections.abc import Sequence
-
-from spacy.tokens import Doc, Token
+from typing import TYPE_CHECKING
 
 from conceptbot.pipeline.goal.mentions import Mention
 from conceptbot.pipeline.goal.parse import Chunk, Clause, Place, vocabulary
 from conceptbot.pipeline.goal.runs import lower as _lower
 from conceptbot.pipeline.goal.runs import nominal
 from conceptbot.pipeline.goal.runs import runs as _runs
+
+if TYPE_CHECKING:  # spaCy is loaded with the model, on first use (pipeline/goal imports light)
+    from spacy.tokens import Doc, Token
 
 
 def desire_verb(doc: Doc, first: int, end: int, lets: bool) -> Token | None:
