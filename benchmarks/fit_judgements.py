@@ -27,19 +27,28 @@ import numpy as np
 
 from conceptbot.core.config import load_settings
 from conceptbot.knowledge.registry import open_graph
+from conceptbot.pipeline.combine import value
+from conceptbot.pipeline.decide import group_readings
 from conceptbot.pipeline.evidence import FEATURES, GRAPH_FREE, GraphEvidence
 
 FOLDS = 5
 L2 = 1.0
 WEIGHTS = Path("src/conceptbot/pipeline/judgement_weights.json")
+GROUP = (
+    "model", "model_z", "model_gap", "is_dish", "model*is_dish", "model_gap*is_dish", "is_material",
+    "is_several", "model*is_several",
+)  # fmt: skip
 VARIANTS = {
     "model": None,
     "model-fit": ("model",),
+    "model-group": GROUP,
     "graph": FEATURES,
-    "combined": ("model", *FEATURES),
-    "combined+plain": ("model", "plain", *FEATURES),
-    "nokg": ("plain", *GRAPH_FREE),
+    "combined": tuple(dict.fromkeys((*GROUP, *FEATURES, "materials_named*is_several"))),
+    "combined+plain": tuple(dict.fromkeys((*GROUP, "plain", *FEATURES, "materials_named*is_several"))),
+    "nokg": tuple(dict.fromkeys((*GROUP, *GRAPH_FREE, "materials_named*is_several"))),
 }
+#: The combinations shipped: the default system's and the no-graph ablation's.
+SHIPPED = (("graph", "combined"), ("nograph", "nokg"))
 
 
 def fit(x: np.ndarray, y: np.ndarray, l2: float = L2) -> tuple[np.ndarray, float]:
@@ -65,8 +74,30 @@ def fold(obj: str) -> int:
     return zlib.crc32(obj.lower().encode()) % FOLDS
 
 
-def matrix(rows: list[dict], names: tuple[str, ...]) -> np.ndarray:
-    return np.array([[float(r[n]) for n in names] for r in rows], dtype=float)
+def matrix(rows: list[dict], names: tuple[str, ...], ablation: bool = False) -> np.ndarray:
+    """The rows' features; for the no-graph ablation, its own readings and evidence (``nokg_``)."""
+    prefix = "nokg_" if ablation else ""
+    return np.array(
+        [
+            [value({k[len(prefix) :]: v for k, v in r.items() if k.startswith(prefix)}, n) for n in names]
+            for r in rows
+        ],
+        dtype=float,
+    )
+
+
+def add_group_readings(rows: list[dict]) -> None:
+    """Each row's readings standardised within its group (the objects asked together), as the
+    planner computes them (``decide.group_readings``): with facts, and without (the ablation's)."""
+    groups: dict[tuple[str, str], list[dict]] = {}
+    for row in rows:
+        groups.setdefault((row["request"], row["criterion"]), []).append(row)
+    for members in groups.values():
+        with_facts = group_readings({r["object"]: r["model"] for r in members})
+        without = group_readings({r["object"]: r["plain"] for r in members})
+        for r in members:
+            r.update(with_facts[r["object"]])
+            r.update({f"nokg_{k}": v for k, v in without[r["object"]].items()})
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -86,6 +117,7 @@ def main(argv: list[str] | None = None) -> int:
             {f"nokg_{k}": v for k, v in names_only.read(row["object"], row["criterion"]).features.items()}
         )
         row["y"] = 1.0 if row["answer"] else 0.0
+    add_group_readings(rows)
     y = np.array([r["y"] for r in rows])
     folds = np.array([fold(r["object"]) for r in rows])
     predicted: dict[str, np.ndarray] = {}
@@ -93,8 +125,7 @@ def main(argv: list[str] | None = None) -> int:
         if names is None:
             predicted[variant] = np.array([r["model"] > 0 for r in rows], dtype=float)
             continue
-        columns = tuple(f"nokg_{n}" if variant == "nokg" and n in GRAPH_FREE else n for n in names)
-        x = matrix(rows, columns)
+        x = matrix(rows, names, ablation=variant == "nokg")
         out = np.zeros(len(rows))
         for k in range(FOLDS):
             train, test = folds != k, folds == k
@@ -121,11 +152,10 @@ def main(argv: list[str] | None = None) -> int:
                     f"answer={r['answer']!s:5} model={r['model']:+.2f} {'; '.join(r['statements'])[:160]}"
                 )
     fitted = {}
-    for name, variant in (("graph", "combined"), ("nograph", "nokg")):
+    for name, variant in SHIPPED:
         names = VARIANTS[variant]
         assert names is not None
-        columns = tuple(f"nokg_{n}" if variant == "nokg" and n in GRAPH_FREE else n for n in names)
-        w, b = fit(matrix(rows, columns), y)
+        w, b = fit(matrix(rows, names, ablation=variant == "nokg"), y)
         fitted[name] = {
             "features": list(names),
             "weights": [round(float(v), 4) for v in w],

@@ -50,7 +50,9 @@ def deciders() -> tuple[Decider, Decider, str]:
     with_graph = build_system(settings, "conceptbot")
     without = build_system(settings, "nokg")
     model = settings.llm.split(":", 1)[-1]
-    return with_graph.goal_planner.decider, without.goal_planner.decider, model  # type: ignore[attr-defined]
+    # The model's own readings: deciders with the systems' model and facts but no combination.
+    found = [s.goal_planner.decider for s in (with_graph, without)]  # type: ignore[attr-defined]
+    return Decider(found[0].llm, found[0].facts), Decider(found[1].llm, found[1].facts), model
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -26,7 +26,21 @@ GRAPH = DictGraph(
 
 
 def _features(obj: str, criterion: str, graph: DictGraph | None = GRAPH) -> dict[str, float]:
-    return {k: v for k, v in GraphEvidence(graph).read(obj, criterion).features.items() if v}
+    """The statement features that are set (not the criterion's kind)."""
+    found = GraphEvidence(graph).read(obj, criterion).features
+    return {k: v for k, v in found.items() if v and not k.startswith("is_")}
+
+
+def test_the_criterion_kind_is_a_feature() -> None:
+    assert GraphEvidence(None).read("lemon", "an ingredient of hollandaise").features["is_dish"] == 1.0
+    assert GraphEvidence(None).read("steel bolt", "made of metal").features["is_material"] == 1.0
+    assert GraphEvidence(None).read("yew", "poisonous").features["is_material"] == 0.0
+
+
+def test_a_material_family_counts_its_members_as_the_same_material() -> None:
+    assert _features("steel bolt", "made only of metal", graph=None) == {"name_yes": 1.0}
+    assert _features("wool scarf", "made of fabric alone", graph=None) == {"name_yes": 1.0}
+    assert _features("plastic folder", "made only of paper", graph=None) == {"name_no": 1.0}
 
 
 def test_a_gloss_that_names_the_property_is_evidence_for_it_and_its_opposite_against() -> None:
@@ -80,6 +94,6 @@ def test_criterion_terms_bring_the_group_and_its_opposite(criterion: str, yes: s
 def test_the_trace_form_lists_only_what_is_set_with_the_statements() -> None:
     found = GraphEvidence(GRAPH).read("death cap", "poisonous").to_dict()
     assert found == {
-        "features": {"own_yes": 1.0},
+        "features": {"own_yes": 1.0},  # the criterion's kind features are 0 here, so not listed
         "statements": ["own_yes: death cap DefinedAs extremely poisonous white fungus"],
     }

@@ -15,7 +15,7 @@ from conceptbot.pipeline.decide import Decider, FactFinder
 from conceptbot.pipeline.goal_planner import GoalPlanner, is_person
 from conceptbot.pipeline.ope import ObjectProperties, OPEResult
 from conceptbot.pipeline.retrieval import RelationRetriever
-from conceptbot.pipeline.targets import ALL, TargetFinder, is_stacking, mentions
+from conceptbot.pipeline.targets import ALL, Target, TargetFinder, is_stacking, mentions
 from tests.pipeline.fakes import DictGraph, risk_reply
 
 SCENE = scene_from_dict(
@@ -340,3 +340,36 @@ def test_conceptbot_uses_the_goal_planner_when_asked() -> None:
     assert ConceptBot(FakeLLM(scores=[]), None, "nokg").planner_kind == "goal"  # the default
     assert ConceptBot(FakeLLM(), None, "nokg").planner_kind == "steps"  # cannot score: the paper's votes
     assert ConceptBot(FakeLLM(scores=[]), None, "ope").planner_kind == "steps"
+
+
+class FixedTargets:
+    """A target reader that returns the given targets (the goal planner's assembly under test)."""
+
+    def __init__(self, targets: list[Target]) -> None:
+        self.targets = targets
+
+    def read(self, request: str, scene) -> tuple[bool, list[Target], Usage]:
+        return False, list(self.targets), Usage(calls=0)
+
+
+def test_the_rest_takes_every_object_no_other_target_took_without_being_asked_about() -> None:
+    # Issue 33, item 3: "the poisonous ones on the toxic tray, the rest on the edible tray".
+    scene = scene_from_dict(
+        {"pickable_objects": ["foxglove", "parsley", "thyme"], "destinations": ["toxic tray", "edible tray"]}
+    )
+    targets = [
+        Target("toxic tray", ALL, "named", criterion="poisonous"),
+        Target("edible tray", ALL, "named", rest=True),
+    ]
+    scores = [PRIOR, [-0.1, -3.0], [-3.0, -0.1], [-3.0, -0.1]]  # poisonous? foxglove yes, the herbs no
+    scores += [PRIOR, SAFE] * 3  # the risk question of each move
+    llm = FakeLLM(scores=scores)
+    result = GoalPlanner(FixedTargets(targets), Decider(llm, FactFinder(None))).plan("sort them", scene)
+    assert result.actions == [
+        "pick_and_place(foxglove, toxic tray)",
+        "pick_and_place(parsley, edible tray)",
+        "pick_and_place(thyme, edible tray)",
+        "done()",
+    ]
+    edible = next(d for d in result.trace.decisions if d.target.to == "edible tray")
+    assert not edible.decided and len(llm.score_requests) == len(scores)

@@ -58,6 +58,8 @@ def test_no_prompt_example_mirrors_a_test_item() -> None:
             continue
         text = " ".join(re.findall(r"[a-z0-9]+", path.read_text(encoding="utf-8").lower()))
         for name in objects - EVERYDAY:
-            assert not re.search(rf"\b{re.escape(name)}\b", text), f"{path.name} names the test object {name!r}"
+            assert not re.search(rf"\b{re.escape(name)}\b", text), (
+                f"{path.name} names the test object {name!r}"
+            )
         for request in requests:
             assert " ".join(re.findall(r"[a-z0-9]+", request)) not in text, f"{path.name} quotes {request!r}"

@@ -173,6 +173,7 @@ def _goal(console: Console, trace: PlanTrace) -> None:
         named = f"; objects named: {', '.join(target.named)}" if target.named else ""
         criterion = f"; objects that fit {target.criterion!r}" if target.criterion else ""
         criterion += f"; a dish the graph knows: {target.dish}" if target.dish else ""
+        criterion += "; the rest (what no other target takes)" if target.rest else ""
         console.print(line(f"  -> {target.to} ({how}): {target.count}{named}{criterion}"))
     for decision in trace.decisions or ():
         if not decision.decided:
@@ -180,12 +181,24 @@ def _goal(console: Console, trace: PlanTrace) -> None:
         title = plain(f"Decisions for the {decision.target.to} (calibrated log-odds of yes)")
         # The name ranking (which object, all listed in one question) exists for targets taking N.
         names = any(row.name_score is not None for row in decision.objects)
-        columns = ["object", "P(yes)", "score", *(["name"] if names else []), "graph facts in the question"]
+        # Combined decisions: the model's own log-odds beside the score, and the graph's evidence.
+        combined = any(row.model is not None for row in decision.objects)
+        columns = [
+            "object",
+            "P(yes)",
+            "score",
+            *(["model"] if combined else []),
+            *(["name"] if names else []),
+            "graph evidence" if combined else "graph facts in the question",
+        ]
         table = Table(*columns, title=title)
         for row in sorted(decision.objects, key=lambda r: -r.score):
-            facts = "; ".join(row.facts)[:80]
+            said = row.evidence["statements"] if combined and row.evidence else row.facts
+            facts = "; ".join(said)[:80]
+            model = [f"{row.model:+.2f}" if row.model is not None else ""] if combined else []
             name = [f"{row.name_score:+.2f}" if row.name_score is not None else ""] if names else []
-            table.add_row(plain(row.object), f"{row.p_yes:.2f}", f"{row.score:+.2f}", *name, plain(facts))
+            cells = (f"{row.p_yes:.2f}", f"{row.score:+.2f}", *model, *name)
+            table.add_row(plain(row.object), *cells, plain(facts))
         if decision.context:
             console.print(line("  facts about the request: " + "; ".join(decision.context)))
         console.print(table)

@@ -187,6 +187,7 @@ class TargetTrace:
         criterion: The property that sorts objects to it, in the request's words, or "".
         dish: The dish the request asks for, when the graph knows it as one, or "".
         ingredients: Whether the objects that go are a dish's ingredients.
+        rest: Whether it takes whatever no other target takes ("the rest"; in the JSON only when so).
     """
 
     to: str
@@ -197,6 +198,7 @@ class TargetTrace:
     criterion: str = ""
     dish: str = ""
     ingredients: bool = False
+    rest: bool = False
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form."""
@@ -209,6 +211,7 @@ class TargetTrace:
             "criterion": self.criterion,
             "dish": self.dish,
             "ingredients": self.ingredients,
+            **({"rest": True} if self.rest else {}),
         }
 
 

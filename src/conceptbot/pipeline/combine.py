@@ -34,7 +34,10 @@ class Combination:
 
     Attributes:
         features: Input names: ``model``, ``plain`` (the model's calibrated log-odds with and without
-            graph facts) and evidence feature names (:data:`conceptbot.pipeline.evidence.FEATURES`).
+            graph facts), ``model_z`` and ``model_gap`` (the model's log-odds standardised over the
+            objects judged together, and its distance below the best of them: the model ranks
+            ingredients well but leans towards No for all of them), evidence feature names
+            (:data:`conceptbot.pipeline.evidence.FEATURES`), and products of these (``model*is_dish``).
         weights: One weight per feature.
         bias: The intercept.
     """
@@ -57,9 +60,7 @@ class Combination:
         """
         found = dict(evidence.features) if evidence is not None else {}
         found.update(readings)
-        total = self.bias + sum(
-            w * float(found.get(f, 0.0)) for f, w in zip(self.features, self.weights, strict=True)
-        )
+        total = self.bias + sum(w * value(found, f) for f, w in zip(self.features, self.weights, strict=True))
         if not math.isfinite(total):
             raise ValueError(f"non-finite combined score from {dict(readings)}")
         return total
@@ -76,6 +77,14 @@ class Combination:
         if len(features) != len(weights) or not all(math.isfinite(w) for w in weights):
             raise ValueError("judgement weights: one finite weight per feature is needed")
         return cls(features, weights, float(data["bias"]))
+
+
+def value(found: Mapping[str, float], feature: str) -> float:
+    """A feature's value: a name, or a product of names (``model*is_dish``); absent names are 0."""
+    total = 1.0
+    for part in feature.split("*"):
+        total *= float(found.get(part, 0.0))
+    return total
 
 
 def sigmoid(x: float) -> float:

@@ -34,7 +34,10 @@ from conceptbot.core.usage import Usage
 from conceptbot.models.cache_db import CacheStore
 from conceptbot.models.llm import LLM
 from conceptbot.pipeline import modes, prompts
+from conceptbot.pipeline.combine import combination
 from conceptbot.pipeline.decide import Decider, FactFinder
+from conceptbot.pipeline.evidence import GraphEvidence
+from conceptbot.pipeline.goal import GoalFinder, GoalReader
 from conceptbot.pipeline.goal_planner import GoalPlanner, GoalPlanResult, Thresholds
 from conceptbot.pipeline.hazards import HazardCheck, is_person
 from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
@@ -123,9 +126,18 @@ class ConceptBot:
             planner = "steps"  # the goal planner needs the request compiled and options scored
         self.planner_kind = planner
         facts = FactFinder(retriever)
+        graph = retriever.graph if retriever is not None else None
+        # Criterion decisions weigh the graph's statements as evidence beside the model's answer
+        # (a combination fitted on the judgement set; without a graph, the ablation's own fit).
+        decider = Decider(
+            self._llm_for("decide"), facts, GraphEvidence(graph), combination(with_graph=graph is not None)
+        )
+        # The request's structure from its parse; the graph tells a dish to make from other things
+        # wished for ("I'd love an omelette" / "I'd love a drink").
+        reader = GoalReader(is_dish=facts.is_dish if retriever is not None else None, is_person=is_person)
         self.goal_planner = GoalPlanner(
-            TargetFinder(self._llm_for("goal"), is_person, food=facts),
-            Decider(self._llm_for("decide"), facts),
+            GoalFinder(reader, TargetFinder(self._llm_for("goal"), is_person, food=facts)),
+            decider,
             self.ope if self.switches.ope else None,
             thresholds,
             hazards=self.hazards,

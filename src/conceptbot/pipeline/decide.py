@@ -24,6 +24,7 @@ from typing import Any
 
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
+from conceptbot.knowledge.normalize import singular
 from conceptbot.models.llm import LLM, Message, ScoreRequest
 from conceptbot.pipeline import prompts
 from conceptbot.pipeline.combine import Combination, sigmoid
@@ -169,6 +170,18 @@ class FactFinder:
             if candidate in classes or self._is_a(candidate, classes):
                 return candidate
         return None
+
+    def is_dish(self, phrase: str) -> bool:
+        """Whether the graph places ``phrase`` (or its singular form) under a prepared food
+        (``dish_classes``), up to three IsA steps; False without a graph."""
+        if self.retriever is None:
+            return False
+        classes = set(words()["dish_classes"])
+        name = " ".join(tokens(phrase))
+        forms = dict.fromkeys(
+            [name, " ".join([*name.split()[:-1], singular(name.split()[-1])]) if name else ""]
+        )
+        return any(f and (f in classes or self._is_a(f, classes)) for f in forms)
 
     def prep_places(self, destinations: Sequence[str]) -> list[str]:
         """The destinations food can be prepared in or on: those the graph places under cookware
@@ -367,17 +380,19 @@ class Decider:
                 )
                 usage = usage + used
                 plain = {j.subject: j.score for j in bare}
-            judgements = [self._combined(j, what, plain[j.subject]) for j in judgements]
+            group = group_readings({j.subject: j.score for j in judgements})
+            judgements = [
+                self._combined(j, what, {**group[j.subject], "plain": plain[j.subject]}) for j in judgements
+            ]
         return judgements, context, usage.with_latency(time.perf_counter() - started)
 
-    def _combined(self, judgement: Judgement, criterion: str, plain: float) -> Judgement:
-        """The judgement with its score replaced by the fitted combination of the model's reading
+    def _combined(self, judgement: Judgement, criterion: str, readings: dict[str, float]) -> Judgement:
+        """The judgement with its score replaced by the fitted combination of the model's readings
         and the graph's evidence (the model's own score kept beside it)."""
         assert self.combination is not None
         evidence = self.evidence.read(judgement.subject, criterion) if self.evidence is not None else None
-        model = judgement.score
-        score = self.combination.log_odds({"model": model, "plain": plain}, evidence)
-        return replace(judgement, p_yes=sigmoid(score), score=score, model=model, evidence=evidence)
+        score = self.combination.log_odds(readings, evidence)
+        return replace(judgement, p_yes=sigmoid(score), score=score, model=judgement.score, evidence=evidence)
 
     def name_scores(self, request: str, move: str, objects: Sequence[str]) -> tuple[dict[str, float], Usage]:
         """How much the request raises the probability of naming each object: "which object should
@@ -435,3 +450,17 @@ class Decider:
         p_safe, log_odds, used, method = self._ask(question(move, lines))
         judgement = Judgement(move, "dangerous", 1.0 - p_safe, prior - log_odds, tuple(lines), method)
         return judgement, (usage + used).with_latency(time.perf_counter() - started)
+
+
+def group_readings(scores: dict[str, float]) -> dict[str, dict[str, float]]:
+    """Per object: its calibrated log-odds (``model``), standardised over the objects judged together
+    (``model_z``) and its distance below the best of them (``model_gap``, 0 for the best); for one
+    object alone both are 0."""
+    values = list(scores.values())
+    mean = sum(values) / len(values) if values else 0.0
+    spread = (sum((v - mean) ** 2 for v in values) / len(values)) ** 0.5 if values else 0.0
+    best = max(values, default=0.0)
+    return {
+        o: {"model": v, "model_z": (v - mean) / spread if spread > 1e-9 else 0.0, "model_gap": v - best}
+        for o, v in scores.items()
+    }

@@ -61,9 +61,14 @@ FEATURES = (
     "name_no",
     "dish_yes",
     "dish_no",
+    "is_dish",
+    "is_material",
+    "is_several",
+    "materials_named",
 )
-#: The features that need no graph (the no-graph ablation keeps these).
-GRAPH_FREE = ("name_yes", "name_no")
+#: The features that need no graph (the no-graph ablation keeps these): what the object's name states
+#: (``materials_named`` counts only the name's materials there), and what kind of criterion it is.
+GRAPH_FREE = ("name_yes", "name_no", "is_dish", "is_material", "is_several", "materials_named")
 
 
 @cache
@@ -90,6 +95,8 @@ class Terms:
     yes: tuple[tuple[str, ...], ...]
     no: tuple[tuple[str, ...], ...]
     dish: str = ""
+    material: bool = False
+    several: bool = False
 
 
 def _phrases(items: Iterable[str]) -> tuple[tuple[str, ...], ...]:
@@ -105,6 +112,8 @@ def criterion_terms(criterion: str, graph: KnowledgeGraph | None = None) -> Term
         return Terms((), (), dish.group(1).strip(" ."))
     forms = {**vocab["material_forms"], **vocab["spellings"]}
     seq = [forms.get(w, w) for w in words_of(text)]
+    if any(_phrase_at(seq, words_of(p)) for p in vocab["several_materials"]):
+        return Terms((), (), several=True)
     yes: list[str] = []
     no: list[str] = []
     used = [False] * len(seq)
@@ -125,9 +134,14 @@ def criterion_terms(criterion: str, graph: KnowledgeGraph | None = None) -> Term
     ignore = set(vocab["ignore"])
     rest = [w for w, u in zip(seq, used, strict=True) if not u and w not in ignore and len(w) > 2]
     materials = set(vocab["materials"])
+    families: dict[str, list[str]] = vocab["material_families"]
     yes += rest
-    if any(w in materials for w in rest):
-        no += [m for m in materials if m not in rest and forms.get(m, m) not in rest]
+    named = [w for w in rest if w in materials or w in families]
+    if named:
+        # A family's members state it ("steel" is a metal); a member states itself only.
+        same = set(named) | {m for w in named for m in families.get(w, [])}
+        yes += sorted(same - set(yes))
+        no += [m for m in sorted(materials | set(families)) if m not in same and forms.get(m, m) not in same]
     if graph is not None and len(rest) == 1 and not grouped:
         # Synonyms of a word with one WordNet sense only: "glass" has several (a drinking glass,
         # a mirror, ...), and its synonyms would be evidence about other things.
@@ -137,7 +151,7 @@ def criterion_terms(criterion: str, graph: KnowledgeGraph | None = None) -> Term
             synonyms = [e for e in found.edges if e.relation == "Synonym"]
             yes += [e.head if e.tail.lower() == rest[0] else e.tail for e in synonyms]
     yes_p = _phrases(yes)
-    return Terms(yes_p, tuple(p for p in _phrases(no) if p not in yes_p))
+    return Terms(yes_p, tuple(p for p in _phrases(no) if p not in yes_p), material=bool(named))
 
 
 def _negated(seq: Sequence[str], at: int) -> bool:
@@ -253,6 +267,12 @@ class GraphEvidence:
                 features[name] = value
                 statements.append(f"{name}: {sentence}")
 
+        features["is_dish"] = 1.0 if terms.dish else 0.0
+        features["is_material"] = 1.0 if terms.material else 0.0
+        features["is_several"] = 1.0 if terms.several else 0.0
+        if terms.several:
+            self._materials(obj, features, statements)
+            return Evidence(obj, criterion, features, tuple(statements))
         if terms.dish:
             self._dish(obj, terms.dish, note)
             return Evidence(obj, criterion, features, tuple(statements))
@@ -301,6 +321,27 @@ class GraphEvidence:
                 if no:
                     note("kind_no", AMBIGUOUS, edge.sentence)
         return Evidence(obj, criterion, features, tuple(statements))
+
+    def _materials(self, obj: str, features: dict[str, float], statements: list[str]) -> None:
+        """For "made of several materials": how many materials (0-3) the name and the object's own
+        ``MadeOf`` edges and gloss name ("paper cup MadeOf paper", "a disposable cup ... plastic")."""
+        vocab = terms_vocabulary()
+        known = set(vocab["materials"]) | set(vocab["material_families"])
+        forms = {**vocab["material_forms"], **vocab["spellings"]}
+
+        def named(text: str) -> set[str]:
+            return {forms.get(w, w) for w in words_of(text)} & known
+
+        found = named(obj)
+        if self.graph is not None:
+            own, senses = self._own(obj, (*_EXACT, *_HEAD))
+            for edge in own:
+                if edge.relation == "MadeOf" or (edge.relation == "DefinedAs" and senses <= 1):
+                    new = named(edge.tail) - found
+                    if new:
+                        found |= new
+                        statements.append(f"materials_named: {edge.sentence}")
+        features["materials_named"] = float(min(len(found), 3))
 
     def _dish(self, obj: str, dish: str, note: Any) -> None:
         """Whether the dish's gloss or ``MadeOf`` edges name the object, its head noun or a parent."""

@@ -30,6 +30,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass, field
+from typing import Protocol
 
 from conceptbot.core.errors import (
     BackendRequestError,
@@ -48,10 +49,20 @@ from conceptbot.pipeline.decide import Decider, Judgement
 from conceptbot.pipeline.hazards import HazardCheck, is_person, is_vulnerable
 from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
 from conceptbot.pipeline.ope_answers import RiskIndex
-from conceptbot.pipeline.targets import ALL, Target, TargetFinder, is_stacking, mentions
+from conceptbot.pipeline.targets import ALL, Target, mentions
 from conceptbot.pipeline.tracing import judgement_trace, target_trace
 
 METHOD = "decide"
+
+
+class TargetReader(Protocol):
+    """Reads a request's goal for the planner (``GoalFinder``, or the word rules' ``TargetFinder``)."""
+
+    def read(self, request: str, scene: Scene) -> tuple[bool, list[Target], Usage]:
+        """Whether the request asks for a pile, its targets (none for a pile), and the model calls."""
+        ...
+
+
 TOP_K = 6
 NAMED = 10.0  # the score of an object the request names: above any decided one
 BASE = "a sturdy object with a flat top that other things can safely be stacked on"
@@ -164,7 +175,9 @@ class GoalPlanner:
     """Targets -> decisions -> plan (see the module docstring).
 
     Args:
-        targets: Reads targets, counts and named objects from the request.
+        targets: Reads whether the request asks for a pile, and its targets, counts and named
+            objects (:class:`~conceptbot.pipeline.goal.GoalFinder` by default;
+            :class:`~conceptbot.pipeline.targets.TargetFinder` is the word-rule reader before it).
         decider: Yes/no decisions.
         ope: OPE for the objects a plan moves (evidence for the risk decisions), or None.
         thresholds: Decision thresholds.
@@ -175,7 +188,7 @@ class GoalPlanner:
 
     def __init__(
         self,
-        targets: TargetFinder,
+        targets: TargetReader,
         decider: Decider,
         ope: ObjectPropertiesExtractor | None = None,
         thresholds: Thresholds | None = None,
@@ -202,12 +215,9 @@ class GoalPlanner:
         ``observer`` gets a progress message as each piece of work starts and the events ``goal``,
         ``decisions``, ``risk`` and one ``step`` per move, in that order, as each part is done."""
         usage: dict[str, Usage] = {}
-        stack = is_stacking(request)
-        if stack:  # a pile has no destination of its own: the objects are the destinations
-            targets, usage["goal"] = [], Usage(calls=0)
-        else:
-            observer.progress("Goal: where the request sends things")
-            targets, usage["goal"] = self.targets.find(request, scene)
+        observer.progress("Goal: where the request sends things")
+        # A pile has no destination of its own (the objects are the destinations): no targets.
+        stack, targets, usage["goal"] = self.targets.read(request, scene)
         goal = GoalTrace(tuple(target_trace(t) for t in targets), stack)
         observer.event("goal", goal.to_dict())
         ranked, decisions, usage["decide"] = self._decide(request, scene, targets, stack, observer)
@@ -228,7 +238,7 @@ class GoalPlanner:
         # least one more move, so this ends.
         while True:
             if not stack:
-                moves = self._choose(targets, ranked, blocked)
+                moves = self._choose(targets, ranked, blocked, scene.pickable)
             fresh = [m for m in moves if m not in checks]
             if not fresh:
                 break
@@ -270,7 +280,7 @@ class GoalPlanner:
         for target in targets:
             named = [Judgement(o, target.name, 1.0, NAMED) for o in target.named]
             needs_more = target.count == ALL or target.count > len(target.named)
-            if stack or not needs_more:
+            if stack or not needs_more or target.rest:  # the rest is what others leave: not asked
                 ranked[target.name] = named
                 decisions.append(DecisionTrace(target_trace(target), decided=False))
                 continue
@@ -310,13 +320,21 @@ class GoalPlanner:
         return ranked, tuple(decisions), usage
 
     def _choose(
-        self, targets: list[Target], ranked: dict[str, list[Judgement]], blocked: set[tuple[str, str]]
+        self,
+        targets: list[Target],
+        ranked: dict[str, list[Judgement]],
+        blocked: set[tuple[str, str]],
+        pickable: list[str],
     ) -> list[tuple[str, str]]:
-        """The moves: each target's best objects (its count), an object to the target it fits best."""
+        """The moves: each target's best objects (its count), an object to the target it fits best;
+        then a target that takes the rest takes every pickable object left."""
         wanted: dict[str, tuple[str, float]] = {}  # object -> (target, score)
-        sorting = len(targets) >= 2 and all(t.count == ALL for t in targets)
+        # A sort: two or more targets each taking all that fit (not counting a remainder, which takes
+        # what they leave): each object goes to the target it fits best.
+        judged = [t for t in targets if not t.rest]
+        sorting = len(judged) >= 2 and all(t.count == ALL for t in judged)
         fit = self.thresholds.partition if sorting else self.thresholds.fit
-        for target in targets:
+        for target in (t for t in targets if not t.rest):
             taken = 0
             skipped = 0
             for judgement in ranked.get(target.name, []):
@@ -338,6 +356,11 @@ class GoalPlanner:
                     continue
                 wanted[obj] = (target.name, judgement.score)
                 taken += 1
+        for target in (t for t in targets if t.rest):
+            # "The rest go in B": every object no other target took, in scene order.
+            for obj in pickable:
+                if obj not in wanted and obj != target.name and (obj, target.name) not in blocked:
+                    wanted[obj] = (target.name, 0.0)
         order = {t.name: i for i, t in enumerate(targets)}
         moves = sorted(wanted.items(), key=lambda item: (order[item[1][0]], -item[1][1]))
         return [(obj, target) for obj, (target, _) in moves]

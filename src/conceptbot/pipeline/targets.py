@@ -209,7 +209,8 @@ class TargetFinder:
         self.threshold = threshold
         self.food = food
 
-    def _log_odds(self, request: str, dest: str) -> tuple[float, Usage]:
+    def log_odds(self, request: str, dest: str) -> tuple[float, Usage]:
+        """The log-odds of Yes to "should the robot put things in the X?" for ``request``."""
         action = f"give things to the {dest}" if self.is_person(dest) else f"put things in or on the {dest}"
         messages = (
             Message("system", prompts.render("decide_system")),
@@ -218,6 +219,13 @@ class TargetFinder:
         scored = self.llm.score(ScoreRequest(options=("Yes", "No"), messages=messages))
         yes, no = scored.logprobs
         return yes - no, scored.usage
+
+    def read(self, request: str, scene: Scene) -> tuple[bool, list[Target], Usage]:
+        """Whether the request asks for a pile, and (unless it does) its targets (:meth:`find`)."""
+        if is_stacking(request):
+            return True, [], Usage(calls=0)
+        targets, usage = self.find(request, scene)
+        return False, targets, usage
 
     def find(self, request: str, scene: Scene) -> tuple[list[Target], Usage]:
         """The targets, in the order the request names them (scored ones best first)."""
@@ -245,8 +253,8 @@ class TargetFinder:
                 # things in the X?", the model preferred the fridge or the counter to the bowl.
                 candidates = self.food.prep_places(candidates) or candidates
             for dest in candidates:
-                odds, used = self._log_odds(request, dest)
-                prior, used_prior = self._log_odds(CONTENT_FREE_REQUEST, dest)
+                odds, used = self.log_odds(request, dest)
+                prior, used_prior = self.log_odds(CONTENT_FREE_REQUEST, dest)
                 usage = usage + used + used_prior
                 scores[dest] = odds - prior
             ranked = sorted(scores, key=lambda d: -scores[d])

@@ -84,6 +84,7 @@ def target_trace(target: Target) -> TargetTrace:
         criterion=data["criterion"],
         dish=data["dish"],
         ingredients=data["ingredients"],
+        rest=data.get("rest", False),
     )
 
 

@@ -77,3 +77,14 @@ def test_the_scored_chooser_asks_the_target_finder_s_question() -> None:
         and "Throw away the broken shells." in llm.score_requests[0].messages[1].content
     )
     assert chooser(GoalTarget(None, "need"), SHELLS) == [("user", 0.0)]
+
+
+def test_names_with_marks_are_read_as_their_words_and_planned_with_their_own_spelling() -> None:
+    from conceptbot.core.scene import scene_from_dict
+    from conceptbot.pipeline.goal import GoalReader
+    from conceptbot.pipeline.goal.adapter import read_plainly
+
+    scene = scene_from_dict({"pickable_objects": ["apple [/x]", "pear"], "destinations": ["child", "table"]})
+    goal = read_plainly(GoalReader(), "give the apple [/x] to the child [bold]", scene)
+    [target] = goal.targets
+    assert (target.to, target.takes, target.named) == ("child", "named", ("apple [/x]",))

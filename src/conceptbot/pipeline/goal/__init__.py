@@ -36,7 +36,7 @@ words leave the place open)::
     usage = chooser.usage
 """
 
-from conceptbot.pipeline.goal.adapter import Chooser, ScoredChooser, to_targets
+from conceptbot.pipeline.goal.adapter import Chooser, GoalFinder, ScoredChooser, to_targets
 from conceptbot.pipeline.goal.compare import GoalMatch, same_goal
 from conceptbot.pipeline.goal.reader import GoalReader
 from conceptbot.pipeline.goal.types import ALL, TAKES, Goal, GoalTarget
@@ -46,6 +46,7 @@ __all__ = [
     "TAKES",
     "Chooser",
     "Goal",
+    "GoalFinder",
     "GoalMatch",
     "GoalReader",
     "GoalTarget",

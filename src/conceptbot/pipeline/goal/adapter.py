@@ -22,10 +22,14 @@ right):
 
 from __future__ import annotations
 
+import re
+import time
 from collections.abc import Callable
+from dataclasses import replace
 
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
+from conceptbot.pipeline.goal.reader import GoalReader
 from conceptbot.pipeline.goal.types import ALL as GOAL_ALL
 from conceptbot.pipeline.goal.types import Goal, GoalTarget
 from conceptbot.pipeline.targets import ALL, CONTENT_FREE_REQUEST, Target, TargetFinder
@@ -130,8 +134,8 @@ class ScoredChooser:
         scores = {}
         for dest in candidates:
             # TargetFinder's own scored question (one method, so that both readers ask the same).
-            odds, used = self.finder._log_odds(self.request, dest)
-            prior, used_prior = self.finder._log_odds(CONTENT_FREE_REQUEST, dest)
+            odds, used = self.finder.log_odds(self.request, dest)
+            prior, used_prior = self.finder.log_odds(CONTENT_FREE_REQUEST, dest)
             self.usage = self.usage + used + used_prior
             scores[dest] = odds - prior
         ranked = sorted(scores, key=lambda d: -scores[d])
@@ -140,3 +144,55 @@ class ScoredChooser:
             for i, d in enumerate(ranked)
             if i == 0 or (scores[d] > self.finder.threshold and not making)
         ]
+
+
+class GoalFinder:
+    """The goal planner's targets from :class:`~conceptbot.pipeline.goal.reader.GoalReader`: the
+    request's structure from its parse, and where the words leave a place open, the model's scored
+    choice (:class:`ScoredChooser`).
+
+    Args:
+        reader: Reads the goal.
+        finder: Asks the scored question for open places (its LLM, threshold and food knowledge).
+    """
+
+    def __init__(self, reader: GoalReader, finder: TargetFinder) -> None:
+        self.reader = reader
+        self.finder = finder
+
+    def read(self, request: str, scene: Scene) -> tuple[bool, list[Target], Usage]:
+        """Whether the request asks for a pile, its targets, and the model calls made."""
+        started = time.perf_counter()
+        goal = read_plainly(self.reader, request, scene)
+        chooser = ScoredChooser(self.finder, request)
+        targets = to_targets(goal, scene, choose=chooser)
+        return goal.stack, targets, chooser.usage.with_latency(time.perf_counter() - started)
+
+
+def _plain(name: str) -> str:
+    """A name as words the parser reads as one noun phrase ("apple [/x]" -> "apple x")."""
+    return " ".join(re.findall(r"[A-Za-z0-9][A-Za-z0-9'&-]*", name))
+
+
+def read_plainly(reader: GoalReader, request: str, scene: Scene) -> Goal:
+    """``reader.read``, with scene names that carry brackets, slashes or other marks read as their
+    words: the parser splits "apple [/x]" into pieces that no longer make a noun phrase. The goal
+    names the scene's own spellings."""
+    plain = {o.name: _plain(o.name) for o in scene.objects}
+    odd = {n: p for n, p in plain.items() if p and p != n and p not in plain}
+    if not odd or len(set(odd.values())) < len(odd):
+        return reader.read(request, scene)
+    text = request
+    for name in sorted(odd, key=len, reverse=True):
+        text = re.sub(re.escape(name), odd[name], text, flags=re.IGNORECASE)
+    renamed = replace(scene, objects=tuple(replace(o, name=odd.get(o.name, o.name)) for o in scene.objects))
+    back = {p: n for n, p in odd.items()}
+    goal = reader.read(text, renamed)
+
+    def spelt(name: str | None) -> str | None:
+        return back.get(name, name) if name is not None else None
+
+    targets = tuple(
+        replace(t, to=spelt(t.to), named=tuple(back.get(n, n) for n in t.named)) for t in goal.targets
+    )
+    return replace(goal, targets=targets)

@@ -177,7 +177,7 @@ function showGoal(goal) {
   $("targets").replaceChildren(...goal.targets.map((t) => el("li", {},
     `→ ${t.to}: ${t.count} (${t.how}${t.named.length ? ", named: " + t.named.join(", ") : ""}` +
     `${t.criterion ? ", objects that fit “" + t.criterion + "”" : ""}` +
-    `${t.dish ? ", a dish the graph knows: " + t.dish : ""})`)));
+    `${t.dish ? ", a dish the graph knows: " + t.dish : ""}${t.rest ? ", the rest" : ""})`)));
   if (goal.stack) $("targets").append(el("li", {}, "stack the objects"));
 }
 
@@ -185,12 +185,17 @@ function showDecisions(decisions) {
   for (const d of decisions.filter((x) => x.decided)) {
     // The name ranking (all objects in one question) exists only for targets taking N objects.
     const names = d.objects.some((o) => "name_score" in o);
+    // Combined decisions carry the model's own log-odds and the graph's evidence statements.
+    const combined = d.objects.some((o) => "model" in o);
     const table = el("table", {}, el("tr", {}, el("th", {}, `for the ${d.to}`), el("th", {}, "P(yes)"),
-      el("th", {}, "score"), ...(names ? [el("th", {}, "name")] : []), el("th", {}, "graph facts in the question")));
+      el("th", {}, "score"), ...(combined ? [el("th", {}, "model")] : []), ...(names ? [el("th", {}, "name")] : []),
+      el("th", {}, combined ? "graph evidence" : "graph facts in the question")));
     for (const o of d.objects.slice().sort((a, b) => b.score - a.score)) {
+      const said = combined && o.evidence ? o.evidence.statements : o.facts;
       table.append(el("tr", { class: o.score > 0 ? "kept" : "dropped" }, el("td", {}, o.object),
         el("td", {}, o.p_yes.toFixed(2)), el("td", {}, o.score.toFixed(2)),
-        ...(names ? [el("td", {}, o.name_score.toFixed(2))] : []), el("td", {}, o.facts.join("; "))));
+        ...(combined ? [el("td", {}, "model" in o ? o.model.toFixed(2) : "")] : []),
+        ...(names ? [el("td", {}, o.name_score.toFixed(2))] : []), el("td", {}, said.join("; "))));
     }
     if (d.context && d.context.length) $("decisions").append(el("p", {}, "facts about the request: " + d.context.join("; ")));
     $("decisions").append(table);
