@@ -19,17 +19,51 @@ if TYPE_CHECKING:  # spaCy is loaded with the model, on first use (pipeline/goal
 _NP_START = {"DT", "PDT", "PRP$", "CD", "JJ", "NN", "NNS", "NNP", "NNPS"}
 
 
-def _opened(doc: Doc, chunk: Chunk) -> tuple[int, bool]:
-    """The index after the chunk's opening words ("and", "please", "could you", "let's"), and
-    whether they were "let's"."""
+def _phrase_at(doc: Doc, at: int, end: int, phrases: Sequence[Sequence[str]]) -> int:
+    """The index after the first of ``phrases`` spelled at ``at`` (by word or lemma), else -1."""
+    for phrase in phrases:
+        stop = at + len(phrase)
+        if stop <= end and all(
+            _lower(doc[at + k]) == w or doc[at + k].lemma_.lower() == w for k, w in enumerate(phrase)
+        ):
+            return stop
+    return -1
+
+
+def assured(doc: Doc, chunk: Chunk) -> int:
+    """The index after "make sure (that)", "ensure", "see to it that" opening the chunk (after its
+    boundary words), else -1: what follows is the state asked for ("make sure the stapler ends up in
+    the drawer", "make sure anything poisonous is up in the cabinet")."""
     vocab = vocabulary()
-    i, lets = chunk.start, False
+    i = chunk.start
+    while i < chunk.end and (_lower(doc[i]) in vocab["openers"] or doc[i].is_punct):
+        i += 1
+    after = _phrase_at(doc, i, chunk.end, vocab["assurance"])
+    if after < 0:
+        return -1
+    if after < chunk.end and _lower(doc[after]) == "that":
+        after += 1
+    return after if after < chunk.end else -1
+
+
+def _opened(doc: Doc, chunk: Chunk) -> tuple[int, bool, bool]:
+    """The index after the chunk's opening words ("and", "please", "could you", "let's", "as for",
+    "make sure", "I'd appreciate it if you"), whether they were "let's", and whether they were "make
+    sure"."""
+    vocab = vocabulary()
+    i, lets, made_sure = chunk.start, False, False
     while i < chunk.end:
         word = _lower(doc[i])
         nxt = _lower(doc[i + 1]) if i + 1 < chunk.end else ""
         asked = asks_you_to(doc, i, chunk.end)
+        topic = _phrase_at(doc, i, chunk.end, vocab["topic"])
+        sure = assured(doc, Chunk(i, chunk.end, ""))
         if asked >= 0:
-            i = asked  # "I'd like you to put ..."
+            i = asked  # "I'd like you to put ...", "I'd appreciate it if you brought ..."
+        elif sure >= 0:
+            i, made_sure = sure, True
+        elif topic >= 0 and topic < chunk.end:
+            i = topic  # "as for the throw pillow": the topic of the next clause
         elif word in vocab["question"] and nxt == "you":
             i += 2
         elif word == "let" and nxt in ("'s", "’s", "us"):
@@ -38,7 +72,7 @@ def _opened(doc: Doc, chunk: Chunk) -> tuple[int, bool]:
             i += 1
         else:
             break
-    return i, lets
+    return i, lets, made_sure
 
 
 def _closed(doc: Doc, chunk: Chunk) -> int:
@@ -245,20 +279,24 @@ def _chain(doc: Doc, verb: Token, first: int, end: int) -> list[int]:
 
 
 def _subject_verb(
-    doc: Doc, first: int, end: int, places: list[Place], mentions: Sequence[Mention]
+    doc: Doc, first: int, end: int, places: list[Place], mentions: Sequence[Mention], state: bool = False
 ) -> Token | None:
-    """The verb of a "X go(es) in A" / "X should be thrown away" clause, or None."""
+    """The verb of a "X go(es) in A" / "X should be thrown away" clause, or None; with ``state``
+    (after "make sure") also "X is (up) in A"."""
     vocab = vocabulary()
+    motion = {*vocab["motion"], "be"} if state else set(vocab["motion"])
     place_tokens = {i for p in places for i in p.frame}
     for token in doc[first:end]:
-        phrasal = token.lemma_ in vocab["motion"] and token.i + 1 < end and _lower(doc[token.i + 1]) == "up"
+        phrasal = token.lemma_ in motion and token.i + 1 < end and _lower(doc[token.i + 1]) == "up"
         if _mention_at(mentions, token.i) is not None or not (token.tag_.startswith("VB") or phrasal):
             continue
         auxes = [c for c in token.children if c.dep_ in ("aux", "auxpass")]
         if token.dep_ == "xcomp" and token.head.lemma_ in ("need", "have"):
             auxes += [token.head]
         obliged = any(_lower(a) in vocab["obligation"] or a.lemma_ in vocab["obligation"] for a in auxes)
-        if token.lemma_ in vocab["motion"]:
+        # a question opened by its modal asks for it: "Could something to read be brought to me?"
+        obliged = obliged or any(a.i == first and a.tag_ == "MD" for a in auxes)
+        if token.lemma_ in motion:
             after = token.i + 1
             while after < end and _lower(doc[after]) in vocab["particles"]:
                 after += 1
@@ -290,11 +328,44 @@ def _personal_subject(doc: Doc, first: int, end: int) -> Token | None:
 
 
 def analyse(doc: Doc, chunk: Chunk, mentions: Sequence[Mention], is_person: Callable[[str], bool]) -> Clause:
-    """Read one chunk (see :mod:`conceptbot.pipeline.goal.parse`)."""
+    """Read one chunk (see :mod:`conceptbot.pipeline.goal.parse`); ``otherwise`` set where it opens
+    with "otherwise"."""
+    clause = _analysed(doc, chunk, mentions, is_person)
+    first, _, _ = _opened(doc, chunk)
+    clause.otherwise = any(_lower(t) in vocabulary()["otherwise"] for t in doc[chunk.start : first])
+    return clause
+
+
+def condition_clause(doc: Doc, chunk: Chunk, first: int, end: int, mentions: Sequence[Mention]) -> Clause:
+    """ "If it's clothing", "if a potted plant is poisonous", "if something could poison the puppy":
+    the condition's predicate is a criterion for what the next clause's "it" sends ("clothing",
+    "could poison the puppy"); a subject that is a clause of its own stays ("swallowing it would
+    poison someone"), and one naming scene objects is what is sent."""
+    verb = doc[first].head
+    if not first < verb.i < end:
+        verb = next((t for t in doc[first + 1 : end] if t.tag_.startswith("VB")), doc[first])
+    subject = next((c for c in verb.children if c.dep_ in ("nsubj", "nsubjpass", "expl")), None)
+    drop = {first}
+    if subject is not None and first < subject.i < end:
+        inside = [t.i for t in subject.subtree if first < t.i < end]
+        if _names_object(inside, mentions):
+            return Clause(chunk, "condition", verb.lemma_.lower(), verb.i, [], tuple(inside), "", False, [])
+        drop |= set(inside)
+    rest = [i for i in range(first + 1, end) if i not in drop]
+    while rest and (doc[rest[0]].lemma_ == "be" or doc[rest[0]].is_punct):
+        rest = rest[1:]  # "is made of glass", "'s poisonous"
+    return Clause(chunk, "condition", verb.lemma_.lower(), verb.i, [], tuple(rest), "", False, [tuple(rest)])
+
+
+def _analysed(
+    doc: Doc, chunk: Chunk, mentions: Sequence[Mention], is_person: Callable[[str], bool]
+) -> Clause:
     vocab = vocabulary()
-    first, lets = _opened(doc, chunk)
+    first, lets, made_sure = _opened(doc, chunk)
     end = _closed(doc, chunk)
     mine = [m for m in mentions if first <= m.start < end]
+    if first < end - 1 and _lower(doc[first]) in vocab["conditional"]:
+        return condition_clause(doc, chunk, first, end, mine)
     verb, negated = _imperative(doc, first, end, mine, chunk.after == "")
     frame: set[int] = set(range(chunk.start, first))
     if negated:
@@ -337,17 +408,25 @@ def analyse(doc: Doc, chunk: Chunk, mentions: Sequence[Mention], is_person: Call
     if asked is not None:
         theme, place = asked
         return Clause(chunk, "imperative", "give", -1, [place], theme, key, False, [theme])
-    moving = _subject_verb(doc, first, end, places, mine)
+    moving = _subject_verb(doc, first, end, places, mine, made_sure)
     if moving is not None:
         chain = _chain(doc, moving, first, end)
         frame |= set(chain) | set(_particles(doc, moving.i, end))
-        before = [r for r in _runs([i for i in indices if i < chain[0]], frame, doc) if nominal(doc, r)]
+        # before the verb, less its auxiliaries: "Could something to read be brought over to me?"
+        ahead = _runs([i for i in indices if i < moving.i], frame, doc)
+        before = [r for r in ahead if nominal(doc, r)]
+        runs = _runs(indices, frame, doc)
         if before and _personal_subject(doc, first, chain[0]) is None:
             # the phrase naming objects, else the first: "The fabric items, and nothing else, go ..."
             named = [r for r in before if any(m.kind in ("object", "both") and m.start in r for m in mine)]
             theme = (named or before)[0]
-            runs = _runs(indices, frame, doc)
             return Clause(chunk, "subject", moving.lemma_.lower(), moving.i, places, theme, key, False, runs)
+        pronoun = [r for r in ahead if all(_lower(doc[i]) in vocab["anaphors"] for i in r)]
+        if not before and pronoun and places:
+            # "it goes on the sofa": what "it" is, the clause before says
+            return Clause(
+                chunk, "subject", moving.lemma_.lower(), moving.i, places, pronoun[0], key, False, runs
+            )
     wished = cleft(doc, first, end)
     if wished is not None:
         return Clause(chunk, "desire", wished[0], -1, [], wished[1], "", False, [wished[1]])

@@ -88,13 +88,15 @@ class Clause:
 
     Attributes:
         chunk: Its tokens.
-        form: ``imperative``, ``subject``, ``for``, ``desire``, ``fragment`` or ``statement``.
+        form: ``imperative``, ``subject``, ``for``, ``desire``, ``condition`` ("if it's X": its theme
+            is the criterion X), ``fragment`` or ``statement``.
         verb: The main verb's lemma ("" for a fragment).
         places: Its destinations in a destination role.
         theme: The token indices of what it sends (empty: none).
         key: "by material" when it sorts by a key, else "".
         negated: The verb is negated ("don't touch").
         runs: Every run of non-frame tokens (for the dish and need readings).
+        otherwise: It opens with "otherwise": "it" is what the conditions before leave.
     """
 
     chunk: Chunk
@@ -106,6 +108,7 @@ class Clause:
     key: str = ""
     negated: bool = False
     runs: list[tuple[int, ...]] = field(default_factory=list)
+    otherwise: bool = False
 
 
 def _in_mention(mentions: Sequence[Mention], index: int) -> Mention | None:
@@ -147,7 +150,7 @@ def chunks(doc: Doc, mentions: Sequence[Mention]) -> list[Chunk]:
             start, after = i, "hard"
         if _in_mention(mentions, i):
             continue
-        if word in HARD:
+        if word in HARD or _dash(token):
             if i > start:
                 pieces.append(Chunk(start, i, after))
             start, after = i + 1, "colon" if word == ":" else "hard"
@@ -159,6 +162,15 @@ def chunks(doc: Doc, mentions: Sequence[Mention]) -> list[Chunk]:
         pieces.append(Chunk(start, len(doc), after))
     pieces = [p for p in pieces if any(not doc[i].is_punct for i in range(p.start, p.end))]
     return _merged(doc, pieces, mentions)
+
+
+def _dash(token: Token) -> bool:
+    """A dash standing apart between words ("put them on the tray - we're setting up a garden"), a
+    boundary like ";"; not the hyphen of "non-toxic"."""
+    doc = token.doc
+    if token.text not in ("-", "--", "–", "—") or token.i == 0 or token.i + 1 >= len(doc):
+        return False
+    return bool(token.whitespace_) and bool(doc[token.i - 1].whitespace_)
 
 
 def _soft(token: Token) -> bool:
@@ -187,7 +199,7 @@ def _merged(doc: Doc, pieces: list[Chunk], mentions: Sequence[Mention]) -> list[
         prev = out[-1] if out else None
         if prev is not None and piece.after == "soft":
             prev_place = _has_place(prev, mentions)
-            if not verbs and not place:
+            if not verbs and not place and not opens_with_verb(doc, piece, mentions):
                 prev.end = piece.end  # "and the eraser", "please"
                 continue
             if not verbs and place and not prev_place and not _statement_like(doc, prev, mentions):
@@ -205,6 +217,7 @@ def _merged(doc: Doc, pieces: list[Chunk], mentions: Sequence[Mention]) -> list[
         and out[1].after == "soft"
         and doc[out[1].start].text.lower() in ("and", "or", ",")
         and _bare_phrase(doc, out[0], mentions)
+        and not opens_with_verb(doc, out[1], mentions)  # "Any herbs we can cook with, | put them ..."
     ):
         out[1] = Chunk(out[0].start, out[1].end, out[0].after)
         out.pop(0)
@@ -224,6 +237,25 @@ def _merged(doc: Doc, pieces: list[Chunk], mentions: Sequence[Mention]) -> list[
     return out
 
 
+def opens_with_verb(doc: Doc, chunk: Chunk, mentions: Sequence[Mention]) -> bool:
+    """Whether a chunk opens, after its boundary words, with a verb in the base form before its
+    object ("so empty the bleach ...", ", put them on the tray"), even where the tagger took the verb
+    for an adjective; a chunk so opened is a clause of its own."""
+    vocab = vocabulary()
+    closed = {*SOFT, *vocab["openers"], *vocab["determiners"], *vocab["quantifiers"], *vocab["restrictors"]}
+    i = chunk.start
+    while i < chunk.end and (doc[i].text.lower() in SOFT or doc[i].is_punct):
+        i += 1
+    if i + 1 >= chunk.end or _in_mention(mentions, i) or doc[i].text.lower() in closed:
+        return False
+    token, nxt = doc[i], doc[i + 1]
+    if any(c.dep_ in ("nsubj", "nsubjpass") for c in token.children):
+        return False
+    if token.tag_ == "VB":
+        return True
+    return token.pos_ in ("ADJ", "VERB") and nxt.tag_ in ("DT", "PRP$", "PDT")
+
+
 def _finite_first(doc: Doc, chunk: Chunk) -> bool:
     """Whether a chunk's first word after its boundary words is a finite verb without a subject."""
     i = chunk.start
@@ -239,7 +271,7 @@ def asks_you_to(doc: Doc, at: int, end: int) -> int:
     asked for; else -1 (the request is then the imperative that follows)."""
     words = [t.text.lower() for t in doc[at : min(end, at + 6)]]
     if not words or words[0] not in ("i", "we"):
-        return -1
+        return _asks_if(doc, at, end)
     k = 1 + (len(words) > 1 and words[1] in ("'d", "would", "really"))
     if (
         len(words) > k + 2
@@ -247,6 +279,28 @@ def asks_you_to(doc: Doc, at: int, end: int) -> int:
         and words[k + 1 : k + 3] == ["you", "to"]
     ):
         return at + k + 3
+    return _asks_if(doc, at, end)
+
+
+def _asks_if(doc: Doc, at: int, end: int) -> int:
+    """After a polite frame with "if you" ("I'd appreciate it if you", "it would be great if you",
+    "I'd be grateful if you could"): the index of the verb asked for; else -1. The frame is the
+    speaker's (or "it") with verbs, adjectives and "it" only: no noun of its own."""
+    words = [t.text.lower() for t in doc[at:end]]
+    if not words or words[0] not in ("i", "we", "it"):
+        return -1
+    for j in range(at + 2, min(end - 2, at + 8)):
+        if doc[j].text.lower() != "if" or doc[j + 1].text.lower() != "you":
+            continue
+        frame = doc[at:j]
+        if any(t.tag_.startswith("NN") or t.is_punct for t in frame):
+            return -1
+        if not any(t.tag_.startswith("VB") for t in frame):
+            return -1
+        k = j + 2
+        if k < end and doc[k].tag_ == "MD":
+            k += 1  # "if you could pass me ..."
+        return k if k < end and doc[k].tag_ in ("VB", "VBD", "VBP") else -1
     return -1
 
 

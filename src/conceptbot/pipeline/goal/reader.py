@@ -52,6 +52,9 @@ class _Item:
     theme: tuple[int, ...]
     key: str = ""
     shared: bool = False  # the theme is shared with the item before ("and the plastic bin")
+    condition: bool = False  # an "if" clause's criterion, waiting for the clause that sends "it"
+    generic: bool = False  # sends whatever meets a condition: all of them
+    remainder: bool = False  # "otherwise it goes in A": what the conditions before leave
 
 
 class GoalReader:
@@ -319,6 +322,31 @@ def _items(
         stay = (clause.verb in vocab["stay"] and not places) or (
             clause.negated and clause.verb in (*vocab["untouched"], *vocab["stay"])
         )
+        waiting = items[-1] if items and items[-1].condition else None
+        if clause.form == "condition":
+            if clause.theme:
+                items.append(_Item(clause, [], clause.theme, condition=True))
+            continue
+        if (
+            waiting is not None
+            and (stay or clause.verb in vocab["stay"])
+            and _pronoun_only(doc, clause.theme)
+        ):
+            items.pop()  # "if something combines materials, leave it on the desk": it stays
+            continue
+        if (
+            waiting is not None
+            and _pronoun_only(doc, clause.theme)
+            and clause.form in ("imperative", "subject")
+        ):
+            # "if it's poisonous, lock it away", "if it's clothing, it belongs in the basket"
+            items[-1] = _Item(clause, places, waiting.theme, clause.key or pending, generic=True)
+            pending = ""
+            continue
+        if clause.otherwise and places and _pronoun_only(doc, clause.theme):
+            items.append(_Item(clause, places, clause.theme, clause.key or pending, remainder=True))
+            pending = ""
+            continue
         if clause.form == "desire" and clause.theme and clause.verb in ("want", "need"):
             # a need is for a thing ("I need a tool that drives in nails"), a wish maybe for a dish
             thing = clause.verb == "need" or _indefinite(doc, clause.theme)
@@ -336,6 +364,8 @@ def _items(
         if clause.form == "imperative" and not places:
             if clause.verb in (*vocab["making"], *vocab["desire"], *vocab["helping"]):
                 continue
+            if clause.theme and doc[clause.theme[0]].tag_ == "IN":
+                continue  # "look at my fingers": the verb's object is a place it looks, not a thing sent
             if clause.verb in vocab["stack"]["verbs"] or stack:
                 continue
             if clause.theme:
@@ -372,7 +402,8 @@ def _items(
             continue
         theme = clause.theme
         if places and _pronoun_only(doc, theme) and not items and n:
-            theme = antecedent(doc, clauses[n - 1]) or theme  # "I'm looking for X; pass it to me"
+            # "I'm looking for X; pass it to me"
+            theme = antecedent(doc, clauses[n - 1], mentions, _plural(doc, theme)) or theme
         if places and _pronoun_only(doc, theme) and items:
             before = items[-1]
             if before.places == places:
@@ -385,20 +416,37 @@ def _items(
     return _without_headers(items, vocab)
 
 
-def antecedent(doc: Doc, clause: Clause) -> tuple[int, ...]:
-    """What "it" refers back to in the clause before: its last noun phrase that is not a person
-    ("I'm looking for something to write with"), as the phrase's tokens."""
+def _plural(doc: Doc, run: Sequence[int]) -> bool | None:
+    """Whether a pronoun theme is plural ("them", "they", "these"), singular ("it"), or says not."""
+    words = {doc[i].text.lower() for i in run}
+    if words & {"them", "they", "these", "those"}:
+        return True
+    return False if words & {"it", "this", "that"} else None
+
+
+def antecedent(
+    doc: Doc, clause: Clause, mentions: Sequence[Mention] = (), plural: bool | None = None
+) -> tuple[int, ...]:
+    """What "it" or "them" refers back to in the clause before: the objects it names (all of them
+    for "them", the last for "it"), else its last noun phrase that is not a person and agrees in
+    number ("I'm looking for something to write with"), as the phrase's tokens."""
     found: tuple[int, ...] = ()
     chunk = clause.chunk
+    named = [m for m in mentions if m.kind in ("object", "both") and chunk.start <= m.start < chunk.end]
+    if named and plural:
+        return tuple(range(named[0].start, named[-1].end))  # "the socks and the towel ...; load them"
+    if named and plural is False:
+        return tuple(range(named[-1].start, named[-1].end))
     for token in doc[chunk.start : chunk.end]:
         role = token.dep_ in ("dobj", "pobj", "nsubj", "attr") and token.tag_.startswith("NN")
-        if role and token.text.lower() not in vocabulary()["personal"]:
+        agrees = plural is None or (token.tag_ in ("NNS", "NNPS")) == plural
+        if role and agrees and token.text.lower() not in vocabulary()["personal"]:
             found = tuple(t.i for t in token.subtree if chunk.start <= t.i < chunk.end and not t.is_punct)
     return found
 
 
 def _pronoun_only(doc: Doc, run: Sequence[int]) -> bool:
-    return not run or all(doc[i].text.lower() in ("it", "them", "one", "these", "those") for i in run)
+    return not run or all(doc[i].text.lower() in ("it", "them", "they", "one", "these", "those") for i in run)
 
 
 def _without_headers(items: list[_Item], vocab: dict) -> list[_Item]:
@@ -411,8 +459,8 @@ def _without_headers(items: list[_Item], vocab: dict) -> list[_Item]:
             clause = item.clause
             if clause.form == "fragment" or clause.verb in vocab["sort"]:
                 continue
-        if not item.places and item.clause.form == "fragment":
-            continue
+        if (not item.places and item.clause.form == "fragment") or item.condition:
+            continue  # a condition no clause sent anything by
         kept.append(item)
     return kept
 
@@ -438,6 +486,10 @@ def _targets(doc: Doc, items: list[_Item], mentions: list[Mention]) -> list[Goal
             targets += [GoalTarget(n, "criterion", (), key, ALL) for n in names if n not in own]
             continue
         reading = read_theme(doc, theme, mentions) if theme else Reading("all")
+        if group[0].remainder:
+            reading = Reading("remainder")
+        elif group[0].generic and reading.takes == "criterion":
+            reading = Reading("criterion", (), reading.criterion, ALL)  # whatever meets the condition
         criterion = reading.criterion or (criterion_text(doc, theme) if reading.takes == "criterion" else "")
         to = names[0] if names else None
         targets.append(GoalTarget(to, reading.takes, reading.named, criterion, reading.count))
