@@ -111,6 +111,7 @@ def _imperative(doc: Doc, at: int, end: int, mentions: Sequence[Mention], openin
     if (
         token.dep_ == "conj"
         and token.head.dep_ not in ("relcl", "acl")
+        and _lower(doc[token.head.left_edge.i]) not in vocab["conditional"]  # "if X would ..., lock it"
         and any(c.dep_ in ("nsubj", "nsubjpass") and _lower(c) != "you" for c in token.head.children)
     ):
         return -1, negated  # "I fell off my bike | and scraped my knee": the subject is shared

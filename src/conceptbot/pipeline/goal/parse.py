@@ -206,7 +206,11 @@ def _merged(doc: Doc, pieces: list[Chunk], mentions: Sequence[Mention]) -> list[
                 prev.end = piece.end  # "put the hammer | and the screwdriver in the toolbox"
                 continue
             subjects = [c for v in verbs for c in v.children if c.dep_ in ("nsubj", "nsubjpass")]
-            if subjects and all(prev.start <= c.i < prev.end for c in subjects):
+            if (
+                subjects
+                and all(prev.start <= c.i < prev.end for c in subjects)
+                and not opens_with_verb(doc, piece, mentions)
+            ):
                 prev.end = piece.end  # "I'd like the tweezers | and the thermometer put in the kit"
                 continue
         out.append(piece)
@@ -249,11 +253,11 @@ def opens_with_verb(doc: Doc, chunk: Chunk, mentions: Sequence[Mention]) -> bool
     if i + 1 >= chunk.end or _in_mention(mentions, i) or doc[i].text.lower() in closed:
         return False
     token, nxt = doc[i], doc[i + 1]
-    if any(c.dep_ in ("nsubj", "nsubjpass") for c in token.children):
-        return False
+    if any(c.dep_ in ("nsubj", "nsubjpass") and c.i >= chunk.start for c in token.children):
+        return False  # a subject before the comma is set apart: "Any herbs we can cook with, put them"
     if token.tag_ == "VB":
         return True
-    return token.pos_ in ("ADJ", "VERB") and nxt.tag_ in ("DT", "PRP$", "PDT")
+    return token.pos_ in ("ADJ", "VERB") and nxt.tag_ in ("DT", "PRP$", "PDT", "PRP")
 
 
 def _finite_first(doc: Doc, chunk: Chunk) -> bool:

@@ -403,7 +403,8 @@ def _items(
         theme = clause.theme
         if places and _pronoun_only(doc, theme) and not items and n:
             # "I'm looking for X; pass it to me"
-            theme = antecedent(doc, clauses[n - 1], mentions, _plural(doc, theme)) or theme
+            said = theme or tuple(i for r in clause.runs for i in r)
+            theme = antecedent(doc, clauses[n - 1], mentions, _plural(doc, said)) or theme
         if places and _pronoun_only(doc, theme) and items:
             before = items[-1]
             if before.places == places:
