@@ -112,6 +112,7 @@ def _imperative(doc: Doc, at: int, end: int, mentions: Sequence[Mention], openin
         token.dep_ == "conj"
         and token.head.dep_ not in ("relcl", "acl")
         and _lower(doc[token.head.left_edge.i]) not in vocab["conditional"]  # "if X would ..., lock it"
+        and not (token.tag_ == "VB" and token.head.tag_ in ("VBD", "VBZ", "VBN"))  # "X's been good, so let"
         and any(c.dep_ in ("nsubj", "nsubjpass") and _lower(c) != "you" for c in token.head.children)
     ):
         return -1, negated  # "I fell off my bike | and scraped my knee": the subject is shared
@@ -433,7 +434,7 @@ def _analysed(
         return Clause(chunk, "desire", wished[0], -1, [], wished[1], "", False, [wished[1]])
     desire = desire_verb(doc, first, end, lets)
     if desire is not None:
-        return desire_clause(doc, chunk, desire, first, end, places, frame)
+        return desire_clause(doc, chunk, desire, first, end, places, frame, mine)
     runs = _runs(indices, frame, doc)
     if _personal_subject(doc, first, end) is not None:
         return Clause(chunk, "statement", "", -1, [], (), key, False, runs)

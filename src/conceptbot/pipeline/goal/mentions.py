@@ -58,7 +58,9 @@ def _ends_phrase(doc: Doc, end: int) -> bool:
         return True
     after = doc[end]
     if after.tag_ == "POS" or (after.text.lower() in ("'s", "’s") and after.dep_ == "case"):
-        return False
+        # a possessor, unless "'s" is "has"/"is" before a participle or adverb ("the dog's been good")
+        verb = end + 1 < len(doc) and doc[end + 1].tag_ in ("VBN", "VBD", "VBG", "RB")
+        return verb
     return not (after.pos_ in ("NOUN", "PROPN") and doc[end - 1].head.i >= end)
 
 
@@ -140,12 +142,32 @@ def _pronouns(
     people = [m for m in known if m.kind == "person" or any(is_person(n) for n in m.names)]
     found = []
     for token in doc:
-        if token.text.lower() not in pronouns or token.tag_ != "PRP" or not people:
+        if token.text.lower() not in pronouns or not people:
+            continue
+        if token.tag_ != "PRP" and not _object_pronoun(doc, token):
             continue
         before = [m for m in people if m.end <= token.i]
         who = before[-1] if before else people[0]
         found.append(Mention(who.names, token.i, token.i + 1, "person"))
     return found
+
+
+def _object_pronoun(doc: Doc, token: Token) -> bool:
+    """ "her" tagged a possessive but an object: before a determiner, a pronoun such as
+    "something" (which takes no possessor) or the end ("hand her something", "give her the ball")."""
+    if token.tag_ != "PRP$":
+        return False
+    if token.i + 1 >= len(doc) or doc[token.i + 1].is_punct:
+        return True
+    nxt = doc[token.i + 1]
+    return nxt.tag_ in ("DT", "PDT", "PRP", "CD") or nxt.text.lower() in (
+        "something",
+        "anything",
+        "everything",
+        "one",
+        "some",
+        "any",
+    )
 
 
 def scene_mentions(

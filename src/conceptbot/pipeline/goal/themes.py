@@ -76,6 +76,10 @@ def _stripped(doc: Doc, run: Sequence[int]) -> list[int]:
     lead = {*vocab["determiners"], *vocab["quantifiers"], *vocab["restrictors"], "one", "of", "here", "there"}
     lead -= {"something"}
     out = list(run)
+    for phrase in vocab["only_phrases"]:  # "nothing but the paper": only the paper
+        if [_lower(doc[i]) for i in out[: len(phrase)]] == phrase:
+            out = out[len(phrase) :]
+            break
     while out and _lower(doc[out[0]]) in lead:
         out = out[1:]
     return out
@@ -124,6 +128,11 @@ def count_of(doc: Doc, run: Sequence[int]) -> Count:
                 return max(1, int(token.text))
             except ValueError:
                 pass
+    if words and words[0] in ("whichever", "whatever") and len(run) > 1:
+        noun = doc[run[1]]  # "whichever toy is ...": one toy; "whatever food is ...": all of it
+        mass = {*vocab["mass"], *MATERIALS}
+        if noun.tag_ == "NN" and noun.lemma_.lower() not in mass and _lower(noun) not in mass:
+            return 1
     if any(w in vocab["quantifiers"] for w in words):
         return ALL
     start = next((w for w in words if w not in vocab["restrictors"]), "")

@@ -72,8 +72,19 @@ def _wishing_phrase(doc: Doc, token: Token, end: int) -> Token | None:
     return None
 
 
+def _names_object(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> bool:
+    return any(m.kind in ("object", "both") and m.start in run for m in mentions)
+
+
 def desire_clause(
-    doc: Doc, chunk: Chunk, verb: Token, first: int, end: int, places: list[Place], frame: set[int]
+    doc: Doc,
+    chunk: Chunk,
+    verb: Token,
+    first: int,
+    end: int,
+    places: list[Place],
+    frame: set[int],
+    mentions: Sequence[Mention] = (),
 ) -> Clause:
     """A wish as a clause: its theme is what is wished for (the subject of "X would be lovely", the
     object otherwise); for "I want to make X" the verb is the wished activity's ("make")."""
@@ -103,6 +114,10 @@ def desire_clause(
         return Clause(chunk, "imperative", "put", at.i, places, theme, "", False, runs)
     runs = _runs(list(range(at.i + 1, end)), frame, doc)
     theme = next((r for r in runs if nominal(doc, r)), ())
+    if theme and _names_object(doc, theme, mentions):
+        # "could I have the watering can, and the trowel as well?": the objects joined on
+        joined = [r for r in runs if r[0] > theme[-1] and _lower(doc[r[0] - 1]) in ("and", ",")]
+        theme = (*theme, *(i for r in joined if _names_object(doc, r, mentions) for i in r))
     lemma = "want"
     if activity is not None or at.lemma_ in vocab["making"]:
         lemma = at.lemma_.lower()
