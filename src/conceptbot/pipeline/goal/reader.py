@@ -198,8 +198,21 @@ def making_anywhere(doc: Doc, mentions: list[Mention]) -> tuple[int, ...]:
         if not token.tag_.startswith("VB") or not (plain or phrasal):
             continue
         made = next((c for c in token.children if c.dep_ == "dobj"), None)
+        if made is not None and made.text.lower() in ("one", "some", "it") and not list(made.children):
+            return _indefinite_before(doc, made.i)  # "the pasta needs a green salad; let's make one"
         if made is not None and made.lemma_.lower() not in vocab["stack"]["nouns"]:
             return tuple(t.i for t in made.subtree if not t.is_punct)
+    return ()
+
+
+def _indefinite_before(doc: Doc, at: int) -> tuple[int, ...]:
+    """What "one" stands for: the last noun phrase before ``at`` opened by "a", "an" or "some" (its
+    words up to the noun); () if none."""
+    for token in reversed(doc[:at]):
+        if token.tag_ in ("NN", "NNS") and any(
+            c.dep_ == "det" and c.text.lower() in ("a", "an", "some") for c in token.children
+        ):
+            return tuple(range(token.left_edge.i, token.i + 1))
     return ()
 
 

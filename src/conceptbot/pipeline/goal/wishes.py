@@ -41,10 +41,38 @@ def desire_verb(doc: Doc, first: int, end: int, lets: bool) -> Token | None:
             return phrase  # "I'm in the mood for an omelette": the phrase's preposition
         if _lower(token) == "about" and token.i > first and _lower(doc[token.i - 1]) == "how":
             return token
+        other = _other_wish(token, subject, speaker)
+        if other is not None:
+            return other
         conditional = any(_lower(c) in ("would", "could") for c in token.children)
         praised = any(c.dep_ == "acomp" for c in token.children)
         thing = bool(subject) and not any(_lower(c) in vocab["personal"] for c in subject)
         if token.lemma_ == "be" and conditional and praised and thing:
+            return token
+    return None
+
+
+def _other_wish(token: Token, subject: list[Token], speaker: bool) -> Token | None:
+    """Wishes said about the meal or by comparison: "breakfast should be an omelette" (the copula),
+    "I'm thinking fruit salad" (the verb), "this morning calls for pancakes", "nothing would hit the
+    spot like a PB&J" (the preposition before what is wished for); else None."""
+    vocab = vocabulary()
+    if not token.tag_.startswith("VB"):
+        return None
+    meal = any(c.lemma_.lower() in vocab["meals"] for c in subject)
+    if token.lemma_ == "be" and meal and any(c.dep_ == "attr" for c in token.children):
+        return token
+    if token.lemma_ == "think" and speaker and any(c.dep_ == "dobj" for c in token.children):
+        return token
+    if token.lemma_ == "call":
+        return next((c for c in token.children if c.dep_ == "prep" and _lower(c) == "for"), None)
+    if any(_lower(c) == "nothing" for c in subject):
+        # "nothing beats X" is a wish for X, and so is "nothing would hit the spot like X"
+        after = [t for t in token.subtree if t.i > token.i]
+        compared = next((t for t in after if t.tag_ == "IN" and _lower(t) in vocab["comparing"]), None)
+        if compared is not None:
+            return compared
+        if token.lemma_ == "beat" and any(c.dep_ == "dobj" for c in token.children):
             return token
     return None
 
@@ -88,6 +116,11 @@ def desire_clause(
 ) -> Clause:
     """A wish as a clause: its theme is what is wished for (the subject of "X would be lovely", the
     object otherwise); for "I want to make X" the verb is the wished activity's ("make")."""
+    attr = next((c for c in verb.children if c.dep_ == "attr"), None)
+    if verb.lemma_ == "be" and attr is not None:
+        # "breakfast should be an omelette": what the meal is to be
+        theme = tuple(t.i for t in attr.subtree if t.i not in frame and not t.is_punct)
+        return Clause(chunk, "desire", "be", verb.i, [], theme, "", False, [theme])
     if verb.lemma_ == "be":
         subject = next(c for c in verb.children if c.dep_ == "nsubj")
         theme = tuple(i for i in range(subject.left_edge.i, subject.right_edge.i + 1) if i not in frame)
