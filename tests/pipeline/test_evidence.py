@@ -94,6 +94,6 @@ def test_criterion_terms_bring_the_group_and_its_opposite(criterion: str, yes: s
 def test_the_trace_form_lists_only_what_is_set_with_the_statements() -> None:
     found = GraphEvidence(GRAPH).read("death cap", "poisonous").to_dict()
     assert found == {
-        "features": {"own_yes": 1.0},  # the criterion's kind features are 0 here, so not listed
+        "features": {"own_yes": 1.0, "is_poison": 1.0},  # what it states, and the criterion's kind
         "statements": ["own_yes: death cap DefinedAs extremely poisonous white fungus"],
     }

@@ -183,6 +183,28 @@ class FactFinder:
         )
         return any(f and (f in classes or self._is_a(f, classes)) for f in forms)
 
+    def dish_concept(self, phrase: str, pickable: Sequence[str] = ()) -> str | None:
+        """The graph's concept for a dish the request names in its own words ("a hollandaise sauce"
+        -> "hollandaise", "Pancakes" -> "pancake"), or None if the graph places none of it under a
+        prepared food.
+
+        Tried in order: the phrase's singular form, the phrase, its word pairs, then its single words, a
+        word of the scene's objects never ("a tomato and cucumber salad" with a tomato in the scene
+        is a salad: "tomato IsA salad" is in the offline graph) and a bare class word ("sauce")
+        after the others, being the least specific."""
+        seq = [w for w in tokens(phrase) if w.isalpha() and w not in _STOP]
+        if not seq:
+            return None
+        classes = set(words()["dish_classes"])
+        in_scene = {w for name in pickable for w in tokens(name)}
+        # The singular first: the graph's concept is singular, and a dish's definition is found by
+        # an exact match (``context``).
+        candidates = [" ".join([*seq[:-1], singular(seq[-1])]), " ".join(seq)]
+        candidates += [f"{a} {b}" for a, b in itertools.pairwise(seq)]
+        single = [w for w in seq if w not in in_scene and singular(w) not in in_scene]
+        candidates += sorted(single, key=lambda w: singular(w) in classes or w in classes)
+        return next((c for c in dict.fromkeys(candidates) if self.is_dish(c)), None)
+
     def prep_places(self, destinations: Sequence[str]) -> list[str]:
         """The destinations food can be prepared in or on: those the graph places under cookware
         (``cookware_classes``: "frying pan" IsA pan, "mixing bowl" IsA bowl), by their name or its

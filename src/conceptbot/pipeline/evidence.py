@@ -65,10 +65,16 @@ FEATURES = (
     "is_material",
     "is_several",
     "materials_named",
+    "is_poison",
+    "is_food",
+    "is_safe",
 )
 #: The features that need no graph (the no-graph ablation keeps these): what the object's name states
 #: (``materials_named`` counts only the name's materials there), and what kind of criterion it is.
-GRAPH_FREE = ("name_yes", "name_no", "is_dish", "is_material", "is_several", "materials_named")
+GRAPH_FREE = (
+    "name_yes", "name_no", "is_dish", "is_material", "is_several", "materials_named", "is_poison", "is_food",
+    "is_safe",
+)  # fmt: skip
 
 
 @cache
@@ -97,6 +103,7 @@ class Terms:
     dish: str = ""
     material: bool = False
     several: bool = False
+    groups: tuple[str, ...] = ()
 
 
 def _phrases(items: Iterable[str]) -> tuple[tuple[str, ...], ...]:
@@ -119,6 +126,7 @@ def criterion_terms(criterion: str, graph: KnowledgeGraph | None = None) -> Term
     used = [False] * len(seq)
     groups = vocab["groups"]
     grouped = False
+    found_groups: list[str] = []
     # Longest phrases first: "safe to eat" is food, not "safe".
     phrases = sorted(
         ((tuple(words_of(w)), name) for name, g in groups.items() for w in g["words"]),
@@ -129,6 +137,7 @@ def criterion_terms(criterion: str, graph: KnowledgeGraph | None = None) -> Term
             if not any(used[at : at + len(phrase)]):
                 used[at : at + len(phrase)] = [True] * len(phrase)
                 grouped = True
+                found_groups.append(name)
                 yes += groups[name]["words"]
                 no += groups[groups[name]["opposite"]]["words"]
     ignore = set(vocab["ignore"])
@@ -151,7 +160,8 @@ def criterion_terms(criterion: str, graph: KnowledgeGraph | None = None) -> Term
             synonyms = [e for e in found.edges if e.relation == "Synonym"]
             yes += [e.head if e.tail.lower() == rest[0] else e.tail for e in synonyms]
     yes_p = _phrases(yes)
-    return Terms(yes_p, tuple(p for p in _phrases(no) if p not in yes_p), material=bool(named))
+    against = tuple(p for p in _phrases(no) if p not in yes_p)
+    return Terms(yes_p, against, material=bool(named), groups=tuple(dict.fromkeys(found_groups)))
 
 
 def _negated(seq: Sequence[str], at: int) -> bool:
@@ -270,6 +280,8 @@ class GraphEvidence:
         features["is_dish"] = 1.0 if terms.dish else 0.0
         features["is_material"] = 1.0 if terms.material else 0.0
         features["is_several"] = 1.0 if terms.several else 0.0
+        for group in ("poison", "food", "safe"):
+            features[f"is_{group}"] = 1.0 if group in terms.groups else 0.0
         if terms.several:
             self._materials(obj, features, statements)
             return Evidence(obj, criterion, features, tuple(statements))

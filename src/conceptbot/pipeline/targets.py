@@ -41,6 +41,7 @@ from conceptbot.pipeline import prompts
 
 ALL = 0  # count meaning "every object that fits"
 CONTENT_FREE_REQUEST = "Do the task."
+CONTENT_FREE_DISH = "the food"  # the dish a preparation question is calibrated against
 
 
 @cache
@@ -215,6 +216,18 @@ class TargetFinder:
         messages = (
             Message("system", prompts.render("decide_system")),
             Message("user", prompts.render("target_user", request=request, action=action)),
+        )
+        scored = self.llm.score(ScoreRequest(options=("Yes", "No"), messages=messages))
+        yes, no = scored.logprobs
+        return yes - no, scored.usage
+
+    def prep_log_odds(self, dish: str, place: str) -> tuple[float, Usage]:
+        """The log-odds of Yes to "to make the hollandaise, should the robot put the ingredients in
+        or on the ceramic bowl?" (asked about the dish, not the request: for the request, the plate
+        beat the bowl for a sauce)."""
+        messages = (
+            Message("system", prompts.render("decide_system")),
+            Message("user", prompts.render("prep_user", dish=dish, place=place)),
         )
         scored = self.llm.score(ScoreRequest(options=("Yes", "No"), messages=messages))
         yes, no = scored.logprobs

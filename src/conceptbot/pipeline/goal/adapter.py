@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import re
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 
 from conceptbot.core.scene import Scene
@@ -32,7 +32,7 @@ from conceptbot.core.usage import Usage
 from conceptbot.pipeline.goal.reader import GoalReader
 from conceptbot.pipeline.goal.types import ALL as GOAL_ALL
 from conceptbot.pipeline.goal.types import Goal, GoalTarget
-from conceptbot.pipeline.targets import ALL, CONTENT_FREE_REQUEST, Target, TargetFinder
+from conceptbot.pipeline.targets import ALL, CONTENT_FREE_DISH, CONTENT_FREE_REQUEST, Target, TargetFinder
 
 #: Chooses the destinations of a target whose goal names none: ``(destination, score)`` pairs, best
 #: first (the score is kept in :attr:`Target.score`).
@@ -113,14 +113,16 @@ class ScoredChooser:
     Args:
         finder: Its LLM, ``is_person``, threshold and food knowledge are used.
         request: The request the goal was read from.
+        dish: The dish the goal asks to be made ("" for none): where it is made is asked about it.
 
     Attributes:
         usage: The model calls made so far.
     """
 
-    def __init__(self, finder: TargetFinder, request: str) -> None:
+    def __init__(self, finder: TargetFinder, request: str, dish: str = "") -> None:
         self.finder = finder
         self.request = request
+        self.dish = dish
         self.usage = Usage(calls=0)
 
     def __call__(self, target: GoalTarget, scene: Scene) -> list[tuple[str, float]]:
@@ -133,9 +135,14 @@ class ScoredChooser:
             candidates = self.finder.food.prep_places(candidates) or candidates
         scores = {}
         for dest in candidates:
-            # TargetFinder's own scored question (one method, so that both readers ask the same).
-            odds, used = self.finder.log_odds(self.request, dest)
-            prior, used_prior = self.finder.log_odds(CONTENT_FREE_REQUEST, dest)
+            if making and self.dish:
+                # Where the dish is made: asked about the dish, calibrated against "the food".
+                odds, used = self.finder.prep_log_odds(self.dish, dest)
+                prior, used_prior = self.finder.prep_log_odds(CONTENT_FREE_DISH, dest)
+            else:
+                # TargetFinder's own scored question (one method, so that both readers ask the same).
+                odds, used = self.finder.log_odds(self.request, dest)
+                prior, used_prior = self.finder.log_odds(CONTENT_FREE_REQUEST, dest)
             self.usage = self.usage + used + used_prior
             scores[dest] = odds - prior
         ranked = sorted(scores, key=lambda d: -scores[d])
@@ -154,17 +161,30 @@ class GoalFinder:
     Args:
         reader: Reads the goal.
         finder: Asks the scored question for open places (its LLM, threshold and food knowledge).
+        dish_concept: The graph's concept for the dish the request names in its own words ("a
+            hollandaise sauce" -> "hollandaise"), so that its definition can be found; None: the
+            words, lower case.
     """
 
-    def __init__(self, reader: GoalReader, finder: TargetFinder) -> None:
+    def __init__(
+        self,
+        reader: GoalReader,
+        finder: TargetFinder,
+        dish_concept: Callable[[str, Sequence[str]], str | None] | None = None,
+    ) -> None:
         self.reader = reader
         self.finder = finder
+        self.dish_concept = dish_concept
 
     def read(self, request: str, scene: Scene) -> tuple[bool, list[Target], Usage]:
         """Whether the request asks for a pile, its targets, and the model calls made."""
         started = time.perf_counter()
         goal = read_plainly(self.reader, request, scene)
-        chooser = ScoredChooser(self.finder, request)
+        if goal.dish:
+            found = self.dish_concept
+            concept = found(goal.dish, scene.pickable) if found is not None else None
+            goal = replace(goal, dish=concept or goal.dish.lower())
+        chooser = ScoredChooser(self.finder, request, goal.dish or "")
         targets = to_targets(goal, scene, choose=chooser)
         return goal.stack, targets, chooser.usage.with_latency(time.perf_counter() - started)
 
