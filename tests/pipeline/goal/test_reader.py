@@ -204,3 +204,190 @@ def test_the_goal_set_is_read(reader: GoalReader) -> None:
         results[row["split"]].append(same_goal(read, Goal.from_dict(row["goal"])).ok)
     assert all(results["original"])
     assert sum(results["paraphrase"]) / len(results["paraphrase"]) >= 0.95
+
+
+# Structures that paraphrase round 4 exposed (our own sentences and scenes).
+
+
+def _criterion(to: str | None, criterion: str, count: int | str = "all") -> GoalTarget:
+    return GoalTarget(to, "criterion", (), criterion, count)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("request_", "targets"),
+    [
+        ("If it's broken, it goes in the shoe box.", [_criterion("shoe box", "broken")]),
+        ("If a shell is chipped, it belongs in the shoe box.", [_criterion("shoe box", "chipped")]),
+        (
+            "If something is made entirely of shell, put it in the biscuit tin; if it's sandy, it goes"
+            " in the shoe box.",
+            [_criterion("biscuit tin", "made entirely of shell"), _criterion("shoe box", "sandy")],
+        ),
+        (
+            "If touching it could cut someone, throw it away.",
+            [_criterion(None, "touching it could cut someone")],
+        ),
+        (
+            "If it's whole, it goes in the biscuit tin; otherwise, it goes in the shoe box.",
+            [_criterion("biscuit tin", "whole"), GoalTarget("shoe box", "remainder")],
+        ),
+        (
+            "If it's cracked, leave it where it is; otherwise it goes in the shoe box.",
+            [GoalTarget("shoe box", "remainder")],
+        ),
+    ],
+)
+def test_a_condition_is_the_criterion_of_what_it_sends(
+    reader: GoalReader, request_: str, targets: list[GoalTarget]
+) -> None:
+    _is(reader, request_, SHELLS, *targets)
+
+
+def test_make_sure_asks_for_the_state_it_names(reader: GoalReader) -> None:
+    _is(
+        reader,
+        "Make sure the conch shell ends up in the shoe box.",
+        SHELLS,
+        _named("shoe box", "conch shell"),
+    )
+    _is(
+        reader,
+        "The baby is crawling now, so make sure anything sharp is up on the top shelf.",
+        NURSERY,
+        _criterion("top shelf", "sharp"),
+    )
+
+
+@pytest.mark.parametrize(
+    "request_",
+    [
+        "I'd appreciate it if you passed me the lime.",
+        "It would be great if you could hand me the lime.",
+        "I'd be grateful if you brought me the lime.",
+    ],
+)
+def test_a_polite_if_you_frame_asks_for_its_verb(reader: GoalReader, request_: str) -> None:
+    _is(reader, request_, PANTRY, _named("user", "lime"))
+
+
+def test_a_topic_set_apart_is_what_it_sends(reader: GoalReader) -> None:
+    _is(
+        reader,
+        "The conch shell goes in the shoe box; as for the sand dollar, it goes in the biscuit tin.",
+        SHELLS,
+        _named("shoe box", "conch shell"),
+        _named("biscuit tin", "sand dollar"),
+    )
+    _is(
+        reader,
+        "Any shells that are chipped, put them in the shoe box.",
+        SHELLS,
+        _criterion("shoe box", "shells that are chipped"),
+    )
+
+
+def test_a_spaced_dash_ends_a_clause(reader: GoalReader) -> None:
+    _is(
+        reader,
+        "Put the nappy cream on the top shelf - the baby keeps opening it.",
+        NURSERY,
+        _named("top shelf", "nappy cream"),
+    )
+
+
+def test_a_passive_question_asks_for_what_it_moves(reader: GoalReader) -> None:
+    _is(reader, "Could the dog lead be brought over to me?", KENNEL, _named("user", "dog lead"))
+    _is(reader, "Could something to eat be brought to me?", PANTRY, _criterion("user", "something to eat", 1))
+
+
+def test_them_refers_back_to_every_object_named(reader: GoalReader) -> None:
+    _is(
+        reader,
+        "The scallop shell and the sand dollar are sandy, so put them in the shoe box.",
+        SHELLS,
+        _named("shoe box", "scallop shell", "sand dollar"),
+    )
+
+
+def test_s_before_a_participle_is_a_verb_not_a_possessor(reader: GoalReader) -> None:
+    _is(
+        reader,
+        "The dog's been patient, so let him have the squeaky bone.",
+        KENNEL,
+        _named("dog", "squeaky bone"),
+    )
+
+
+def test_only_phrases_and_whichever(reader: GoalReader) -> None:
+    _is(
+        reader,
+        "Nothing but the broken shells should go in the shoe box.",
+        SHELLS,
+        _criterion("shoe box", "broken shells"),
+    )
+    _is(
+        reader,
+        "Whichever shell is the biggest goes in the biscuit tin.",
+        SHELLS,
+        _criterion("biscuit tin", "shell is the biggest", 1),
+    )
+
+
+def test_a_wish_keeps_the_objects_joined_on(reader: GoalReader) -> None:
+    _is(reader, "Could I have the lime, and the cracker as well?", PANTRY, _named("user", "lime", "cracker"))
+
+
+@pytest.mark.parametrize(
+    "request_",
+    [
+        "Lunch today should be guacamole.",
+        "For lunch, I'm thinking guacamole.",
+        "This afternoon calls for guacamole.",
+        "Nothing would taste better than guacamole.",
+        "The crackers need a guacamole on the side; let's make one.",
+    ],
+)
+def test_a_dish_wished_for_by_the_meal_or_a_comparison(reader: GoalReader, request_: str) -> None:
+    read = _is(reader, request_, PANTRY, GoalTarget(None, "ingredients"), dish="guacamole")
+    assert (read.dish or "").lower() == "guacamole"
+
+
+def test_looking_at_something_sends_nothing(reader: GoalReader) -> None:
+    _is(reader, "Look at my hands, they're covered in sand.", SHELLS, GoalTarget(None, "need"), need="x")
+
+
+@pytest.mark.parametrize(
+    "request_",
+    [
+        "",
+        "   ",
+        "...",
+        "?!;:",
+        " - ",
+        "if",
+        "make sure",
+        "I'd appreciate it if you",
+        "otherwise",
+        "as for",
+        "let's make one",
+        "it goes",
+        "Les coquillages → la boîte ☃ 🐚 ½",
+        "Put the conch shell in the shoe box. " * 400,
+        "and and , , , or",
+        "\n\t",
+    ],
+)
+def test_odd_input_never_raises(reader: GoalReader, request_: str) -> None:
+    read = reader.read(request_, SHELLS)
+    assert isinstance(read, Goal) and read.targets
+
+
+def test_a_rule_that_trips_leaves_a_need(reader: GoalReader, monkeypatch: pytest.MonkeyPatch) -> None:
+    import conceptbot.pipeline.goal.reader as reader_module
+
+    def trips(*args: object, **kwargs: object) -> None:
+        raise IndexError("an odd parse")
+
+    monkeypatch.setattr(reader_module, "_items", trips)
+    read = reader.read("Put the conch shell in the shoe box.", SHELLS)
+    assert read.need and read.targets == (GoalTarget(None, "need"),)

@@ -26,6 +26,7 @@ Clauses (:mod:`conceptbot.pipeline.goal.parse`) become targets:
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -41,6 +42,8 @@ from conceptbot.pipeline.hazards import is_person as default_is_person
 if TYPE_CHECKING:  # spaCy is loaded with the model, on first use (pipeline/goal imports light)
     from spacy.language import Language
     from spacy.tokens import Doc
+
+logger = logging.getLogger(__name__)
 
 
 @dataclass
@@ -101,8 +104,19 @@ class GoalReader:
             scene: What the robot sees (its names are the goal's).
 
         Returns:
-            The goal: targets with scene names, ``to`` None where the planner must choose.
+            The goal: targets with scene names, ``to`` None where the planner must choose. It never
+            raises on odd input (empty, punctuation only, very long): a request longer than the
+            parser takes is read up to its limit, and one the rules cannot read is a need (the
+            planner then reads the whole request with the model).
         """
+        text = request[: self.nlp.max_length - 1]
+        try:
+            return self._read(text, scene)
+        except Exception:  # a rule tripping on an odd parse must not stop the robot
+            logger.exception("goal reader: cannot read %r; taken as a need", request[:200])
+            return Goal(False, None, request.strip().rstrip(".!?"), (GoalTarget(None, "need"),))
+
+    def _read(self, request: str, scene: Scene) -> Goal:
         vocab = vocabulary()
         doc = self.nlp(request)
         spelled = self._spell(scene.names)
@@ -356,7 +370,11 @@ def _items(
             items[-1] = _Item(clause, places, waiting.theme, clause.key or pending, generic=True)
             pending = ""
             continue
-        if clause.otherwise and places and _pronoun_only(doc, clause.theme):
+        alone = prev is not None and all(  # "otherwise, | it goes ..."
+            doc[i].text.lower() in vocab["otherwise"] or doc[i].is_punct
+            for i in range(prev.chunk.start, prev.chunk.end)
+        )
+        if (clause.otherwise or alone) and places and _pronoun_only(doc, clause.theme):
             items.append(_Item(clause, places, clause.theme, clause.key or pending, remainder=True))
             pending = ""
             continue

@@ -59,7 +59,11 @@ def _other_wish(token: Token, subject: list[Token], speaker: bool) -> Token | No
     vocab = vocabulary()
     if not token.tag_.startswith("VB"):
         return None
-    meal = any(c.lemma_.lower() in vocab["meals"] for c in subject)
+    # the meal is the subject (or, misparsed, a noun phrase before the verb: "Lunch today should be")
+    meal = any(
+        c.lemma_.lower() in vocab["meals"] and c.i < token.i and c.dep_ in ("nsubj", "npadvmod")
+        for c in token.children
+    )
     if token.lemma_ == "be" and meal and any(c.dep_ == "attr" for c in token.children):
         return token
     if token.lemma_ == "think" and speaker and any(c.dep_ == "dobj" for c in token.children):
@@ -121,8 +125,8 @@ def desire_clause(
         # "breakfast should be an omelette": what the meal is to be
         theme = tuple(t.i for t in attr.subtree if t.i not in frame and not t.is_punct)
         return Clause(chunk, "desire", "be", verb.i, [], theme, "", False, [theme])
-    if verb.lemma_ == "be":
-        subject = next(c for c in verb.children if c.dep_ == "nsubj")
+    subject = next((c for c in verb.children if c.dep_ == "nsubj"), None)
+    if verb.lemma_ == "be" and subject is not None:
         theme = tuple(i for i in range(subject.left_edge.i, subject.right_edge.i + 1) if i not in frame)
         return Clause(chunk, "desire", "be", verb.i, [], theme, "", False, [theme])
     vocab = vocabulary()
