@@ -31,3 +31,9 @@ def test_a_word_of_the_scenes_objects_is_an_ingredient_not_the_dish() -> None:
 def test_no_dish_without_a_graph_or_a_food_class() -> None:
     assert FACTS.dish_concept("some lemonade") is None
     assert FactFinder(None).dish_concept("a hollandaise sauce") is None
+
+
+def test_a_wished_thing_the_graph_does_not_know_may_be_a_dish_one_it_knows_otherwise_is_not() -> None:
+    assert FACTS.may_be_dish("a hollandaise sauce")
+    assert FACTS.may_be_dish("a PB&J")  # not in the graph: the parse decides
+    assert not FACTS.may_be_dish("some lemonade")  # known, as a beverage

@@ -134,12 +134,7 @@ class ConceptBot:
         )
         # The request's structure from its parse; the graph tells a dish to make from other things
         # wished for ("I'd love an omelette" / "I'd love a drink").
-        reader = GoalReader(
-            is_dish=(lambda phrase: facts.dish_concept(phrase) is not None)
-            if retriever is not None
-            else None,
-            is_person=is_person,
-        )
+        reader = GoalReader(is_dish=facts.may_be_dish if retriever is not None else None, is_person=is_person)
         self.goal_planner = GoalPlanner(
             GoalFinder(
                 reader,

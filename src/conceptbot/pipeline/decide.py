@@ -205,6 +205,17 @@ class FactFinder:
         candidates += sorted(single, key=lambda w: singular(w) in classes or w in classes)
         return next((c for c in dict.fromkeys(candidates) if self.is_dish(c)), None)
 
+    def may_be_dish(self, phrase: str) -> bool:
+        """Whether a wished-for thing may be a dish to make: the graph places it under a prepared
+        food, or knows none of its words (a "PB&J" is not in the offline graph: the parse decides);
+        a thing the graph knows as something else ("a drink") is not."""
+        if self.dish_concept(phrase) is not None:
+            return True
+        assert self.retriever is not None
+        seq = [w for w in tokens(phrase) if w.isalpha() and w not in _STOP]
+        known = (self.retriever.graph.edges(w, ["IsA"], 1).match in ("exact", "lemma") for w in seq)
+        return not any(known)
+
     def prep_places(self, destinations: Sequence[str]) -> list[str]:
         """The destinations food can be prepared in or on: those the graph places under cookware
         (``cookware_classes``: "frying pan" IsA pan, "mixing bowl" IsA bowl), by their name or its
