@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from conceptbot.bench.grading import load_dev_scene
-from conceptbot.core.scene import Scene
+from conceptbot.core.scene import Scene, scene_from_dict
 from conceptbot.pipeline.goal import Goal, GoalReader, GoalTarget, same_goal
 from tests.pipeline.goal.scenes import KENNEL, NURSERY, PANTRY, SHELLS, WORKSHOP
 
@@ -391,3 +391,63 @@ def test_a_rule_that_trips_leaves_a_need(reader: GoalReader, monkeypatch: pytest
     monkeypatch.setattr(reader_module, "_items", trips)
     read = reader.read("Put the conch shell in the shoe box.", SHELLS)
     assert read.need and read.targets == (GoalTarget(None, "need"),)
+
+
+_DESK = scene_from_dict(
+    {
+        "pickable_objects": ["plum", "water bottle", "hole punch", "pretzels", "notebook"],
+        "destinations": ["user", "cupboard", "windowsill"],
+    }
+)
+
+
+def test_a_three_item_list_sends_every_named_object(reader: GoalReader) -> None:
+    _is(
+        reader,
+        "Fetch me the plum, the notebook and the water bottle.",
+        _DESK,
+        _named("user", "plum", "notebook", "water bottle"),
+    )
+
+
+def test_a_list_of_two_indefinites_is_two_things(reader: GoalReader) -> None:
+    _is(
+        reader,
+        "I'd like something to nibble on and a cushion.",
+        _DESK,
+        GoalTarget("user", "criterion", (), "something to nibble on", 1),
+        GoalTarget("user", "criterion", (), "cushion", 1),
+    )
+
+
+def test_a_list_mixing_a_name_and_an_indefinite_keeps_both(reader: GoalReader) -> None:
+    _is(
+        reader,
+        "Could you pass me the notebook and something to write with?",
+        _DESK,
+        _named("user", "notebook"),
+        GoalTarget("user", "criterion", (), "something to write with", 1),
+    )
+    _is(
+        reader,
+        "Grab me a bag of pretzels and something cold to drink.",
+        _DESK,
+        _named("user", "pretzels"),
+        GoalTarget("user", "criterion", (), "something cold to drink", 1),
+    )
+
+
+def test_lists_for_two_places_stay_apart(reader: GoalReader) -> None:
+    _is(
+        reader,
+        "Put the plum on the windowsill and give me the hole punch and the pretzels.",
+        _DESK,
+        _named("windowsill", "plum"),
+        _named("user", "hole punch", "pretzels"),
+    )
+    _is(
+        reader,
+        "The notebook, the plum and the water bottle go in the cupboard.",
+        _DESK,
+        _named("cupboard", "notebook", "plum", "water bottle"),
+    )

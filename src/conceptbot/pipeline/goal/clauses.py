@@ -11,6 +11,7 @@ from conceptbot.pipeline.goal.parse import Chunk, Clause, Place, asks_you_to, cl
 from conceptbot.pipeline.goal.runs import lower as _lower
 from conceptbot.pipeline.goal.runs import nominal
 from conceptbot.pipeline.goal.runs import runs as _runs
+from conceptbot.pipeline.goal.themes import extend_with_conjuncts
 from conceptbot.pipeline.goal.wishes import cleft, desire_clause, desire_verb, existential
 
 if TYPE_CHECKING:  # spaCy is loaded with the model, on first use (pipeline/goal imports light)
@@ -334,6 +335,11 @@ def analyse(doc: Doc, chunk: Chunk, mentions: Sequence[Mention], is_person: Call
     with "otherwise"."""
     clause = _analysed(doc, chunk, mentions, is_person)
     first, _, _ = _opened(doc, chunk)
+    if clause.theme and clause.form != "condition":
+        # "bring me the pear, | the stapler and the juice box": the rest of the list is the theme's
+        framed = {i for p in clause.places for i in p.frame} | {clause.verb_at}
+        allowed = {i for i in range(first, chunk.end) if i not in framed and not doc[i].is_punct}
+        clause.theme = extend_with_conjuncts(doc, clause.theme, allowed)
     clause.otherwise = any(_lower(t) in vocabulary()["otherwise"] for t in doc[chunk.start : first])
     return clause
 

@@ -35,7 +35,15 @@ from conceptbot.core.scene import Scene
 from conceptbot.pipeline.goal.clauses import analyse
 from conceptbot.pipeline.goal.mentions import Mention, scene_mentions
 from conceptbot.pipeline.goal.parse import Clause, chunks, vocabulary
-from conceptbot.pipeline.goal.themes import Reading, criterion_text, head_of, objects_in, read_theme
+from conceptbot.pipeline.goal.themes import (
+    Reading,
+    conjuncts,
+    criterion_text,
+    head_of,
+    objects_in,
+    read_theme,
+    read_themes,
+)
 from conceptbot.pipeline.goal.types import ALL, Goal, GoalTarget
 from conceptbot.pipeline.hazards import is_person as default_is_person
 
@@ -150,7 +158,7 @@ class GoalReader:
             if clause.form == "imperative" and clause.verb in vocab["making"] and personal:
                 wished, making = clause.theme, True  # "make me a PB&J"
             elif clause.form == "fragment" and not clause.places and _polite(doc, clause) and clause.theme:
-                return [_to(users, read_theme(doc, clause.theme, mentions))], None  # "A drink, please."
+                return _all_to(users, read_themes(doc, clause.theme, mentions)), None  # "A drink, please."
             elif clause.form == "desire" and (
                 clause.verb in vocab["making"] or clause.verb in ("want", "need", "be")
             ):
@@ -162,11 +170,12 @@ class GoalReader:
             if not wished:
                 continue
             reading = read_theme(doc, wished, mentions)
-            thing = (
-                _names_itself(doc, wished, mentions) or _indefinite(doc, wished) or _described(doc, wished)
+            parts = conjuncts(doc, wished)
+            thing = any(
+                _names_itself(doc, p, mentions) or _indefinite(doc, p) or _described(doc, p) for p in parts
             )
             if not making and thing:
-                return [_to(users, reading)], None
+                return _all_to(users, read_themes(doc, wished, mentions)), None
             dish = dish_words(doc, wished)
             if dish and (self.is_dish is None or self.is_dish(dish)):
                 named = objects_in(wished, mentions)
@@ -249,6 +258,11 @@ def _to(users: list[str], reading: Reading) -> GoalTarget:
     return GoalTarget(
         users[0] if users else None, reading.takes, reading.named, reading.criterion, reading.count
     )
+
+
+def _all_to(users: list[str], readings: list[Reading]) -> list[GoalTarget]:
+    """Wished-for things (a list: "a napkin and something to read"), to the user."""
+    return [_to(users, r) for r in readings]
 
 
 def dish_words(doc: Doc, run: Sequence[int]) -> str:
@@ -380,8 +394,9 @@ def _items(
             continue
         if clause.form == "desire" and clause.theme and clause.verb in ("want", "need"):
             # a need is for a thing ("I need a tool that drives in nails"), a wish maybe for a dish
-            thing = clause.verb == "need" or _indefinite(doc, clause.theme)
-            if thing or _names_itself(doc, clause.theme, mentions):
+            parts = conjuncts(doc, clause.theme)  # "a bag of crackers and something to drink"
+            thing = clause.verb == "need" or any(_indefinite(doc, p) for p in parts)
+            if thing or any(_names_itself(doc, p, mentions) for p in parts):
                 items.append(_Item(clause, [tuple(users)] if users else [], clause.theme))
             continue
         if stay or clause.form in ("statement", "desire"):
@@ -517,13 +532,19 @@ def _targets(doc: Doc, items: list[_Item], mentions: list[Mention]) -> list[Goal
             key = next((i.key for i in group if i.key), "")
             targets += [GoalTarget(n, "criterion", (), key, ALL) for n in names if n not in own]
             continue
+        to = names[0] if names else None
+        if theme and not group[0].remainder and not group[0].generic:
+            # "the pear, the stapler and something to write with": each phrase of a list goes there
+            readings = read_themes(doc, theme, mentions)
+            if len(readings) > 1:
+                targets += [GoalTarget(to, r.takes, r.named, r.criterion, r.count) for r in readings]
+                continue
         reading = read_theme(doc, theme, mentions) if theme else Reading("all")
         if group[0].remainder:
             reading = Reading("remainder")
         elif group[0].generic and reading.takes == "criterion":
             reading = Reading("criterion", (), reading.criterion, ALL)  # whatever meets the condition
         criterion = reading.criterion or (criterion_text(doc, theme) if reading.takes == "criterion" else "")
-        to = names[0] if names else None
         targets.append(GoalTarget(to, reading.takes, reading.named, criterion, reading.count))
     return _merged_named(targets)
 

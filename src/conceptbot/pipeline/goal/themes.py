@@ -166,3 +166,108 @@ def read_theme(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> Rea
     if _whole(doc, run):
         return Reading("all")
     return Reading("criterion", (), criterion_text(doc, run), count_of(doc, run))
+
+
+def _listed(token: Token) -> list[Token]:
+    """The noun phrases coordinated with ``token`` after it, by spaCy's ``conj`` (a list "A, B and
+    C" the parser often reads as "B" in apposition to "A", or as a ``dep``, with "C" its ``conj``)."""
+    found = []
+    for child in token.children:
+        nominal = child.tag_.startswith("NN") or child.pos_ in ("NOUN", "PROPN", "PRON")
+        if not nominal or child.i < token.i:
+            continue
+        listed = child.dep_ == "conj" or (
+            child.dep_ in ("appos", "dep")
+            and child.left_edge.i > 0
+            and child.doc[child.left_edge.i - 1].text == ","
+            and any(c.dep_ == "conj" for c in child.children)
+        )
+        if listed:
+            found += [child, *_listed(child)]
+    return found
+
+
+def _own_span(token: Token, members: set[int]) -> tuple[int, ...]:
+    """A conjunct's own words: its subtree without the other conjuncts, their "and" and commas."""
+    drop: set[int] = set()
+    for child in token.children:
+        if child.i in members or (child.dep_ in ("cc", "punct") and child.i > token.i):
+            drop |= {t.i for t in child.subtree}
+    return tuple(t.i for t in token.subtree if t.i not in drop and not t.is_punct)
+
+
+def conjuncts(doc: Doc, run: Sequence[int]) -> list[tuple[int, ...]]:
+    """The coordinated object phrases of a theme ("the pear, the stapler and the juice box", "a
+    bag of crackers and something to drink"), each as its tokens within ``run``; ``[run]`` when the
+    theme is one phrase. Only the phrase's head is split: "a salad with tomato and cucumber" and
+    "made of glass and metal" are one; a negated conjunct ("and nothing else") is not one."""
+    inside = set(run)
+    heads = [doc[i] for i in run if doc[i].head.i not in inside or doc[i].head.i == i]
+    head = next((t for t in heads if t.tag_.startswith("NN") or t.pos_ in ("NOUN", "PROPN", "PRON")), None)
+    if head is None:
+        return [tuple(run)]
+    listed = [t for t in _listed(head) if t.i in inside]
+    if not listed:
+        return [tuple(run)]
+    members = {head.i, *(t.i for t in listed)}
+    spans = [tuple(i for i in _own_span(t, members) if i in inside) for t in (head, *listed)]
+    if any(not s or doc[s[0]].text.lower() in ("nothing", "no", "none", "not") for s in spans):
+        return [tuple(run)]
+    return spans
+
+
+def extend_with_conjuncts(doc: Doc, theme: Sequence[int], allowed: set[int]) -> tuple[int, ...]:
+    """A theme with the phrases coordinated with its head that the clause's runs split off ("the
+    pear | , the stapler and the juice box"), within ``allowed`` (the clause's non-frame tokens)."""
+    if not theme:
+        return tuple(theme)
+    inside = set(theme)
+    head = next(
+        (
+            doc[i]
+            for i in theme
+            if (doc[i].head.i not in inside or doc[i].head.i == i)
+            and (doc[i].tag_.startswith("NN") or doc[i].pos_ in ("NOUN", "PROPN", "PRON"))
+        ),
+        None,
+    )
+    if head is None:
+        return tuple(theme)
+    members = {head.i}
+    extra: set[int] = set()
+    for token in _listed(head):
+        members.add(token.i)
+    for token in _listed(head):
+        span = [i for i in _own_span(token, members) if i in allowed]
+        if not span or doc[span[0]].text.lower() in ("nothing", "no", "none", "not"):
+            break
+        extra |= set(span)
+    return tuple(sorted(inside | extra))
+
+
+def read_themes(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> list[Reading]:
+    """What a theme sends, one reading per coordinated phrase: the named objects as one reading,
+    each phrase describing objects as one of its own ("the pear and something to write with"); a list
+    of plural or mass criteria ("apples and pears") stays one criterion."""
+    parts = conjuncts(doc, run)
+    if len(parts) < 2:
+        return [read_theme(doc, run, mentions)]
+    objects = [m for m in mentions if m.kind in ("object", "both")]
+    # a conjunct the run cut inside a name ("the teddy | bear away") takes the whole name
+    parts = [
+        tuple(
+            sorted(
+                {*p, *(i for m in objects if m.start in p or m.end - 1 in p for i in range(m.start, m.end))}
+            )
+        )
+        for p in parts
+    ]
+    readings = [read_theme(doc, p, mentions) for p in parts]
+    if any(r.takes not in ("named", "criterion") for r in readings):
+        return [read_theme(doc, run, mentions)]
+    criteria = [r for r in readings if r.takes == "criterion"]
+    if criteria and all(r.count == ALL for r in criteria) and len(criteria) == len(readings):
+        return [read_theme(doc, run, mentions)]
+    named = tuple(dict.fromkeys(n for r in readings for n in r.named))
+    out = [Reading("named", named, "", len(named))] if named else []
+    return out + criteria
