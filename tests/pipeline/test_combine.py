@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from conceptbot.pipeline.combine import Combination, combination, model_only, sigmoid
+from conceptbot.pipeline.combine import Combination, combination, sigmoid
 from conceptbot.pipeline.evidence import FEATURES, GRAPH_FREE, Evidence
 
 
@@ -19,7 +19,7 @@ def test_the_log_odds_add_the_weighted_readings_and_features() -> None:
 
 def test_a_non_finite_reading_is_an_error_not_a_decision() -> None:
     with pytest.raises(ValueError, match="non-finite"):
-        model_only().log_odds({"model": math.nan}, None)
+        Combination(("model",), (1.0,), 0.0).log_odds({"model": math.nan}, None)
 
 
 def test_malformed_weights_are_refused() -> None:

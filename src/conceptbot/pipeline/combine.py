@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cache
 from importlib import resources
@@ -106,9 +106,3 @@ def shipped() -> dict[str, Combination]:
 def combination(with_graph: bool) -> Combination:
     """The shipped combination for a system with or without the graph."""
     return shipped()["graph" if with_graph else "nograph"]
-
-
-def model_only(features: Sequence[str] = ("model",)) -> Combination:
-    """The identity combination: the model's calibrated log-odds as they are (for tests and for a
-    backend whose weights have not been fitted)."""
-    return Combination(tuple(features), (1.0,) * len(features), 0.0)

@@ -231,8 +231,10 @@ class GraphEvidence:
 
     def __init__(self, graph: KnowledgeGraph | None) -> None:
         self.graph = graph
-        # The graph does not change while a system lives: its answers are kept per concept.
+        # The graph does not change while a system lives: its answers are kept per concept, and the
+        # terms per criterion (one criterion is read for every object of a target).
         self._edges: dict[str, tuple[str, str | None, tuple[Edge, ...]]] = {}
+        self._terms: dict[str, Terms] = {}
 
     def _lookup(self, concept: str) -> tuple[str, str | None, tuple[Edge, ...]]:
         assert self.graph is not None
@@ -268,7 +270,9 @@ class GraphEvidence:
 
     def read(self, obj: str, criterion: str) -> Evidence:
         """The evidence about ``obj`` (as the scene names it) for ``criterion``."""
-        terms = criterion_terms(criterion, self.graph)
+        if criterion not in self._terms:
+            self._terms[criterion] = criterion_terms(criterion, self.graph)
+        terms = self._terms[criterion]
         features = dict.fromkeys(FEATURES, 0.0)
         statements: list[str] = []
 

@@ -213,22 +213,17 @@ class TargetFinder:
     def log_odds(self, request: str, dest: str) -> tuple[float, Usage]:
         """The log-odds of Yes to "should the robot put things in the X?" for ``request``."""
         action = f"give things to the {dest}" if self.is_person(dest) else f"put things in or on the {dest}"
-        messages = (
-            Message("system", prompts.render("decide_system")),
-            Message("user", prompts.render("target_user", request=request, action=action)),
-        )
-        scored = self.llm.score(ScoreRequest(options=("Yes", "No"), messages=messages))
-        yes, no = scored.logprobs
-        return yes - no, scored.usage
+        return self._yes_no(prompts.render("target_user", request=request, action=action))
 
     def prep_log_odds(self, dish: str, place: str) -> tuple[float, Usage]:
         """The log-odds of Yes to "to make the hollandaise, should the robot put the ingredients in
         or on the ceramic bowl?" (asked about the dish, not the request: for the request, the plate
         beat the bowl for a sauce)."""
-        messages = (
-            Message("system", prompts.render("decide_system")),
-            Message("user", prompts.render("prep_user", dish=dish, place=place)),
-        )
+        return self._yes_no(prompts.render("prep_user", dish=dish, place=place))
+
+    def _yes_no(self, question: str) -> tuple[float, Usage]:
+        """The log-odds of Yes against No for one question, scored in one pass."""
+        messages = (Message("system", prompts.render("decide_system")), Message("user", question))
         scored = self.llm.score(ScoreRequest(options=("Yes", "No"), messages=messages))
         yes, no = scored.logprobs
         return yes - no, scored.usage
