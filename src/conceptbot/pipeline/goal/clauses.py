@@ -12,7 +12,14 @@ from conceptbot.pipeline.goal.runs import lower as _lower
 from conceptbot.pipeline.goal.runs import nominal
 from conceptbot.pipeline.goal.runs import runs as _runs
 from conceptbot.pipeline.goal.themes import extend_with_conjuncts
-from conceptbot.pipeline.goal.wishes import cleft, desire_clause, desire_verb, existential
+from conceptbot.pipeline.goal.wishes import (
+    cleft,
+    desire_clause,
+    desire_verb,
+    existential,
+    offered,
+    recipient_question,
+)
 
 if TYPE_CHECKING:  # spaCy is loaded with the model, on first use (pipeline/goal imports light)
     from spacy.tokens import Doc, Token
@@ -67,6 +74,8 @@ def _opened(doc: Doc, chunk: Chunk) -> tuple[int, bool, bool]:
             i = topic  # "as for the throw pillow": the topic of the next clause
         elif word in vocab["question"] and nxt == "you":
             i += 2
+        elif word == "mind" and i + 1 < chunk.end and doc[i + 1].tag_ == "VBG":
+            i += 1  # "would you mind grabbing ...", "mind passing ..."
         elif word == "let" and nxt in ("'s", "’s", "us"):
             i, lets = i + 2, True
         elif word in vocab["openers"] or doc[i].is_punct:
@@ -117,7 +126,8 @@ def _imperative(doc: Doc, at: int, end: int, mentions: Sequence[Mention], openin
         and any(c.dep_ in ("nsubj", "nsubjpass") and _lower(c) != "you" for c in token.head.children)
     ):
         return -1, negated  # "I fell off my bike | and scraped my knee": the subject is shared
-    if token.tag_ in ("VB", "VBP", "VBD") or (token.tag_ == "VBG" and not opening):
+    minded = at > 0 and _lower(doc[at - 1]) == "mind"  # "(would you) mind grabbing a drink?"
+    if token.tag_ in ("VB", "VBP", "VBD") or (token.tag_ == "VBG" and (not opening or minded)):
         return at, negated
     if token.tag_ in ("NNS", "NNPS", "VBG"):
         return -1, negated  # a plural noun is no imperative ("Houseplants that are ...")
@@ -278,6 +288,9 @@ def _chain(doc: Doc, verb: Token, first: int, end: int) -> list[int]:
         chain.add(verb.head.i)
     for head in heads:
         chain |= {c.i for c in head.children if c.dep_ in ("aux", "auxpass", "neg") and first <= c.i < end}
+    at = verb.i
+    if at - 2 >= first and doc[at - 1].tag_ == "TO" and _lower(doc[at - 2]) in vocabulary()["obligation"]:
+        chain |= {at - 2, at - 1}  # "needs to go", where the tagger took "needs" for a noun
     return sorted(chain)
 
 
@@ -360,7 +373,8 @@ def condition_clause(doc: Doc, chunk: Chunk, first: int, end: int, mentions: Seq
             return Clause(chunk, "condition", verb.lemma_.lower(), verb.i, [], tuple(inside), "", False, [])
         drop |= set(inside)
     rest = [i for i in range(first + 1, end) if i not in drop]
-    while rest and (doc[rest[0]].lemma_ == "be" or doc[rest[0]].is_punct):
+    copula = ("'s", "’s")
+    while rest and (doc[rest[0]].lemma_ == "be" or _lower(doc[rest[0]]) in copula or doc[rest[0]].is_punct):
         rest = rest[1:]  # "is made of glass", "'s poisonous"
     return Clause(chunk, "condition", verb.lemma_.lower(), verb.i, [], tuple(rest), "", False, [tuple(rest)])
 
@@ -374,6 +388,9 @@ def _analysed(
     mine = [m for m in mentions if first <= m.start < end]
     if first < end - 1 and _lower(doc[first]) in vocab["conditional"]:
         return condition_clause(doc, chunk, first, end, mine)
+    given = offered(doc, first, end)
+    if given is not None:  # "have you got something for it?"
+        return Clause(chunk, "desire", "want", first, [], given, "", False, [given])
     verb, negated = _imperative(doc, first, end, mine, chunk.after == "")
     frame: set[int] = set(range(chunk.start, first))
     if negated:
@@ -395,6 +412,9 @@ def _analysed(
         role = place_role(doc, mention, chunk, (first, end), verb, mine, is_person)
         if role is not None:
             places.append(Place(mention, role))
+    if any(p.frame for p in places):
+        # "set out a game for us to play on the coffee table": "for us to play" is the criterion's
+        places = [p for p in places if p.frame]
     if verb >= 0 and not places:
         inverted = inverted_place(doc, verb, end, mine, frame)
         places = [inverted] if inverted is not None else []
@@ -412,7 +432,7 @@ def _analysed(
             runs = _runs(indices, frame, doc)
             theme = next((r for r in runs if r[0] > at_for and nominal(doc, r)), ())
             return Clause(chunk, "for", "be", at_for, places, theme, key, False, runs)
-    asked = existential(doc, first, end, mine)
+    asked = existential(doc, first, end, mine) or recipient_question(doc, first, end, mine, is_person)
     if asked is not None:
         theme, place = asked
         return Clause(chunk, "imperative", "give", -1, [place], theme, key, False, [theme])
@@ -467,6 +487,9 @@ def imperative_clause(
     end = bounds[1]
     negated = verb - 2 in frame and _lower(doc[verb - 1]) in ("n't", "not")
     frame |= {verb, *_particles(doc, verb, end)}
+    if doc[verb].lemma_ in ("get", "have"):
+        # "get the groceries packed in the tote bag": the participle says what to do with them
+        frame |= {c.i for c in doc[verb].children if c.tag_ == "VBN" and c.dep_ in ("ccomp", "xcomp", "oprd")}
     runs = _runs(list(range(verb + 1, end)), frame, doc)
     theme = next((r for r in runs if nominal(doc, r)), ())
     if places and theme and theme[0] < min(places[0].frame or (end,)):

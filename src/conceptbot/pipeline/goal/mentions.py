@@ -59,8 +59,10 @@ def _ends_phrase(doc: Doc, end: int) -> bool:
     after = doc[end]
     if after.tag_ == "POS" or (after.text.lower() in ("'s", "’s") and after.dep_ == "case"):
         # a possessor, unless "'s" is "has"/"is" before a participle or adverb ("the dog's been good")
-        verb = end + 1 < len(doc) and doc[end + 1].tag_ in ("VBN", "VBD", "VBG", "RB")
-        return verb
+        verb = end + 1 < len(doc) and doc[end + 1].tag_ in ("VBN", "VBD", "VBG", "RB", "JJ")
+        # "my boy's thirsty.": a word ending the sentence after "'s" is what the person is
+        last = end + 1 < len(doc) and (end + 2 >= len(doc) or doc[end + 2].is_punct)
+        return verb or (last and doc[end + 1].tag_ not in ("NNS", "NNPS"))
     return not (after.pos_ in ("NOUN", "PROPN") and doc[end - 1].head.i >= end)
 
 

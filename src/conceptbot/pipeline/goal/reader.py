@@ -27,6 +27,7 @@ Clauses (:mod:`conceptbot.pipeline.goal.parse`) become targets:
 from __future__ import annotations
 
 import logging
+import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -126,7 +127,8 @@ class GoalReader:
 
     def _read(self, request: str, scene: Scene) -> Goal:
         vocab = vocabulary()
-        doc = self.nlp(request)
+        # the tokenizer leaves a final "." on a word with a symbol in it ("a PB&J."): split it off
+        doc = self.nlp(re.sub(r"(?<=[^\s.!?])([.!?]+)\s*$", r" \1", request))
         spelled = self._spell(scene.names)
         mentions = scene_mentions(
             doc, scene, spelled, vocab["people"], vocab["recipient_pronouns"], self.is_person
@@ -266,7 +268,8 @@ def _all_to(users: list[str], readings: list[Reading]) -> list[GoalTarget]:
 
 
 def dish_words(doc: Doc, run: Sequence[int]) -> str:
-    """The dish a wished-for phrase names: its words up to the head noun and an "of" phrase, without
+    """The dish a wished-for phrase names: its words up to the head noun and an "of" or "with" phrase
+    ("a salad with tomato and cucumber"), without
     determiners or a following "for breakfast", "to go with ..."; "a bowl of guacamole" is
     guacamole (a measure noun before "of": ``measure`` in ``words.json``)."""
     vocab = vocabulary()
@@ -277,7 +280,8 @@ def dish_words(doc: Doc, run: Sequence[int]) -> str:
         lower = word.lower()
         if not words and lower in (*vocab["determiners"], *vocab["restrictors"], "really", "some"):
             continue
-        if words and (token.tag_ in ("TO", "WDT", "RB") or (token.tag_ == "IN" and lower != "of")):
+        joins = token.tag_ == "IN" and lower not in ("of", "with")
+        if words and (token.tag_ in ("TO", "WDT", "RB") or joins):
             break
         if words and token.tag_ == "DT":
             break
@@ -364,6 +368,10 @@ def _items(
             clause.negated and clause.verb in (*vocab["untouched"], *vocab["stay"])
         )
         waiting = items[-1] if items and items[-1].condition else None
+        sorting = items and len({n for p in items[-1].places for n in p}) > 1
+        if clause.key and not places and not clause.theme and sorting and not items[-1].key:
+            items[-1].key = clause.key  # "... go in the recycling bins, | sorted by material"
+            continue
         if clause.form == "condition":
             if clause.theme:
                 items.append(_Item(clause, [], clause.theme, condition=True))
@@ -456,8 +464,11 @@ def _items(
             if before.places == places:
                 continue  # "the dog would like a treat; give him one": said twice
             theme = before.theme
-            if not before.places:
-                items.pop()  # "fetch one game ... and set it on the coffee table"
+            fetched = before.clause.verb in vocab["fetching"] and all(
+                p.mention.kind == "person" for p in before.clause.places
+            )
+            if not before.places or fetched:
+                items.pop()  # "fetch one game ... and set it on the coffee table", "grab us a game and ..."
         items.append(_Item(clause, places, theme, clause.key or pending))
         pending = ""
     return _without_headers(items, vocab)
@@ -485,6 +496,8 @@ def antecedent(
     if named and plural is False:
         return tuple(range(named[-1].start, named[-1].end))
     for token in doc[chunk.start : chunk.end]:
+        if token.i in found:
+            continue  # inside the phrase found: "something with caffeine", not "caffeine"
         role = token.dep_ in ("dobj", "pobj", "nsubj", "attr") and token.tag_.startswith("NN")
         agrees = plural is None or (token.tag_ in ("NNS", "NNPS")) == plural
         if role and agrees and token.text.lower() not in vocabulary()["personal"]:

@@ -23,7 +23,7 @@ def runs(indices: Sequence[int], frame: set[int], doc: Doc) -> list[tuple[int, .
     runs: list[list[int]] = []
     current: list[int] = []
     for i in indices:
-        if i in frame or (doc[i].is_punct and lower(doc[i]) not in ("-",)):
+        if i in frame or (doc[i].is_punct and lower(doc[i]) not in ("-", "%")):
             if current:
                 runs.append(current)
             current = []

@@ -123,7 +123,9 @@ def count_of(doc: Doc, run: Sequence[int]) -> Count:
     words = [_lower(doc[i]) for i in run]
     for i in run:
         token = doc[i]
-        if token.tag_ == "CD" and token.like_num and _lower(token) != "one" and token.dep_ == "nummod":
+        percent = token.i + 1 < len(doc) and _lower(doc[token.i + 1]) in ("%", "percent", "per")
+        number = token.tag_ == "CD" and token.like_num and _lower(token) != "one"
+        if number and token.dep_ == "nummod" and not percent:
             try:
                 return max(1, int(token.text))
             except ValueError:
@@ -150,6 +152,10 @@ def count_of(doc: Doc, run: Sequence[int]) -> Count:
 def criterion_text(doc: Doc, run: Sequence[int]) -> str:
     """The criterion's words: the run without leading determiners and quantifiers."""
     kept = _stripped(doc, run)
+    # "anything that's poisonous": what the relative clause says
+    relative = len(kept) > 2 and _lower(doc[kept[0]]) in ("that", "which", "who")
+    if relative and doc[kept[1]].lemma_ in ("be", "'s"):
+        kept = kept[2:]
     if not kept:
         return ""
     text = doc[kept[0] : kept[-1] + 1].text

@@ -4,7 +4,7 @@ make", "is there something for my sore throat you could hand me?" (step 2 of
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 from conceptbot.pipeline.goal.mentions import Mention
@@ -33,11 +33,14 @@ def desire_verb(doc: Doc, first: int, end: int, lets: bool) -> Token | None:
         if token.lemma_ == "go" and speaker and wishing:
             return token  # "I could really go for a PB&J"
         if token.lemma_ in vocab["desire"] and token.tag_.startswith("VB") and speaker:
-            if token.lemma_ == "have" and not _wishes_to_have(token, subject, lets):
-                continue
+            if token.lemma_ == "have" and not (_wishes_to_have(token, subject, lets) or _asks(token)):
+                continue  # "I'll have a PB&J" is a wish; "I have a cold" is not
             return token
+        if token.lemma_ in vocab["receiving_asked"] and token.tag_ == "VB" and speaker and _asks(token):
+            return token  # "could I borrow something to write with?", "I'll take the tape measure"
         phrase = _wishing_phrase(doc, token, end)
-        if phrase is not None and any(_lower(t) in ("i", "we") for t in doc[first:end] if t.dep_ == "nsubj"):
+        wishers = ("i", "we", "who", "anyone", "anybody", "everyone")  # "who's up for pancakes?"
+        if phrase is not None and any(_lower(t) in wishers for t in doc[first:end] if t.dep_ == "nsubj"):
             return phrase  # "I'm in the mood for an omelette": the phrase's preposition
         if _lower(token) == "about" and token.i > first and _lower(doc[token.i - 1]) == "how":
             return token
@@ -60,9 +63,10 @@ def _other_wish(token: Token, subject: list[Token], speaker: bool) -> Token | No
     if not token.tag_.startswith("VB"):
         return None
     # the meal is the subject (or, misparsed, a noun phrase before the verb: "Lunch today should be")
+    # "dessert tonight is going to be X": the subject is the head's
+    said = [*token.children, *(token.head.children if token.dep_ == "xcomp" else ())]
     meal = any(
-        c.lemma_.lower() in vocab["meals"] and c.i < token.i and c.dep_ in ("nsubj", "npadvmod")
-        for c in token.children
+        c.lemma_.lower() in vocab["meals"] and c.i < token.i and c.dep_ in ("nsubj", "npadvmod") for c in said
     )
     if token.lemma_ == "be" and meal and any(c.dep_ == "attr" for c in token.children):
         return token
@@ -79,6 +83,17 @@ def _other_wish(token: Token, subject: list[Token], speaker: bool) -> Token | No
         if token.lemma_ == "beat" and any(c.dep_ == "dobj" for c in token.children):
             return token
     return None
+
+
+def _asks(token: Token) -> bool:
+    """Whether the speaker's verb asks to receive: "could/can/may I ...?" (the modal first), or "I'll
+    ..." ("I'll take the tape measure")."""
+    modals = [c for c in token.children if c.tag_ == "MD"]
+    subject = next((c for c in token.children if c.dep_ == "nsubj"), None)
+    if subject is None:
+        return False
+    asked = any(_lower(m) in ("could", "can", "may", "might") and m.i < subject.i for m in modals)
+    return asked or any(_lower(m) in ("'ll", "will") and m.i > subject.i for m in modals)
 
 
 def _wishes_to_have(token: Token, subject: list[Token], lets: bool) -> bool:
@@ -206,3 +221,48 @@ def existential(
                 theme = tuple(i for i in range(first + 2, you.i) if not doc[i].is_punct)
                 return (theme, Place(person, tuple(range(you.i, end)))) if theme else None
     return None
+
+
+def offered(doc: Doc, first: int, end: int) -> tuple[int, ...] | None:
+    """ "Have you got something for it?", "do you have any plasters?", "got a pen?": what the speaker
+    asks to be given; else None."""
+    words = [_lower(t) for t in doc[first : min(end, first + 3)]]
+    at = -1
+    if words[:3] in (["have", "you", "got"], ["do", "you", "have"], ["you", "got", "any"]):
+        at = first + (3 if words[:3] != ["you", "got", "any"] else 2)
+    elif words[:2] in (["got", "any"], ["got", "a"], ["got", "an"], ["got", "some"], ["you", "got"]):
+        at = first + 1 if words[0] == "got" else first + 2
+    if at < 0 or at >= end:
+        return None
+    theme = tuple(i for i in range(at, end) if not doc[i].is_punct)
+    thing = any(doc[i].tag_.startswith("NN") or _lower(doc[i]) in ("something", "anything") for i in theme)
+    return theme if thing else None
+
+
+def recipient_question(
+    doc: Doc, first: int, end: int, mentions: Sequence[Mention], is_person: Callable[[str], bool]
+) -> tuple[tuple[int, ...], Place] | None:
+    """ "Could the dog have a treat?", "can she get something to play with?": a question whose
+    subject is a person or an animal of the scene asks for something to be given to them; the thing
+    and the person, else None."""
+    vocab = vocabulary()
+    modal = first < end and doc[first].tag_ == "MD"
+    if not modal or _lower(doc[first]) not in [*vocab["question"], "may"]:
+        return None
+    verb = next((t for t in doc[first + 1 : end] if t.tag_ == "VB"), None)
+    if verb is None or verb.lemma_ not in ("have", "get", "keep"):
+        return None
+    person = next(
+        (
+            m
+            for m in mentions
+            if first < m.start < verb.i
+            and m.kind != "object"
+            and (m.kind == "person" or any(is_person(n) for n in m.names))
+        ),
+        None,
+    )
+    if person is None:
+        return None
+    theme = tuple(i for i in range(verb.i + 1, end) if not doc[i].is_punct)
+    return (theme, Place(person, tuple(range(first, verb.i + 1)))) if theme else None
