@@ -415,6 +415,13 @@ def _analysed(
     if any(p.frame for p in places):
         # "set out a game for us to play on the coffee table": "for us to play" is the criterion's
         places = [p for p in places if p.frame]
+    favour = [
+        p for p in places if p.mention.kind == "person" and p.frame and _lower(doc[min(p.frame)]) == "for"
+    ]
+    if favour and len(favour) < len(places):
+        # "set the hair dryer on the side of the tub for me": done for the person, put in the place
+        frame |= {i for p in favour for i in p.frame}
+        places = [p for p in places if p not in favour]
     if verb >= 0 and not places:
         inverted = inverted_place(doc, verb, end, mine, frame)
         places = [inverted] if inverted is not None else []
@@ -510,12 +517,14 @@ def inverted_place(
     doc: Doc, verb: int, end: int, mentions: Sequence[Mention], frame: set[int]
 ) -> Place | None:
     """ "Load the tote bag with the groceries", "reward the dog with a treat": the verb's object is
-    the destination when "with" and what is sent follow it."""
+    the destination when "with" and what is sent follow it; so is "use the mixed bin for X"."""
+    reserving = doc[verb].lemma_ in ("use", "reserve", "save", "keep")
     for mention in mentions:
         if mention.kind == "object":
             continue
         j = _determiners_before(doc, mention.start, verb + 1, mentions)
-        if j == verb + 1 and mention.end + 1 < end and _lower(doc[mention.end]) == "with":
+        joined = _lower(doc[mention.end]) if mention.end + 1 < end else ""
+        if j == verb + 1 and (joined == "with" or (reserving and joined == "for")):
             return Place(mention, (*range(j, mention.end + 1),))
     return None
 

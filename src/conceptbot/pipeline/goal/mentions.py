@@ -1,10 +1,11 @@
 """Where a request names the scene's objects, destinations and people, as noun phrases.
 
 A scene name matches a run of tokens spelling it (case-insensitive; its last word also in the plural:
-"bins" for "bin") only where that run ends a noun phrase: "dog" does not match in "the dog biscuit",
-nor "toddler" in "the toddler's reach" (a possessor is not a destination). Longer names are matched
-first and each token belongs to one mention ("non-toxic tray" before "toxic tray"). A plural head
-names several destinations: "the wood, metal and fabric bins" the bins whose other words it has,
+"bins" for "bin"; a one-word compound destination also by its last part: "the tub" for "bathtub")
+only where that run ends a noun phrase: "dog" does not match in "the dog biscuit", nor "toddler" in
+"the toddler's reach" (a possessor is not a destination). Longer names are matched first and each
+token belongs to one mention ("non-toxic tray" before "toxic tray"). A plural head names several
+destinations: "the wood, metal and fabric bins" the bins whose other words it has,
 "the recycling bins" (no such words) every bin.
 
 People: "me" names the destination ``user`` where the scene has one, a people word ("my son", "the
@@ -87,6 +88,23 @@ def _names(doc: Doc, scene: Scene, spelled: dict[str, list[str]], used: list[boo
             if head_ok and _ends_phrase(doc, end):
                 found.append(Mention((name,), start, end, kinds[name]))
                 used[start:end] = [True] * len(key)
+    return found + _shortened(doc, kinds, spelled, used)
+
+
+def _shortened(
+    doc: Doc, kinds: dict[str, str], spelled: dict[str, list[str]], used: list[bool]
+) -> list[Mention]:
+    """A one-word compound name said by its last part ("the tub" for "bathtub", "the box" for
+    "toolbox"), where that part is a noun of three letters or more that ends no other scene name."""
+    found = []
+    for token in doc:
+        word = token.lemma_.lower()
+        if used[token.i] or token.pos_ != "NOUN" or len(word) < 3 or not _ends_phrase(doc, token.i + 1):
+            continue
+        names = [n for n in kinds if len(spelled[n]) == 1 and spelled[n][0].endswith(word)]
+        if len(names) == 1 and spelled[names[0]][0] != word and kinds[names[0]] in ("place", "both"):
+            found.append(Mention((names[0],), token.i, token.i + 1, kinds[names[0]]))
+            used[token.i] = True
     return found
 
 

@@ -202,7 +202,8 @@ def _merged(doc: Doc, pieces: list[Chunk], mentions: Sequence[Mention]) -> list[
             if not verbs and not place and not opens_with_verb(doc, piece, mentions):
                 prev.end = piece.end  # "and the eraser", "please"
                 continue
-            if not verbs and place and not prev_place and not _statement_like(doc, prev, mentions):
+            wants = _statement_like(doc, prev, mentions) and not _wants(doc, prev)
+            if not verbs and place and not prev_place and not wants:
                 prev.end = piece.end  # "put the hammer | and the screwdriver in the toolbox"
                 continue
             subjects = [c for v in verbs for c in v.children if c.dep_ in ("nsubj", "nsubjpass")]
@@ -316,6 +317,17 @@ def _statement_like(doc: Doc, chunk: Chunk, mentions: Sequence[Mention]) -> bool
     for token in doc[chunk.start : chunk.end]:
         subject = token.dep_ in ("nsubj", "nsubjpass") and token.text.lower() in personal - {"you"}
         if subject and token.head.dep_ not in ("relcl", "acl"):
+            return True
+    return False
+
+
+def _wants(doc: Doc, chunk: Chunk) -> bool:
+    """Whether a chunk is the speaker's "I want/I'd like X" ("I want the socks | and the towel in
+    the washing machine": one phrase)."""
+    for token in doc[chunk.start : chunk.end]:
+        if token.lemma_ in ("want", "like") and any(
+            c.dep_ == "nsubj" and c.text.lower() in ("i", "we") for c in token.children
+        ):
             return True
     return False
 

@@ -490,6 +490,9 @@ def antecedent(
     number ("I'm looking for something to write with"), as the phrase's tokens."""
     found: tuple[int, ...] = ()
     chunk = clause.chunk
+    asked = _asked_which(doc, chunk.start, chunk.end)
+    if asked:
+        return asked  # "Which things are paper through and through? Those go in the paper bin."
     named = [m for m in mentions if m.kind in ("object", "both") and chunk.start <= m.start < chunk.end]
     if named and plural:
         return tuple(range(named[0].start, named[-1].end))  # "the socks and the towel ...; load them"
@@ -505,8 +508,24 @@ def antecedent(
     return found
 
 
+def _asked_which(doc: Doc, start: int, end: int) -> tuple[int, ...]:
+    """What a "which/what ... is/are X?" question asks about: X ("which things are paper through and
+    through?"); () for any other chunk."""
+    if start >= end or doc[start].text.lower() not in ("which", "what", "whichever", "whatever"):
+        return ()
+    be = next((t for t in doc[start:end] if t.lemma_ == "be"), None)
+    if be is None:
+        return ()
+    return tuple(i for i in range(be.i + 1, end) if not doc[i].is_punct)
+
+
 def _pronoun_only(doc: Doc, run: Sequence[int]) -> bool:
-    return not run or all(doc[i].text.lower() in ("it", "them", "they", "one", "these", "those") for i in run)
+    """Whether a theme is only a pronoun ("it", "them both", "all of them"), or empty."""
+    pronouns = ("it", "them", "they", "one", "these", "those")
+    words = [doc[i].text.lower() for i in run]
+    return not run or (
+        all(w in (*pronouns, "both", "all", "of") for w in words) and any(w in pronouns for w in words)
+    )
 
 
 def _without_headers(items: list[_Item], vocab: dict) -> list[_Item]:
