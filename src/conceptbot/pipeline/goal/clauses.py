@@ -74,7 +74,7 @@ def _opened(doc: Doc, chunk: Chunk) -> tuple[int, bool, bool]:
             i = topic  # "as for the throw pillow": the topic of the next clause
         elif word in vocab["question"] and nxt == "you":
             i += 2
-        elif word == "mind" and i + 1 < chunk.end and doc[i + 1].tag_ == "VBG":
+        elif word == "mind" and i + 1 < chunk.end and _lower(doc[i + 1]).endswith("ing"):
             i += 1  # "would you mind grabbing ...", "mind passing ..."
         elif word == "let" and nxt in ("'s", "’s", "us"):
             i, lets = i + 2, True
@@ -118,8 +118,10 @@ def _imperative(doc: Doc, at: int, end: int, mentions: Sequence[Mention], openin
     }
     if word in closed or token.dep_ in ("nsubj", "nsubjpass"):
         return -1, negated
+    consequence = at > 0 and _lower(doc[at - 1]) in ("so", "then")  # "..., so put it somewhere safe"
     if (
         token.dep_ == "conj"
+        and not consequence
         and token.head.dep_ not in ("relcl", "acl")
         and _lower(doc[token.head.left_edge.i]) not in vocab["conditional"]  # "if X would ..., lock it"
         and not (token.tag_ == "VB" and token.head.tag_ in ("VBD", "VBZ", "VBN"))  # "X's been good, so let"
@@ -127,7 +129,9 @@ def _imperative(doc: Doc, at: int, end: int, mentions: Sequence[Mention], openin
     ):
         return -1, negated  # "I fell off my bike | and scraped my knee": the subject is shared
     minded = at > 0 and _lower(doc[at - 1]) == "mind"  # "(would you) mind grabbing a drink?"
-    if token.tag_ in ("VB", "VBP", "VBD") or (token.tag_ == "VBG" and (not opening or minded)):
+    if minded and word.endswith("ing"):
+        return at, negated
+    if token.tag_ in ("VB", "VBP", "VBD") or (token.tag_ == "VBG" and not opening):
         return at, negated
     if token.tag_ in ("NNS", "NNPS", "VBG"):
         return -1, negated  # a plural noun is no imperative ("Houseplants that are ...")
@@ -213,6 +217,8 @@ def place_role(
     rest = [i for i in range(first, end) if i not in frame and not doc[i].is_punct]
     if not rest:
         return tuple(frame)  # "coffee table" alone: a fragment naming a place
+    if mention.kind == "person" and _lower(doc[mention.end - 1]) == "way":
+        return tuple(frame)  # "send the hairbrush my way"
     prev = doc[j - 1] if j - 1 >= first else None
     nxt = doc[mention.end] if mention.end < end else None
     if prev is not None and _lower(prev) in vocab["spatial"]:
@@ -276,6 +282,13 @@ def _key(doc: Doc, first: int, end: int, mentions: Sequence[Mention]) -> tuple[s
             k += 1
         if k > j:
             return "by " + " ".join(_lower(t) for t in doc[j:k]), list(range(i, k))
+        made = [_lower(t) for t in doc[j : min(end, j + 5)]]
+        if ("made" in made and made[-1] == "of") or made[:4] in (
+            ["it", "'s", "made", "of"],
+            ["they", "'re", "made", "of"],
+        ):
+            stop = j + made.index("of") + 1
+            return "by material", list(range(i, stop))  # "by what they're made of"
     return "", []
 
 
@@ -499,6 +512,8 @@ def imperative_clause(
         frame |= {c.i for c in doc[verb].children if c.tag_ == "VBN" and c.dep_ in ("ccomp", "xcomp", "oprd")}
     runs = _runs(list(range(verb + 1, end)), frame, doc)
     theme = next((r for r in runs if nominal(doc, r)), ())
+    if theme and _lower(doc[theme[0]]) in ("it", "them"):
+        theme = (theme[0],)  # "put it somewhere safe": an object pronoun takes no modifier
     if places and theme and theme[0] < min(places[0].frame or (end,)):
         joined = [r for r in runs if r[0] > theme[-1] and _lower(doc[r[0] - 1]) in ("and", ",")]
         theme = (*theme, *(i for r in joined for i in r if _names_object(r, mentions)))
@@ -524,7 +539,10 @@ def inverted_place(
             continue
         j = _determiners_before(doc, mention.start, verb + 1, mentions)
         joined = _lower(doc[mention.end]) if mention.end + 1 < end else ""
-        if j == verb + 1 and (joined == "with" or (reserving and joined == "for")):
+        after = verb + 1
+        while after < j and _lower(doc[after]) in vocabulary()["particles"]:
+            after += 1  # "load up the washing machine with ..."
+        if j == after and (joined == "with" or (reserving and joined == "for")):
             return Place(mention, (*range(j, mention.end + 1),))
     return None
 

@@ -117,7 +117,7 @@ def _groups(doc: Doc, scene: Scene, spelled: dict[str, list[str]], used: list[bo
     found = []
     for token in doc:
         group = heads.get(token.lemma_.lower())
-        if used[token.i] or not group or token.text.lower() == token.lemma_.lower():
+        if used[token.i] or not group or token.text.lower() == token.lemma_.lower() or token.tag_ == "VBG":
             continue
         if not _ends_phrase(doc, token.i + 1):
             continue
@@ -152,6 +152,12 @@ def _people(doc: Doc, scene: Scene, people: dict[str, list[str]], used: list[boo
                 continue
             found.append(Mention((name,), token.i, token.i + 1, "person"))
             used[token.i] = True
+    if "user" in [d.lower() for d in scene.destinations]:
+        user = next(d for d in scene.destinations if d.lower() == "user")
+        for token in doc[1:]:
+            if token.text.lower() == "way" and doc[token.i - 1].text.lower() == "my" and not used[token.i]:
+                found.append(Mention((user,), token.i - 1, token.i + 1, "person"))  # "send it my way"
+                used[token.i - 1 : token.i + 1] = [True, True]
     return found
 
 

@@ -308,8 +308,11 @@ def is_stacking(doc: Doc) -> bool:
             return True
         if lemma in words["nouns"] and token.pos_ == "NOUN":
             head = token.head
-            if token.dep_ == "pobj" and head.text.lower() in ("into", "in", "as"):
-                return True
+            made = any(c.text.lower() in ("one", "a", "single") for c in token.children)
+            if token.dep_ == "pobj" and (
+                head.text.lower() in ("into", "as") or (head.text.lower() == "in" and made)
+            ):
+                return True  # "into a pile", "in one pile"; not "everything else in this pile"
             if token.dep_ == "dobj" and head.lemma_ in ("make", "build", "form", "create"):
                 return True
     return False
@@ -415,6 +418,27 @@ def _items(
             and not _names_itself(doc, clause.theme, mentions)
         ):
             continue  # "make me a PB&J": a dish, not a thing to hand over
+        if clause.form == "imperative" and not places and _says_pronoun(doc, clause):
+            # "hand it over", "put those in", "put it somewhere safe": what "it" is, the clause
+            # before says; handing it is to the speaker
+            handed = clause.verb in vocab["handing"] and users
+            if items and items[-1].places and not handed:
+                continue  # said twice: "the paper bin is for X; put those in"
+            said = tuple(i for r in clause.runs for i in r)
+            theme = items[-1].theme if items else ()
+            if not theme and n:
+                theme = antecedent(doc, clauses[n - 1], mentions, _plural(doc, said))
+                if not handed and not objects_in(theme, mentions):
+                    continue  # "we'll want a green salad; can you set that up?": a dish, not a thing
+            if items and not items[-1].places:
+                items.pop()
+            if theme:
+                items.append(_Item(clause, [tuple(users)] if handed else [], theme, clause.key))
+            continue
+        if clause.form == "fragment" and not places and items and items[-1].places and _also(doc, clause):
+            # "fetch me the ruler. Oh, and the eraser as well."; "...; the hammer too."
+            items.append(_Item(clause, items[-1].places, clause.theme, items[-1].key))
+            continue
         if clause.form == "imperative" and not places:
             if clause.verb in (*vocab["making"], *vocab["desire"], *vocab["helping"]):
                 continue
@@ -472,6 +496,21 @@ def _items(
         items.append(_Item(clause, places, theme, clause.key or pending))
         pending = ""
     return _without_headers(items, vocab)
+
+
+def _says_pronoun(doc: Doc, clause: Clause) -> bool:
+    """Whether a clause sends only a pronoun ("hand it over", "put those in")."""
+    said = [i for r in clause.runs for i in r]
+    return (bool(said) and not clause.theme) or (bool(clause.theme) and _pronoun_only(doc, clause.theme))
+
+
+def _also(doc: Doc, clause: Clause) -> bool:
+    """Whether a place-less fragment adds objects to the clause before: it names objects and says
+    "too", "also" or "as well", or opens with "and"."""
+    words = [doc[i].text.lower() for i in range(clause.chunk.start, clause.chunk.end)]
+    text = " " + " ".join(words) + " "
+    added = any(f" {w} " in text for w in vocabulary()["also"]) or "and" in words[:3]
+    return added and bool(clause.theme) and any(doc[i].tag_.startswith("NN") for i in clause.theme)
 
 
 def _plural(doc: Doc, run: Sequence[int]) -> bool | None:

@@ -135,8 +135,10 @@ def count_of(doc: Doc, run: Sequence[int]) -> Count:
         mass = {*vocab["mass"], *MATERIALS}
         if noun.tag_ == "NN" and noun.lemma_.lower() not in mass and _lower(noun) not in mass:
             return 1
-    if any(w in vocab["quantifiers"] for w in words):
-        return ALL
+    head_at = _head(doc, _stripped(doc, run))
+    ahead = [w for i, w in zip(run, words, strict=True) if head_at is None or i <= head_at.i]
+    if any(w in vocab["quantifiers"] for w in ahead):
+        return ALL  # "all the toys"; not "a game we can both play"
     start = next((w for w in words if w not in vocab["restrictors"]), "")
     if start in vocab["one"]:
         return 1
