@@ -31,11 +31,16 @@ from dataclasses import replace
 from pathlib import Path
 
 from conceptbot.bench.grading import load_dev_scene
+from conceptbot.core.config import load_settings
 from conceptbot.core.scene import Scene
+from conceptbot.knowledge.registry import open_graph
 from conceptbot.models.fake import FakeLLM
+from conceptbot.models.registry import open_embedder
+from conceptbot.pipeline.decide import FactFinder
 from conceptbot.pipeline.goal import ALL as GOAL_ALL
 from conceptbot.pipeline.goal import Goal, GoalReader, GoalTarget, same_goal
 from conceptbot.pipeline.hazards import is_person
+from conceptbot.pipeline.retrieval import RelationRetriever, default_theta
 from conceptbot.pipeline.targets import ALL, Target, TargetFinder, is_stacking
 
 GOAL_SET = Path(__file__).parent / "data" / "goal_set.json"
@@ -84,6 +89,15 @@ def _as_goal_target(target: Target) -> GoalTarget:
     return GoalTarget(to, "criterion", named, criterion, count)
 
 
+def graph_reader() -> GoalReader:
+    """The goal reader as ``conceptbot plan`` builds it: the installed graph tells dishes."""
+    settings = load_settings()
+    graph = open_graph(settings, fallback=False)
+    embedder = open_embedder(settings, None)
+    facts = FactFinder(RelationRetriever(graph, embedder, default_theta(embedder.model)))
+    return GoalReader(is_dish=facts.may_be_dish, find_dish=facts.dish_concept)
+
+
 def _structure(goal: Goal) -> Goal:
     """The goal without its criteria's words."""
     return replace(goal, targets=tuple(replace(t, criterion="") for t in goal.targets))
@@ -93,9 +107,15 @@ def main() -> None:
     """Print the figures and the failures."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--failures", choices=["reader", "finder", "both", "none"], default="both")
+    parser.add_argument(
+        "--no-graph",
+        action="store_true",
+        help="read without the graph's dish checks (the no-graph ablation's reader, and the tests')",
+    )
     args = parser.parse_args()
     rows = json.loads(GOAL_SET.read_text(encoding="utf-8"))["requests"]
-    reader = GoalReader()
+    reader = GoalReader() if args.no_graph else graph_reader()
+    print(f"goal reader {'without' if args.no_graph else 'with'} the graph's dish checks\n")
     tally: dict[tuple[str, str], list[int]] = {}
     failures: dict[str, list[str]] = {"reader": [], "finder": []}
     for row in rows:

@@ -134,7 +134,12 @@ class ConceptBot:
         )
         # The request's structure from its parse; the graph tells a dish to make from other things
         # wished for ("I'd love an omelette" / "I'd love a drink").
-        reader = GoalReader(is_dish=facts.may_be_dish if retriever is not None else None, is_person=is_person)
+        graphed = retriever is not None
+        reader = GoalReader(
+            is_dish=facts.may_be_dish if graphed else None,
+            is_person=is_person,
+            find_dish=facts.dish_concept if graphed else None,
+        )
         self.goal_planner = GoalPlanner(
             GoalFinder(
                 reader,

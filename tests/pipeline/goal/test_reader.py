@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import pytest
@@ -456,3 +457,46 @@ def test_lists_for_two_places_stay_apart(reader: GoalReader) -> None:
         _DESK,
         _named("cupboard", "notebook", "plum", "water bottle"),
     )
+
+
+def _graph_knows(*dishes: str) -> Callable[[str, Sequence[str]], str | None]:
+    """A stand-in for ``FactFinder.dish_concept``: these words are dishes."""
+    return lambda phrase, pickable: next((d for d in dishes if d in phrase.lower()), None)
+
+
+def test_a_dish_the_graph_knows_is_read_where_the_rules_find_no_target(reader: GoalReader) -> None:
+    knowing = GoalReader(reader.nlp, find_dish=_graph_knows("dip"))
+    read = knowing.read("We're getting peckish: let's round off the evening with a dip.", PANTRY)
+    assert read.dish == "dip" and [t.takes for t in read.targets] == ["ingredients"]
+    # the same request without the graph is a need; a measure word or an activity is no dish
+    assert reader.read("We're getting peckish: let's round off the evening with a dip.", PANTRY).dish is None
+    slicing = GoalReader(reader.nlp, find_dish=_graph_knows("slice", "time"))
+    assert slicing.read("I'd like to cut the lime into slices.", PANTRY).dish is None
+    assert slicing.read("It's time for me to do the washing up.", PANTRY).dish is None
+
+
+def test_a_placed_target_wins_over_a_dish_in_its_words(reader: GoalReader) -> None:
+    knowing = GoalReader(reader.nlp, find_dish=_graph_knows("cracker", "olive"))
+    _is(knowing, "Put the cracker on the chopping board.", PANTRY, _named("chopping board", "cracker"))
+
+
+def test_requests_put_as_questions_send_to_who_asks_or_is_named(reader: GoalReader) -> None:
+    _is(
+        reader,
+        "May I borrow something crunchy?",
+        PANTRY,
+        GoalTarget("user", "criterion", (), "something crunchy", 1),
+    )
+    _is(
+        reader,
+        "Could the dog have something to chew?",
+        KENNEL,
+        GoalTarget("dog", "criterion", (), "something to chew", 1),
+    )
+    _is(
+        reader,
+        "Got something to brush him with?",
+        KENNEL,
+        GoalTarget("user", "criterion", (), "something to brush him with", 1),
+    )
+    _is(reader, "Would you mind passing the dog lead my way?", KENNEL, _named("user", "dog lead"))

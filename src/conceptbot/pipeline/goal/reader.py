@@ -77,6 +77,9 @@ class GoalReader:
             ``en_core_web_sm``, loaded on first use).
         is_dish: Whether a phrase names a dish to prepare (a graph check); None: trust the parse.
         is_person: Whether a destination is a person or an animal (things are handed to it).
+        find_dish: The graph's dish for a phrase (the phrase and the scene's pickable objects in, the
+            dish's concept or None out), for a request the rules read no placed target in ("Could
+            we get started on some guacamole?"); None: no such reading.
     """
 
     def __init__(
@@ -84,10 +87,12 @@ class GoalReader:
         nlp: Language | None = None,
         is_dish: Callable[[str], bool] | None = None,
         is_person: Callable[[str], bool] = default_is_person,
+        find_dish: Callable[[str, Sequence[str]], str | None] | None = None,
     ) -> None:
         self._nlp = nlp
         self.is_dish = is_dish
         self.is_person = is_person
+        self.find_dish = find_dish
         self._spelled: dict[str, list[str]] = {}
 
     @property
@@ -144,6 +149,13 @@ class GoalReader:
             targets = [_stacked(doc, clauses, mentions)]
         if not targets and not stack:
             targets, dish = self._wished(doc, clauses, mentions, scene)
+        unplaced = all(t.to is None and t.takes == "criterion" for t in targets)
+        if unplaced and not stack and self.find_dish is not None:
+            # with no target, or only place-less descriptions ("finish the meal with a fruit
+            # salad"), a dish the graph knows is what the request asks for
+            found, named_dish = self._dish_named(doc, mentions, scene)
+            if found:
+                targets, dish = found, named_dish
         if not targets and not stack:
             need = request.strip().rstrip(".!?")
             targets = [GoalTarget(None, "need")]
@@ -189,6 +201,27 @@ class GoalReader:
             return [GoalTarget(None, "ingredients", objects_in(made, mentions), "", ALL)], dish_words(
                 doc, made
             )
+        return [], None
+
+    def _dish_named(
+        self, doc: Doc, mentions: list[Mention], scene: Scene
+    ) -> tuple[list[GoalTarget], str | None]:
+        """A dish the graph knows, said as the object of a verb or a preposition in a request with no
+        other reading ("let's finish the meal with a fruit salad", "I've got a craving for pancakes"):
+        its words in the request, its ingredients to a place the planner chooses."""
+        assert self.find_dish is not None
+        pickable = [o.name for o in scene.objects if o.pickable]
+        for token in doc:
+            if not token.tag_.startswith("NN") or token.dep_ not in ("dobj", "pobj", "attr", "conj", "appos"):
+                continue
+            if any(m.covers(token.i) for m in mentions) or token.lemma_.lower() in vocabulary()["measure"]:
+                continue  # "cut this baguette into slices": a measure, not a dish
+            if any(t.tag_ == "TO" for t in token.subtree):
+                continue  # "it's time for me to brush my teeth": what follows is an activity
+            phrase = tuple(t.i for t in token.subtree if not t.is_punct)
+            words = dish_words(doc, phrase)
+            if words and self.find_dish(words, pickable):
+                return [GoalTarget(None, "ingredients", objects_in(phrase, mentions), "", ALL)], words
         return [], None
 
 

@@ -230,8 +230,14 @@ def offered(doc: Doc, first: int, end: int) -> tuple[int, ...] | None:
     at = -1
     if words[:3] in (["have", "you", "got"], ["do", "you", "have"], ["you", "got", "any"]):
         at = first + (3 if words[:3] != ["you", "got", "any"] else 2)
-    elif words[:2] in (["got", "any"], ["got", "a"], ["got", "an"], ["got", "some"], ["you", "got"]):
-        at = first + 1 if words[0] == "got" else first + 2
+    elif words[:2] == ["you", "got"]:
+        at = first + 2
+    elif (
+        words[:1] == ["got"]
+        and len(words) > 1
+        and words[1] in ("a", "an", "any", "some", "anything", "something")
+    ):
+        at = first + 1
     if at < 0 or at >= end:
         return None
     theme = tuple(i for i in range(at, end) if not doc[i].is_punct)
