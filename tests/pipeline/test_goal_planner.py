@@ -323,11 +323,36 @@ def test_a_stack_puts_the_best_base_at_the_bottom() -> None:
         {"pickable_objects": ["cup", "brick", "box"], "destinations": ["cup", "brick", "box"]}
     )
     scores = [[-1.0, -1.0], [-3.0, -0.1], [-0.1, -3.0], [-0.5, -1.5]]  # base: prior, cup, brick, box
+    scores += [[-1.0, -1.0], [-2.0, -1.0], [-2.0, -1.0], [-2.0, -1.0]]  # fragile: none of them
     scores += [PRIOR, SAFE] * 2
     result = _planner(scores).plan("Stack them", scene)
     assert result.actions == ["pick_and_place(box, brick)", "pick_and_place(cup, box)", "done()"]
     assert result.trace.stack is not None
     assert [o.object for o in result.trace.stack.order] == ["brick", "box", "cup"]
+
+
+def test_a_stack_puts_fragile_things_on_top_and_wide_things_low() -> None:
+    scene = scene_from_dict(
+        {
+            "pickable_objects": ["egg box", "atlas", "notebook"],
+            "destinations": ["egg box", "atlas", "notebook"],
+            "detections": {
+                "egg box": {"size_m": [0.3, 0.1, 0.07]},
+                "atlas": {"size_m": [0.4, 0.3, 0.05]},
+                "notebook": {"size_m": [0.2, 0.15, 0.02]},
+            },
+        }
+    )
+    # the model calls the egg box the best base and the notebook better than the atlas
+    scores = [[-1.0, -1.0], [-0.1, -3.0], [-1.5, -0.5], [-0.5, -1.5]]  # base: prior, egg box, atlas, notebook
+    scores += [[-1.0, -1.0], [-0.1, -3.0], [-3.0, -0.1], [-3.0, -0.1]]  # fragile: the egg box only
+    scores += [PRIOR, SAFE] * 2
+    result = _planner(scores).plan("Pile these up", scene)
+    assert result.actions == [
+        "pick_and_place(notebook, atlas)",
+        "pick_and_place(egg box, notebook)",
+        "done()",
+    ]
 
 
 def test_conceptbot_uses_the_goal_planner_when_asked() -> None:

@@ -66,6 +66,9 @@ class TargetReader(Protocol):
 TOP_K = 6
 NAMED = 10.0  # the score of an object the request names: above any decided one
 BASE = "a sturdy object with a flat top that other things can safely be stacked on"
+#: What goes on top of a pile, whatever its size: the graph states it of many things ("egg
+#: HasProperty fragile", "glass HasProperty breakable"), so the combination weighs that evidence.
+FRAGILE = "fragile"
 
 
 @dataclass(frozen=True)
@@ -471,7 +474,11 @@ class GoalPlanner:
         asked: list[str],
     ) -> tuple[list[tuple[str, str]], StackTrace | None]:
         """Bottom-up moves for a pile of the objects that can both be moved and carry another, and
-        the pile's order for the trace (None when there is nothing to pile)."""
+        the pile's order for the trace (None when there is nothing to pile).
+
+        Fragile things go on top (the model's answer combined with what the graph states); below
+        them the larger footprint lower down where the scene gives sizes, then the better base by
+        the model's judgement."""
         named = [o for _, o in mentions(request, scene.pickable)]
         stackable = [o for o in scene.pickable if scene.get(o).destination]  # type: ignore[union-attr]
         items = [o for o in named if o in stackable]
@@ -479,14 +486,18 @@ class GoalPlanner:
         if len(items) < 2:
             return [], None
         judgements, _, used = self.decider.fits(request, BASE, items, scene, combine=False)
-        usage["decide"] = usage["decide"] + used
-        asked.extend(j.scoring for j in judgements)
+        fragile, _, used_fragile = self.decider.fits(request, FRAGILE, items, scene)
+        usage["decide"] = usage["decide"] + used + used_fragile
+        asked.extend(j.scoring for j in (*judgements, *fragile))
+        breaks = {j.subject for j in fragile if j.score > self.thresholds.combined}
 
-        def volume(name: str) -> float:
+        def footprint(name: str) -> float:
             size = scene.get(name).size_m  # type: ignore[union-attr]
-            return size[0] * size[1] * size[2] if size else 0.0
+            return size[0] * size[1] if size else 0.0
 
-        order = sorted(judgements, key=lambda j: (-round(j.score, 1), -volume(j.subject)))
+        order = sorted(
+            judgements, key=lambda j: (j.subject in breaks, -footprint(j.subject), -round(j.score, 1))
+        )
         bottom_up = [j.subject for j in order]
         moves = [(upper, lower) for lower, upper in itertools.pairwise(bottom_up)]
         return moves, StackTrace(BASE, tuple(judgement_trace(j) for j in order))

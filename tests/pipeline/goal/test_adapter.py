@@ -2,6 +2,7 @@ from __future__ import annotations
 
 import pytest
 
+from conceptbot.core.scene import scene_from_dict
 from conceptbot.models.fake import FakeLLM
 from conceptbot.pipeline.goal import Goal, GoalTarget, to_targets
 from conceptbot.pipeline.goal.adapter import ScoredChooser
@@ -67,16 +68,35 @@ def test_open_targets_need_a_chooser_except_a_need() -> None:
 
 
 def test_the_scored_chooser_asks_the_target_finder_s_question() -> None:
-    # per destination: the request's yes/no log-probs, then the content-free request's
-    llm = FakeLLM(scores=[[-0.1, -2.0], [-1.0, -1.0], [-1.0, -1.0], [-1.0, -1.0], [-3.0, -0.1], [-1.0, -1.0]])
+    # per destination: the request's yes/no log-probs, then the content-free request's; the user is
+    # a person, never a place the request left open, so it is not asked about
+    llm = FakeLLM(scores=[[-0.1, -2.0], [-1.0, -1.0], [-3.0, -0.1], [-1.0, -1.0]])
     chooser = ScoredChooser(TargetFinder(llm, is_person), "Throw away the broken shells.")
     places = chooser(GoalTarget(None, "criterion", (), "broken shells"), SHELLS)
     assert places == [("shoe box", pytest.approx(1.9))]
     assert (
-        len(llm.score_requests) == 6
+        len(llm.score_requests) == 4
         and "Throw away the broken shells." in llm.score_requests[0].messages[1].content
+        and not any("user" in r.messages[1].content.split("\n")[-1] for r in llm.score_requests)
     )
     assert chooser(GoalTarget(None, "need"), SHELLS) == [("user", 0.0)]
+
+
+def test_a_place_left_open_is_never_a_person() -> None:
+    # "put the safety pins out of the toddler's reach": scored as the best place, the toddler is
+    # still not where they go
+    scene = scene_from_dict(
+        {
+            "name": "nursery",
+            "objects": ["safety pins", "toddler", "top shelf"],
+            "pickable_objects": ["safety pins"],
+            "destinations": ["toddler", "top shelf"],
+        }
+    )
+    llm = FakeLLM(scores=[[-0.1, -2.0], [-1.0, -1.0]])
+    chooser = ScoredChooser(TargetFinder(llm, is_person), "Put the safety pins out of the toddler's reach.")
+    assert [p for p, _ in chooser(GoalTarget(None, "named", ("safety pins",), "", 1), scene)] == ["top shelf"]
+    assert len(llm.score_requests) == 2
 
 
 def test_names_with_marks_are_read_as_their_words_and_planned_with_their_own_spelling() -> None:

@@ -205,11 +205,11 @@ def test_the_goal_set_is_read(reader: GoalReader) -> None:
         key = row["split"] if row["split"] == "original" else f"round {row['round']}"
         results.setdefault(key, []).append(same_goal(read, Goal.from_dict(row["goal"])).ok)
     assert all(results["original"])
-    # Rounds 1-5 were tuned on (each after its blind run); round 6 is blind after all of that (131/170
+    # Rounds 1-5 were tuned on (each after its blind run), round 6 too after its blind run (131/170
     # when written): the floors keep what was reached from slipping.
     tuned = [ok for r in (1, 2, 3, 4, 5) for ok in results[f"round {r}"]]
     assert sum(tuned) / len(tuned) >= 0.95
-    assert sum(results["round 6"]) >= 131
+    assert sum(results["round 6"]) >= 140
 
 
 # Structures that paraphrase round 4 exposed (our own sentences and scenes).

@@ -16,7 +16,10 @@ right):
 * ``remainder``: ``rest=True``, every object left.
 * ``ingredients``: ``ingredients=True``, ``dish`` and the criterion "an ingredient of <dish>".
 * ``need``: one object (``TargetFinder``'s rule for a need of the speaker's: right on 13 of the 14
-  dev needs; "brush my teeth" needs two).
+  dev needs; "brush my teeth" needs two), decided by the move question and the name ranking. Judged
+  instead against "helps when <the need>" with the fitted combination (the judgement set's
+  question: 88% per object), the dev needs fell from 10/21 to 8/21 (2026-12-02): a yes/no per
+  object ranks the one that helps worse than the name ranking does.
 * ``all``: every object. A stacking goal gives no targets: the planner piles the objects itself.
 """
 
@@ -108,7 +111,8 @@ class ScoredChooser:
     """Chooses an open target's destinations with the model, as ``TargetFinder`` does for a request
     that names none: each destination scored "should the robot put things in the X?" minus the same
     for a content-free request; the best, and (except for a dish, made in one place) those above the
-    finder's threshold. A need goes to the user where the scene has one (the speaker).
+    finder's threshold. A need goes to the user where the scene has one (the speaker); any other
+    open target goes to a place, never to a person or an animal (the goal names those it hands to).
 
     Args:
         finder: Its LLM, ``is_person``, threshold and food knowledge are used.
@@ -130,6 +134,10 @@ class ScoredChooser:
         if target.takes == "need" and _users(scene):
             return [(_users(scene)[0], 0.0)]
         candidates = list(scene.destinations)
+        if target.takes != "need":
+            # A place the request leaves open is a place ("put the pill bottle out of the toddler's
+            # reach", "throw away the poisonous ones"): whoever it hands things to, it names.
+            candidates = [d for d in candidates if not self.finder.is_person(d)] or candidates
         making = target.takes == "ingredients"
         if making and self.finder.food is not None:
             candidates = self.finder.food.prep_places(candidates) or candidates
