@@ -11,6 +11,8 @@ accuracy per kind of:
 * ``graph``: the evidence features alone;
 * ``combined``: model + evidence (the default system's combination);
 * ``combined+plain``: also the question without facts (one more question per object);
+* ``combined+inter``: also the readings without facts, and every reading and statement per kind of
+  criterion (measured, not shipped: a point above ``combined`` for one more question per object);
 * ``nokg``: the question without facts and the name features (the no-graph ablation's combination).
 
     .venv/bin/python benchmarks/fit_judgements.py [--readings FILE] [--write]
@@ -48,6 +50,17 @@ STATED = (
     "model*is_safe",
     "model*is_poison",
 )
+#: The criterion's kind, as the evidence reads it from the criterion's words.
+KIND_FLAGS = ("is_poison", "is_food", "is_safe", "is_material", "is_several", "is_dish")
+#: Each reading (with facts, and without: ``plain_*``) and each statement, per kind of criterion.
+INTERACTIONS = (
+    *(f"{m}*{k}" for m in ("model_z", "model_gap", "plain_z", "plain_gap") for k in KIND_FLAGS),
+    *(
+        f"{f}*{k}"
+        for f in ("own_yes", "own_no", "kind_yes", "kind_no", "name_yes", "name_no")
+        for k in KIND_FLAGS
+    ),
+)
 VARIANTS = {
     "model": None,
     "model-fit": ("model",),
@@ -56,6 +69,9 @@ VARIANTS = {
     "combined": tuple(dict.fromkeys((*GROUP, *FEATURES))),
     "combined+kinds": tuple(dict.fromkeys((*GROUP, *FEATURES, *STATED))),
     "combined+plain": tuple(dict.fromkeys((*GROUP, "plain", *FEATURES, *STATED))),
+    "combined+inter": tuple(
+        dict.fromkeys((*GROUP, "plain", "plain_z", "plain_gap", *FEATURES, *INTERACTIONS))
+    ),
     "nokg": tuple(dict.fromkeys((*GROUP, *GRAPH_FREE))),
 }
 #: The combinations shipped: the default system's and the no-graph ablation's.
@@ -109,6 +125,26 @@ def add_group_readings(rows: list[dict]) -> None:
         for r in members:
             r.update(with_facts[r["object"]])
             r.update({f"nokg_{k}": v for k, v in without[r["object"]].items()})
+            r.update({f"plain{k[len('model') :]}": v for k, v in without[r["object"]].items()})
+
+
+def coverage(rows: list[dict]) -> None:
+    """Per kind: how often the graph states something of the object itself (its edges, gloss or
+    name) and how often that is right; how often only something of its kind (an IsA parent's)."""
+    print(f"\n{'kind':16} {'n':>4} {'own':>5} {'right':>6} {'kind':>5} {'right':>6} {'none':>5}")
+    for kind in [*sorted({r["kind"] for r in rows}), "all"]:
+        chosen = [r for r in rows if kind in ("all", r["kind"])]
+        yes = {id(r): r.get("own_yes", 0) + r.get("name_yes", 0) for r in chosen}
+        no = {id(r): r.get("own_no", 0) + r.get("name_no", 0) for r in chosen}
+        own = [r for r in chosen if yes[id(r)] or no[id(r)]]
+        own_right = sum((yes[id(r)] > no[id(r)]) == bool(r["y"]) for r in own)
+        only_kind = [r for r in chosen if r not in own and (r.get("kind_yes") or r.get("kind_no"))]
+        kind_right = sum((r.get("kind_yes", 0) > r.get("kind_no", 0)) == bool(r["y"]) for r in only_kind)
+        print(
+            f"{kind:16} {len(chosen):>4} {len(own):>5} {own_right / max(1, len(own)):>6.0%} "
+            f"{len(only_kind):>5} {kind_right / max(1, len(only_kind)):>6.0%} "
+            f"{len(chosen) - len(own) - len(only_kind):>5}"
+        )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -155,6 +191,7 @@ def main(argv: list[str] | None = None) -> int:
     for v in ("model", "graph", "combined"):
         right = (predicted[v][stated] == y[stated]).mean() if stated.any() else 0.0
         print(f"  {v} right on {right:.1%} of them")
+    coverage(rows)
     if args.errors:
         for r, p in zip(rows, predicted["combined"], strict=True):
             if p != r["y"]:
