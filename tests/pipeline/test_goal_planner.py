@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from conceptbot.core.scene import scene_from_dict
+from conceptbot.core.scene import Scene, scene_from_dict
 from conceptbot.core.usage import Usage
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.conceptbot import ConceptBot
@@ -398,3 +398,37 @@ def test_the_rest_takes_every_object_no_other_target_took_without_being_asked_ab
     ]
     edible = next(d for d in result.trace.decisions if d.target.to == "edible tray")
     assert not edible.decided and len(llm.score_requests) == len(scores)
+
+
+class _FixedTargets:
+    """A target reader that returns the targets it was given (the reader is tested on its own)."""
+
+    def __init__(self, targets: list[Target]) -> None:
+        self.targets = targets
+
+    def read(self, request: str, scene: Scene) -> tuple[bool, list[Target], Usage]:
+        return False, list(self.targets), Usage(calls=0)
+
+
+def test_two_targets_for_one_place_each_take_their_own_objects() -> None:
+    # "Bring me the chips and something to eat with": both targets are the user's; the second's
+    # ranking must not replace the first's (the chips were lost, and two decided objects went)
+    targets = [Target("user", 1, "named", ["chips"]), Target("user", 1, "named", [])]
+    scores = [
+        PRIOR,  # "give ... to the user": the content-free object
+        [-0.1, -3.0],  # scissors: yes
+        [-0.5, -1.5],  # safety scissors: lean yes
+        [-3.0, -0.1],  # glue: no
+        [-1.0, -2.0, -4.0],  # the name ranking of the three, for the request
+        [-2.0, -2.0, -2.0],  # and for the neutral request
+        PRIOR,
+        SAFE,  # chips to the user
+        PRIOR,
+        SAFE,  # scissors to the user
+    ]
+    llm = FakeLLM(scores=scores)
+    planner = GoalPlanner(_FixedTargets(targets), Decider(llm, FactFinder(None)))
+    result = planner.plan("Bring me the chips and something to cut with", SCENE)
+    assert result.actions == ["pick_and_place(chips, user)", "pick_and_place(scissors, user)", "done()"]
+    assert [c.action for c in result.steps[0].candidates][:1] == ["pick_and_place(chips, user)"]
+    assert "pick_and_place(chips, user)" not in [c.action for c in result.steps[1].candidates]

@@ -230,7 +230,7 @@ class GoalPlanner:
         observer.event("decisions", {"decisions": [d.to_dict() for d in decisions]})
         pile: StackTrace | None = None
         if stack:
-            moves, pile = self._stack(request, scene, ranked, usage, asked)
+            moves, pile = self._stack(request, scene, usage, asked)
             ranked = {}
         blocked: set[tuple[str, str]] = set()
         checks: dict[tuple[str, str], RiskCheck] = {}
@@ -263,7 +263,19 @@ class GoalPlanner:
         risk = tuple(checks.values())
         vetoes = tuple(c.veto for c in risk if c.veto is not None)
         observer.event("risk", {"checks": [c.to_dict() for c in risk]})
-        steps = self._steps(moves, ranked, scene, properties, asked[-1] if asked else "")
+        # Each move's candidates, for the steps: those of the target that took it (two targets may
+        # share a place: "bring me the chips and something to wipe a spill" are both the user's).
+        candidates: dict[tuple[str, str], list[Judgement]] = {}
+        for obj, place in moves:
+            candidates[(obj, place)] = next(
+                (
+                    ranked[number]
+                    for number, target in enumerate(targets)
+                    if target.name == place and any(j.subject == obj for j in ranked.get(number, []))
+                ),
+                [],
+            )
+        steps = self._steps(moves, candidates, scene, properties, asked[-1] if asked else "")
         for step in steps:
             observer.event("step", step.to_dict())
         refused = not moves and bool(blocked)
@@ -274,17 +286,18 @@ class GoalPlanner:
 
     def _decide(
         self, request: str, scene: Scene, targets: list[Target], stack: bool, observer: Observer
-    ) -> tuple[dict[str, list[Judgement]], tuple[DecisionTrace, ...], Usage]:
-        """Per target: the named objects first, then every other object as decided, best first."""
+    ) -> tuple[dict[int, list[Judgement]], tuple[DecisionTrace, ...], Usage]:
+        """Per target (by its position: two may share a place): the named objects first, then every
+        other object as decided, best first."""
         usage = Usage(calls=0)
-        ranked: dict[str, list[Judgement]] = {}
+        ranked: dict[int, list[Judgement]] = {}
         decisions = []
         named_anywhere = {o for t in targets for o in t.named}
-        for target in targets:
+        for number, target in enumerate(targets):
             named = [Judgement(o, target.name, 1.0, NAMED) for o in target.named]
             needs_more = target.count == ALL or target.count > len(target.named)
             if stack or not needs_more or target.rest:  # the rest is what others leave: not asked
-                ranked[target.name] = named
+                ranked[number] = named
                 decisions.append(DecisionTrace(target_trace(target), decided=False))
                 continue
             others = [o for o in scene.pickable if o != target.name and o not in named_anywhere]
@@ -309,7 +322,7 @@ class GoalPlanner:
                 usage = usage + used
                 yes_no, named_z = _standardised(order), _standardised(names)
                 order = {o: yes_no[o] + self.thresholds.name_weight * named_z[o] for o in order}
-            ranked[target.name] = named + sorted(judgements, key=lambda j: -order[j.subject])
+            ranked[number] = named + sorted(judgements, key=lambda j: -order[j.subject])
             decisions.append(
                 DecisionTrace(
                     target_trace(target),
@@ -325,7 +338,7 @@ class GoalPlanner:
     def _choose(
         self,
         targets: list[Target],
-        ranked: dict[str, list[Judgement]],
+        ranked: dict[int, list[Judgement]],
         blocked: set[tuple[str, str]],
         pickable: list[str],
     ) -> list[tuple[str, str]]:
@@ -337,10 +350,12 @@ class GoalPlanner:
         judged = [t for t in targets if not t.rest]
         sorting = len(judged) >= 2 and all(t.count == ALL for t in judged)
         fit = self.thresholds.partition if sorting else self.thresholds.fit
-        for target in (t for t in targets if not t.rest):
+        for number, target in enumerate(targets):
+            if target.rest:
+                continue
             taken = 0
             skipped = 0
-            for judgement in ranked.get(target.name, []):
+            for judgement in ranked.get(number, []):
                 obj = judgement.subject
                 if (obj, target.name) in blocked:
                     skipped += 1
@@ -351,7 +366,7 @@ class GoalPlanner:
                 if judgement.model is not None and target.count == ALL and not sorting:
                     limit = self.thresholds.combined  # a fitted probability: above one half
                 elif target.ingredients and target.count == ALL:
-                    best = ranked[target.name][0].score if ranked[target.name] else 0.0
+                    best = ranked[number][0].score if ranked[number] else 0.0
                     limit = best - self.thresholds.ingredients
                 if judgement.score <= limit or (target.count != ALL and taken >= target.count):
                     break
@@ -469,7 +484,6 @@ class GoalPlanner:
         self,
         request: str,
         scene: Scene,
-        ranked: dict[str, list[Judgement]],
         usage: dict[str, Usage],
         asked: list[str],
     ) -> tuple[list[tuple[str, str]], StackTrace | None]:
@@ -505,18 +519,18 @@ class GoalPlanner:
     def _steps(
         self,
         moves: list[tuple[str, str]],
-        ranked: dict[str, list[Judgement]],
+        ranked: dict[tuple[str, str], list[Judgement]],
         scene: Scene,
         properties: dict[str, ObjectProperties],
         scoring: str,
     ) -> list[Step]:
-        """One step per move; its candidates are the target's best objects (for the CLI and the page);
-        ``scoring`` is how the backend scored the plan's questions."""
+        """One step per move; its candidates are the best objects of the target that took it (for the
+        CLI and the page); ``scoring`` is how the backend scored the plan's questions."""
         steps = []
         for number, (obj, target) in enumerate(moves, 1):
             chosen = str(Action(obj, target))
             candidates = []
-            for judgement in ranked.get(target, [])[:TOP_K]:
+            for judgement in ranked.get((obj, target), [])[:TOP_K]:
                 action = Action(judgement.subject, target)
                 s_aff, factors = affordance(action, scene, properties, [], self.gripper)
                 p = judgement.p_yes
