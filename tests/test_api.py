@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 import conceptbot
+from conceptbot.core.plan import format_actions
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.models.registry import open_store
 from tests.pipeline.fakes import DictGraph, properties_reply, urp_reply
@@ -34,10 +35,10 @@ def test_a_planner_from_backend_objects_plans_with_them() -> None:
         "paper", llm=llm, graph=graph, embedder=FakeEmbedder(), options=ONE_VOTE
     )
     result = planner.plan("Bring me an apple", conceptbot.scene_from_dict(SCENE))
-    assert result.actions == ["pick_and_place(apple, user)", "done()"]
+    assert format_actions(result.actions) == ["pick_and_place(apple, user)", "done()"]
     assert result.refused is False and result.reason is None
     assert (
-        result.to_dict()["plan"] == result.actions
+        result.to_dict()["plan"] == format_actions(result.actions)
         and result.trace.ope is not None
         and result.trace.urp is not None
     )
@@ -52,7 +53,7 @@ def test_a_planner_from_settings_with_a_backend_spec(tmp_path: Path) -> None:
     replies.write_text(json.dumps([*OPE, *URP, *STEPS]))
     planner = conceptbot.open_planner("paper-nokg", llm=f"fake:{replies}", options=ONE_VOTE, use_cache=False)
     result = planner.plan("Bring me an apple", conceptbot.load_scene(_scene_file(tmp_path)))
-    assert result.actions == ["pick_and_place(apple, user)", "done()"]
+    assert format_actions(result.actions) == ["pick_and_place(apple, user)", "done()"]
     assert set(result.to_dict()["usage"]) == {"ope", "urp", "planner", "total"}
 
 
@@ -64,7 +65,7 @@ def test_settings_passed_in_take_the_overrides(tmp_path: Path) -> None:
         "paper-nokg", settings=settings, llm=f"fake:{replies}", options=ONE_VOTE, home=tmp_path / "other"
     )
     result = planner.plan("Bring me an apple", conceptbot.load_scene(_scene_file(tmp_path)))
-    assert result.actions == ["pick_and_place(apple, user)", "done()"]
+    assert format_actions(result.actions) == ["pick_and_place(apple, user)", "done()"]
     assert (tmp_path / "other" / "cache.db").is_file()  # the cache went to the overriding home
 
 

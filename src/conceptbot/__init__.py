@@ -30,6 +30,10 @@ _EXPORTS: dict[str, str] = {
     "scene_from_dict": "conceptbot.core.scene",
     "Scene": "conceptbot.core.scene",
     "Plan": "conceptbot.core.plan",
+    "PickAndPlace": "conceptbot.core.plan",
+    "Done": "conceptbot.core.plan",
+    "format_actions": "conceptbot.core.plan",
+    "read_actions": "conceptbot.core.plan",
     "Observer": "conceptbot.core.observe",
     "Callbacks": "conceptbot.core.observe",
     "FanOut": "conceptbot.core.observe",
@@ -51,19 +55,23 @@ __all__ = [  # the names of _EXPORTS, written out for tools that read __all__ wi
     "Callbacks",
     "ConceptBotError",
     "ConfigError",
+    "Done",
     "Embedder",
     "FanOut",
     "KnowledgeGraph",
     "Observer",
+    "PickAndPlace",
     "Plan",
     "PlannerSystem",
     "Scene",
     "Settings",
     "SystemOptions",
     "__version__",
+    "format_actions",
     "load_scene",
     "load_settings",
     "open_planner",
+    "read_actions",
     "scene_from_dict",
 ]
 
@@ -72,7 +80,7 @@ if TYPE_CHECKING:  # the same names for type checkers and editors, which do not 
     from conceptbot.core.config import Settings, load_settings
     from conceptbot.core.errors import ConceptBotError, ConfigError
     from conceptbot.core.observe import Callbacks, FanOut, Observer
-    from conceptbot.core.plan import Plan
+    from conceptbot.core.plan import Done, PickAndPlace, Plan, format_actions, read_actions
     from conceptbot.core.scene import Scene, scene_from_dict
     from conceptbot.knowledge.base import KnowledgeGraph
     from conceptbot.models.embedder import Embedder

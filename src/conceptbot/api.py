@@ -7,7 +7,8 @@ instead of going through the CLI or the web page. Everything here is also at the
 
     planner = conceptbot.open_planner()  # the settings of `conceptbot plan`
     result = planner.plan("I would like a hollandaise sauce", conceptbot.load_scene("kitchen"))
-    result.actions    # ['pick_and_place(...)', ..., 'done()']
+    result.actions    # (PickAndPlace("butter", "ceramic bowl"), ..., Done())
+    conceptbot.format_actions(result.actions)  # ['pick_and_place(butter, ceramic bowl)', ..., 'done()']
     result.refused, result.reason, result.trace
     result.to_dict()  # the JSON object `conceptbot plan --json` prints
 

@@ -3,6 +3,7 @@ import math
 import pytest
 
 from conceptbot.baselines.saycan import DONE_AFFORDANCE, SayCan
+from conceptbot.core.plan import format_actions
 from conceptbot.core.scene import scene_from_dict
 from conceptbot.models.fake import FakeLLM
 from tests.pipeline.fakes import Recorder, spill_scene
@@ -22,7 +23,7 @@ def test_scores_are_llm_probability_times_binary_affordance_normalised() -> None
     logprobs = [math.log(p) for p in (0.1, 0.4, 0.05, 0.05, 0.05, 0.05, 0.3)]
     llm = FakeLLM(scores=[logprobs, [0.0 if o == "done()" else -9.0 for o in OPTIONS]])
     plan = SayCan(llm).plan("Bring me chips", spill_scene())
-    assert plan.actions == ["pick_and_place(chips, user)", "done()"]
+    assert format_actions(plan.actions) == ["pick_and_place(chips, user)", "done()"]
     first = {c.action: c for c in plan.steps[0].candidates}
     total = 0.1 + 0.4 + 4 * 0.05 + 0.3 * DONE_AFFORDANCE
     assert first["pick_and_place(chips, user)"].combined == pytest.approx(0.4 / total)
@@ -51,14 +52,15 @@ def test_undetected_objects_get_zero_affordance() -> None:
     )
     llm = FakeLLM(scores=[[0.0, -5.0]])
     plan = SayCan(llm).plan("apple", scene)
-    assert plan.actions == ["done()"] and plan.steps[0].candidates[0].action == "done()"
+    assert format_actions(plan.actions) == ["done()"] and plan.steps[0].candidates[0].action == "done()"
 
 
 def test_feedback_makes_failed_options_infeasible_and_keeps_executed_steps() -> None:
-    from conceptbot.core.plan import Feedback, valid_actions
+    from conceptbot.core.plan import Feedback, PickAndPlace, valid_actions
 
     scene = spill_scene()
-    order = [str(a) for a in valid_actions(scene)]
+    actions = valid_actions(scene)
+    order = [str(a) for a in actions]
     best = order.index("pick_and_place(chips, user)")
     second = order.index("pick_and_place(sponge, user)")
     scores = [[0.0 if i == best else (-0.5 if i == second else -9.0) for i in range(len(order))]]
@@ -66,9 +68,13 @@ def test_feedback_makes_failed_options_infeasible_and_keeps_executed_steps() -> 
     plan = SayCan(FakeLLM(scores=scores)).plan(
         "r",
         scene,
-        feedback=Feedback(executed=["pick_and_place(knife, table)"], failed=[(order[best], "slipped")]),
+        feedback=Feedback(executed=(PickAndPlace("knife", "table"),), failed=((actions[best], "slipped"),)),
     )
-    assert plan.actions == ["pick_and_place(knife, table)", "pick_and_place(sponge, user)", "done()"]
+    assert format_actions(plan.actions) == [
+        "pick_and_place(knife, table)",
+        "pick_and_place(sponge, user)",
+        "done()",
+    ]
 
 
 def test_each_step_is_announced_and_reported_to_the_observer() -> None:

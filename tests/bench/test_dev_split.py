@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import re
 from collections import Counter
+from collections.abc import Sequence
 from pathlib import Path
 
 import pytest
@@ -14,29 +15,35 @@ from conceptbot.bench.grading import (
     CATEGORIES,
     SPLITS,
     Task,
+    Verdict,
     dev_scene_names,
-    grade,
     load_dev_scene,
     load_tasks,
     reference_plan,
     task_scene,
 )
+from conceptbot.bench.grading import grade as grade_actions
 from conceptbot.bench.report import markdown, summarise
 from conceptbot.bench.results import load_records
 from conceptbot.bench.runner import Job, run
 from conceptbot.core.errors import ConfigError
-from conceptbot.core.plan import Plan
+from conceptbot.core.plan import Action, Done, PickAndPlace, Plan, read_action
 from conceptbot.core.usage import Usage
 from conceptbot.scenes import demo_scene_names, load_demo_scene
 from tests.bench.test_grading import widest_plan
 
-DONE = "done()"
+DONE = Done()
 DEV = load_tasks(split="dev")
 TEST = load_tasks()
 
 
-def pp(obj: str, target: str) -> str:
-    return f"pick_and_place({obj}, {target})"
+def pp(obj: str, target: str) -> PickAndPlace:
+    return PickAndPlace(obj, target)
+
+
+def grade(task: Task, plan: Sequence[Action | str], refused: bool = False) -> Verdict:
+    """The grader, with a gold file's texts read as actions first."""
+    return grade_actions(task, [read_action(a) if isinstance(a, str) else a for a in plan], refused)
 
 
 def words(text: str) -> str:
@@ -143,7 +150,7 @@ def test_dev_files_are_validated(tmp_path: Path, monkeypatch: pytest.MonkeyPatch
         "category": "toxic",
         "request": "r",
         "scene": "dev-tmp",
-        "gold": {"type": "any_of", "plans": [[pp("cup", "user")]]},
+        "gold": {"type": "any_of", "plans": [["pick_and_place(cup, user)"]]},
         "notes": "",
     }
 
@@ -157,7 +164,7 @@ def test_dev_files_are_validated(tmp_path: Path, monkeypatch: pytest.MonkeyPatch
         for changes, why in [
             ({"id": "toxic-1"}, "must start with 'dev-toxic-'"),
             ({"scene": "kitchen"}, "unknown dev scene 'kitchen'"),
-            ({"gold": {"type": "any_of", "plans": [[pp("cup", "table")]]}}, "invalid gold"),
+            ({"gold": {"type": "any_of", "plans": [["pick_and_place(cup, table)"]]}}, "invalid gold"),
         ]:
             write({**entry, **changes})
             with pytest.raises(ConfigError, match=re.escape(why)):

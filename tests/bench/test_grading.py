@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from collections import Counter
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -21,23 +22,48 @@ from conceptbot.bench.grading import (
     task_scene,
 )
 from conceptbot.core.errors import ConfigError
+from conceptbot.core.plan import Action, Done, InvalidActionError, PickAndPlace, format_action, read_action
 
-DONE = "done()"
+DONE = Done()
 
 
-def pp(obj: str, target: str) -> str:
-    """The text of one pick_and_place action."""
-    return f"pick_and_place({obj}, {target})"
+def pp(obj: str, target: str) -> PickAndPlace:
+    """One pick_and_place action."""
+    return PickAndPlace(obj, target)
+
+
+def actions(plan: Sequence[Action | str]) -> list[Action | str]:
+    """The plan with its texts (a gold file's, a literal's) read as actions; text that is no action
+    stays text, which the grader rejects."""
+    out: list[Action | str] = []
+    for item in plan:
+        try:
+            out.append(read_action(item) if isinstance(item, str) else item)
+        except InvalidActionError:
+            out.append(item)
+    return out
 
 
 def make(gold: dict[str, Any], scene: str = "kitchen", task_id: str = "test-1") -> Task:
-    """A hand-made task on a demo scene."""
-    return Task(task_id, "test", "a request", scene, gold, "")
+    """A hand-made task on a demo scene; its actions written as a task file writes them."""
+    return Task(task_id, "test", "a request", scene, _as_written(gold), "")
 
 
-def check(task: Task, plan: list[str], expected: str | None = None, refused: bool = False) -> Verdict:
+def _as_written(value: Any) -> Any:
+    if isinstance(value, PickAndPlace | Done):
+        return format_action(value)
+    if isinstance(value, dict):
+        return {k: _as_written(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_as_written(v) for v in value]
+    return value
+
+
+def check(
+    task: Task, plan: Sequence[Action | str], expected: str | None = None, refused: bool = False
+) -> Verdict:
     """Grade; with ``expected`` the plan must fail with that text in the reason, else it must pass."""
-    verdict = grade(task, plan, refused=refused)
+    verdict = grade(task, actions(plan), refused=refused)  # type: ignore[arg-type]
     if expected is None:
         assert verdict.ok, verdict.reason
     else:
@@ -116,7 +142,7 @@ def test_action_after_done_fails_for_every_gold(task: Task) -> None:
     plan = reference_plan(task)
     extra = plan[0] if len(plan) > 1 else DONE
     verdict = check(task, [*plan, extra], "action after done(): ")
-    assert verdict.reason.endswith(extra)
+    assert verdict.reason.endswith(str(extra))
 
 
 def test_duplicate_action_fails() -> None:
@@ -155,7 +181,7 @@ def test_self_placement_is_invalid() -> None:
 def test_refusing_a_feasible_task_fails_for_every_non_refuse_gold() -> None:
     for task in (CHIPS_SPONGE, FRUIT, STACK_ANY_OF, STACK_ASSIGN, PAPER, CHOOSE):
         verdict = check(task, [DONE], "refused a feasible task: ", refused=True)
-        assert reference_plan(task)[0] in verdict.reason
+        assert str(reference_plan(task)[0]) in verdict.reason
 
 
 # any_of --------------------------------------------------------------------------------------------

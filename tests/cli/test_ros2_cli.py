@@ -14,7 +14,7 @@ from click.testing import CliRunner
 from conceptbot.cli.main import cli, main
 from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConceptBotError
-from conceptbot.core.plan import Plan
+from conceptbot.core.plan import Done, PickAndPlace, Plan
 from conceptbot.core.scene import Scene
 from conceptbot.ros2 import ROS2_MISSING
 from conceptbot.ros2.client import send_request
@@ -88,7 +88,7 @@ class Mover:
         if observer is not None:
             observer.progress(f"moving for {request!r}")
             observer.event("step", {"index": 1})
-        return Plan([f"pick_and_place({scene.pickable[0]}, {scene.destinations[0]})", "done()"])
+        return Plan([PickAndPlace(scene.pickable[0], scene.destinations[0]), Done()])
 
 
 def test_send_prints_progress_and_the_result(

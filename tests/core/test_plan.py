@@ -1,12 +1,24 @@
 import pytest
 
-from conceptbot.core.plan import Action, InvalidActionError, parse_action, valid_actions
+from conceptbot.core.plan import (
+    Done,
+    InvalidActionError,
+    PickAndPlace,
+    Plan,
+    check_action,
+    format_action,
+    format_actions,
+    parse_action,
+    read_action,
+    read_actions,
+    valid_actions,
+)
 from tests.pipeline.fakes import spill_scene
 
 
 def test_parse_maps_to_the_scene_spelling() -> None:
     scene = spill_scene()
-    assert parse_action("1. pick_and_place( Sponge , USER )", scene) == Action("sponge", "user")
+    assert parse_action("1. pick_and_place( Sponge , USER )", scene) == PickAndPlace("sponge", "user")
     assert parse_action("done()", scene).is_done
     assert (
         str(parse_action("I choose pick_and_place(chips, table).", scene)) == "pick_and_place(chips, table)"
@@ -50,9 +62,9 @@ def test_valid_actions_cover_every_pair_plus_done() -> None:
 
 
 def test_a_plan_built_by_hand_has_an_empty_trace_and_the_schema_ships_with_the_package() -> None:
-    from conceptbot.core.plan import DONE, Plan, plan_schema
+    from conceptbot.core.plan import plan_schema
 
-    data = Plan([DONE]).to_dict()
+    data = Plan([Done()]).to_dict()
     assert data == {
         "plan": ["done()"],
         "steps": [],
@@ -66,3 +78,30 @@ def test_a_plan_built_by_hand_has_an_empty_trace_and_the_schema_ships_with_the_p
     assert schema["required"] == ["plan", "steps", "refused", "reason", "trace", "usage"]
     schema["required"].clear()  # each call is a fresh copy: a caller's edit does not leak
     assert plan_schema()["required"]
+
+
+def test_actions_round_trip_through_their_one_text_form() -> None:
+    scene = spill_scene()
+    for action in valid_actions(scene):
+        text = format_action(action)
+        assert read_action(text) == action and parse_action(text, scene) == action and str(action) == text
+    plan = (PickAndPlace("chips", "user"), PickAndPlace("sponge", "user"), Done())
+    assert read_actions(format_actions(plan)) == plan
+    assert format_actions(plan) == ["pick_and_place(chips, user)", "pick_and_place(sponge, user)", "done()"]
+    # unchecked reading keeps the names as written; checking maps them to the scene's spelling
+    assert read_action("pick_and_place( Sponge , USER )") == PickAndPlace("Sponge", "USER")
+    assert check_action(PickAndPlace("Sponge", "USER"), scene) == PickAndPlace("sponge", "user")
+    with pytest.raises(InvalidActionError, match="not an action"):
+        read_action("bring the chips")
+    with pytest.raises(InvalidActionError, match="object not in the scene"):
+        check_action(PickAndPlace("banana", "user"), scene)
+
+
+def test_a_plan_holds_typed_actions_only() -> None:
+    plan = Plan([PickAndPlace("chips", "user"), Done()])
+    assert plan.actions == (PickAndPlace("chips", "user"), Done()) and plan.to_dict()["plan"] == [
+        "pick_and_place(chips, user)",
+        "done()",
+    ]
+    with pytest.raises(TypeError, match="PickAndPlace or Done"):
+        Plan(["pick_and_place(chips, user)", "done()"])  # type: ignore[list-item]

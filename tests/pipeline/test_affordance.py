@@ -1,6 +1,6 @@
 import pytest
 
-from conceptbot.core.plan import Action
+from conceptbot.core.plan import Done, PickAndPlace
 from conceptbot.core.scene import SceneObject
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.affordance import (
@@ -51,10 +51,10 @@ def test_risk_scores_are_scaled_and_interactions_count_both_ways() -> None:
 
 def test_affordance_multiplies_factors_and_zeroes_repeats() -> None:
     scene = spill_scene()
-    total, factors = affordance(Action("knife", "user"), scene, {}, [])
+    total, factors = affordance(PickAndPlace("knife", "user"), scene, {}, [])
     assert factors == {"pick": 0.9, "place": 1.0, "bbox": 1.0, "prop": 1.0} and total == pytest.approx(0.9)
-    assert affordance(Action("knife", "user"), scene, {}, ["pick_and_place(knife, user)"])[0] == 0.0
-    assert affordance(Action(), scene, {}, []) == (1.0, {})
+    assert affordance(PickAndPlace("knife", "user"), scene, {}, [PickAndPlace("knife", "user")])[0] == 0.0
+    assert affordance(Done(), scene, {}, []) == (1.0, {})
 
 
 def test_property_scores_are_relative_to_the_safest_open_move() -> None:

@@ -3,6 +3,7 @@ import json
 import pytest
 
 from conceptbot.core.errors import ConfigError
+from conceptbot.core.plan import format_actions
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.conceptbot import ConceptBot
 from conceptbot.pipeline.retrieval import RelationRetriever
@@ -33,7 +34,11 @@ def test_full_pipeline_with_relations_properties_and_refusal_free_plan() -> None
     llm = FakeLLM(replies, scores=scores)
     bot, _ = _bot(llm)
     plan = bot.plan("Bring me chips and something to wipe a spill", spill_scene())
-    assert plan.actions == ["pick_and_place(chips, user)", "pick_and_place(sponge, user)", "done()"]
+    assert format_actions(plan.actions) == [
+        "pick_and_place(chips, user)",
+        "pick_and_place(sponge, user)",
+        "done()",
+    ]
     assert not plan.refused
     # OPE prompt carried the object's kept relations; the knife got its property.
     ope_prompt = llm.requests[2].messages[-1].content
@@ -71,7 +76,11 @@ def test_refusal_gives_done_only_with_a_reason() -> None:
     ]
     llm = FakeLLM(replies, scores=[])
     plan = _bot(llm)[0].plan("Give the knife to the baby", spill_scene())
-    assert plan.refused and plan.actions == ["done()"] and plan.reason == "a knife can hurt a child"
+    assert (
+        plan.refused
+        and format_actions(plan.actions) == ["done()"]
+        and plan.reason == "a knife can hurt a child"
+    )
     assert plan.steps == [] and llm.score_requests == []
 
 
@@ -87,7 +96,7 @@ def test_nokg_uses_no_graph_and_urp_config_skips_ope() -> None:
         scores=[[-9.0, 0.0] + [-9.0] * 5, [-9.0] * 6 + [0.0]],
     )
     plan2 = _bot(llm2, "urp")[0].plan("chips please", spill_scene())
-    assert plan2.trace.ope is None and plan2.actions[0] == "pick_and_place(chips, user)"
+    assert plan2.trace.ope is None and format_actions(plan2.actions)[0] == "pick_and_place(chips, user)"
 
 
 def test_empty_request_is_rejected() -> None:

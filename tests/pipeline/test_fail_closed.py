@@ -13,7 +13,7 @@ import math
 import pytest
 
 from conceptbot.core.errors import ModelOutputError
-from conceptbot.core.plan import valid_actions
+from conceptbot.core.plan import format_actions, valid_actions
 from conceptbot.core.scene import scene_from_dict
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.models.llm import ScoreRequest
@@ -48,7 +48,7 @@ def test_the_step_planner_never_hands_over_what_ope_rates_five_for_that_recipien
     # The paper's S_prop only discounts: 0.104 x a unanimous vote beat every alternative at 0.
     llm = FakeLLM(_knife_replies(["pick_and_place(knife, child)", "done()"]))
     plan = _paper_bot(llm, config=config).plan("give the knife to the child", TINY, risk=True)
-    assert plan.actions == ["done()"]
+    assert format_actions(plan.actions) == ["done()"]
     assert plan.refused and "pick_and_place(knife, child): vetoed" in (plan.reason or "")
     vetoes = plan.trace.vetoes or ()
     assert [(v.move, v.source) for v in vetoes] == [("pick_and_place(knife, child)", "ope")]
@@ -68,7 +68,7 @@ def test_a_vetoed_move_scores_zero_and_the_planner_takes_the_next_allowed_one() 
     plan = _paper_bot(FakeLLM(replies, scores=[first, second])).plan(
         "give the child something", TINY, risk=True
     )
-    assert plan.actions == ["pick_and_place(apple, child)", "done()"] and not plan.refused
+    assert format_actions(plan.actions) == ["pick_and_place(apple, child)", "done()"] and not plan.refused
     vetoed = next(c for c in plan.steps[0].candidates if c.action == "pick_and_place(knife, child)")
     assert vetoed.factors["veto"] == 0.0 and vetoed.combined == 0.0
 
@@ -81,7 +81,7 @@ def test_the_graph_vetoes_a_hand_over_the_model_calls_safe() -> None:
     llm = FakeLLM(scores=[PRIOR, SAFE])  # the model answers "Yes, it is safe"
     bot = ConceptBot(llm, RelationRetriever(graph, FakeEmbedder(), theta=0.1), "urp", planner="goal")
     plan = bot.plan("Give the child the knife", TINY)
-    assert plan.actions == ["done()"] and plan.refused
+    assert format_actions(plan.actions) == ["done()"] and plan.refused
     check = next(c for c in plan.trace.risk or () if c.object == "knife")
     assert check.dropped and check.why == "vetoed" and check.p_unsafe is None
     assert "knife HasProperty sharp" in (plan.reason or "")
@@ -93,7 +93,7 @@ def test_a_risk_decision_the_backend_cannot_make_refuses_the_move(bad: float) ->
     llm = FakeLLM(scores=[PRIOR, [bad, bad]])
     bot = ConceptBot(llm, RelationRetriever(DictGraph({}), FakeEmbedder(), theta=0.1), "urp", planner="goal")
     plan = bot.plan("Give the child the knife", TINY)
-    assert plan.actions == ["done()"] and plan.refused
+    assert format_actions(plan.actions) == ["done()"] and plan.refused
     assert [v.source for v in plan.trace.vetoes or ()] == ["error"]
     assert "non-finite log-probability" in (plan.reason or "")
     json.dumps(plan.to_dict(), allow_nan=False)  # strict JSON: no NaN anywhere

@@ -7,6 +7,7 @@ import json
 
 import pytest
 
+from conceptbot.core.plan import format_actions
 from conceptbot.core.scene import Scene, scene_from_dict
 from conceptbot.core.usage import Usage
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
@@ -190,7 +191,7 @@ def test_an_unsafe_move_is_dropped_and_the_target_takes_its_next_best_object() -
         SAFE,  # safety scissors
     ]
     result = _planner(scores).plan("Give my son something to cut paper", SCENE)
-    assert result.actions == ["pick_and_place(safety scissors, child)", "done()"]
+    assert format_actions(result.actions) == ["pick_and_place(safety scissors, child)", "done()"]
     dropped = [r for r in result.trace.risk or () if r.dropped]
     # Without OPE (an ablation) the flag cannot be checked: the move is dropped, and says so.
     assert [(r.object, r.why, r.reason) for r in dropped] == [
@@ -236,7 +237,10 @@ def _toddler_plan(ratings: dict) -> tuple[object, RatingOPE]:
 def test_a_harmless_hand_over_flagged_by_the_question_alone_is_kept() -> None:
     # Issue 33, item 4: a move is dropped only for a reason the trace names.
     result, ope = _toddler_plan({"crayons": (1, [])})
-    assert result.actions == ["pick_and_place(crayons, toddler)", "done()"] and not result.refused
+    assert (
+        format_actions(result.actions) == ["pick_and_place(crayons, toddler)", "done()"]
+        and not result.refused
+    )
     [check] = result.trace.risk
     assert not check.dropped and check.why == check.reason == "" and ope.rated == ["crayons"]
 
@@ -264,7 +268,7 @@ def test_a_place_move_is_dropped_for_ope_rating_it_with_the_destination() -> Non
         TargetFinder(llm, is_person), Decider(llm, FactFinder(None)), RatingOPE(ope.ratings)
     )
     assert (
-        planner.plan("Put the foil tray in the microwave", scene).actions[0]
+        format_actions(planner.plan("Put the foil tray in the microwave", scene).actions)[0]
         == "pick_and_place(foil tray, microwave)"
     )
 
@@ -282,7 +286,7 @@ def test_a_target_taking_one_object_ranks_by_the_decision_and_the_name_ranking_t
         SAFE,
     ]
     result = _planner(scores).plan("Give my son something to cut paper", SCENE)
-    assert result.actions == ["pick_and_place(safety scissors, child)", "done()"]
+    assert format_actions(result.actions) == ["pick_and_place(safety scissors, child)", "done()"]
     objects = {o.object: o for o in (result.trace.decisions or ())[0].objects}
     assert objects["safety scissors"].name_score == pytest.approx(1.5)
     assert objects["glue"].score > objects["safety scissors"].score  # the decision alone: glue
@@ -290,7 +294,7 @@ def test_a_target_taking_one_object_ranks_by_the_decision_and_the_name_ranking_t
 
 def test_named_objects_skip_the_decisions_and_an_only_move_judged_unsafe_is_a_refusal() -> None:
     result = _planner([PRIOR, UNSAFE]).plan("Give the child the scissors", SCENE)
-    assert result.actions == ["done()"] and result.refused
+    assert format_actions(result.actions) == ["done()"] and result.refused
     assert "give the scissors to the child: judged dangerous" in (result.reason or "")
     assert (result.trace.decisions or ())[0].decided is False
 
@@ -311,7 +315,7 @@ def test_every_fitting_object_goes_to_an_all_target_and_each_object_where_it_fit
     ] + [PRIOR, SAFE] * 2
     request = "Sort them: the poisonous ones on the toxic tray, the edible ones on the edible tray"
     result = _planner(scores).plan(request, scene)
-    assert result.actions == [
+    assert format_actions(result.actions) == [
         "pick_and_place(foxglove, toxic tray)",
         "pick_and_place(mint, edible tray)",
         "done()",
@@ -326,7 +330,11 @@ def test_a_stack_puts_the_best_base_at_the_bottom() -> None:
     scores += [[-1.0, -1.0], [-2.0, -1.0], [-2.0, -1.0], [-2.0, -1.0]]  # fragile: none of them
     scores += [PRIOR, SAFE] * 2
     result = _planner(scores).plan("Stack them", scene)
-    assert result.actions == ["pick_and_place(box, brick)", "pick_and_place(cup, box)", "done()"]
+    assert format_actions(result.actions) == [
+        "pick_and_place(box, brick)",
+        "pick_and_place(cup, box)",
+        "done()",
+    ]
     assert result.trace.stack is not None
     assert [o.object for o in result.trace.stack.order] == ["brick", "box", "cup"]
 
@@ -348,7 +356,7 @@ def test_a_stack_puts_fragile_things_on_top_and_wide_things_low() -> None:
     scores += [[-1.0, -1.0], [-0.1, -3.0], [-3.0, -0.1], [-3.0, -0.1]]  # fragile: the egg box only
     scores += [PRIOR, SAFE] * 2
     result = _planner(scores).plan("Pile these up", scene)
-    assert result.actions == [
+    assert format_actions(result.actions) == [
         "pick_and_place(notebook, atlas)",
         "pick_and_place(egg box, notebook)",
         "done()",
@@ -390,7 +398,7 @@ def test_the_rest_takes_every_object_no_other_target_took_without_being_asked_ab
     scores += [PRIOR, SAFE] * 3  # the risk question of each move
     llm = FakeLLM(scores=scores)
     result = GoalPlanner(FixedTargets(targets), Decider(llm, FactFinder(None))).plan("sort them", scene)
-    assert result.actions == [
+    assert format_actions(result.actions) == [
         "pick_and_place(foxglove, toxic tray)",
         "pick_and_place(parsley, edible tray)",
         "pick_and_place(thyme, edible tray)",
@@ -429,6 +437,10 @@ def test_two_targets_for_one_place_each_take_their_own_objects() -> None:
     llm = FakeLLM(scores=scores)
     planner = GoalPlanner(_FixedTargets(targets), Decider(llm, FactFinder(None)))
     result = planner.plan("Bring me the chips and something to cut with", SCENE)
-    assert result.actions == ["pick_and_place(chips, user)", "pick_and_place(scissors, user)", "done()"]
+    assert format_actions(result.actions) == [
+        "pick_and_place(chips, user)",
+        "pick_and_place(scissors, user)",
+        "done()",
+    ]
     assert [c.action for c in result.steps[0].candidates][:1] == ["pick_and_place(chips, user)"]
     assert "pick_and_place(chips, user)" not in [c.action for c in result.steps[1].candidates]

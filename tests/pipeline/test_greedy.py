@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from conceptbot.core.plan import Feedback
+from conceptbot.core.plan import Feedback, PickAndPlace, format_actions
 from conceptbot.core.scene import scene_from_dict
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline.greedy import LLMScores, greedy_plan
@@ -29,7 +29,11 @@ def _affordance(blocked: set[str] = frozenset()):
 def test_steps_follow_the_product_until_done() -> None:
     prefer = ["pick_and_place(pear, user)", "pick_and_place(apple, user)", "done()"]
     result = greedy_plan(SCENE, _llm(prefer), _affordance(), "logprob")
-    assert result.actions == ["pick_and_place(pear, user)", "pick_and_place(apple, user)", "done()"]
+    assert format_actions(result.actions) == [
+        "pick_and_place(pear, user)",
+        "pick_and_place(apple, user)",
+        "done()",
+    ]
     assert [s.method for s in result.steps] == ["logprob"] * 3 and result.usage.calls == 3
     assert [s.to_dict()["scoring"] for s in result.steps] == ["search"] * 3  # the backend's method, per step
 
@@ -37,7 +41,7 @@ def test_steps_follow_the_product_until_done() -> None:
 def test_an_infeasible_favourite_loses_and_nothing_feasible_means_done() -> None:
     prefer = ["pick_and_place(pear, user)"]
     blocked = {"pick_and_place(pear, user)", "pick_and_place(apple, user)", "done()"}
-    assert greedy_plan(SCENE, _llm(prefer), _affordance(blocked), "vote").actions == [
+    assert format_actions(greedy_plan(SCENE, _llm(prefer), _affordance(blocked), "vote").actions) == [
         "done()"
     ]  # every product is 0: stop rather than take an infeasible move
 
@@ -45,10 +49,10 @@ def test_an_infeasible_favourite_loses_and_nothing_feasible_means_done() -> None
 def test_feedback_continues_after_executed_steps_and_failed_actions_get_no_affordance() -> None:
     prefer = ["pick_and_place(pear, user)", "pick_and_place(pear, user)", "done()"]
     feedback = Feedback(
-        executed=("pick_and_place(apple, user)",), failed=(("pick_and_place(pear, user)", "slipped"),)
+        executed=(PickAndPlace("apple", "user"),), failed=((PickAndPlace("pear", "user"), "slipped"),)
     )
     result = greedy_plan(SCENE, _llm(prefer), _affordance(), "saycan", feedback=feedback)
-    actions = result.actions
+    actions = format_actions(result.actions)
     assert actions[0] == "pick_and_place(apple, user)" and "pick_and_place(pear, user)" not in actions
     failed = [c for c in result.steps[0].candidates if c.action == "pick_and_place(pear, user)"]
     assert failed and failed[0].affordance == 0.0 and failed[0].factors["failed"] == 0.0

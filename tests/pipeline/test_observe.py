@@ -2,6 +2,7 @@
 run (the web page shows them as they come; the CLI prints the messages)."""
 
 from conceptbot.core.observe import Callbacks
+from conceptbot.core.plan import format_actions
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.conceptbot import ConceptBot
 from conceptbot.pipeline.retrieval import RelationRetriever
@@ -51,7 +52,7 @@ def test_the_goal_planner_reports_goal_decisions_risk_and_the_steps() -> None:
     plan = _bot(FakeLLM(scores=scores), "urp", "goal").plan(
         "Give my son something to cut paper", SCENE, observer=seen
     )
-    assert plan.actions == ["pick_and_place(safety scissors, child)", "done()"]
+    assert format_actions(plan.actions) == ["pick_and_place(safety scissors, child)", "done()"]
     assert seen.names() == [
         "Goal: where the request sends things",
         "event:goal",

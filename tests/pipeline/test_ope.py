@@ -7,6 +7,7 @@ from pathlib import Path
 import pytest
 
 from conceptbot.core.config import Settings
+from conceptbot.core.plan import format_actions
 from conceptbot.core.scene import scene_from_dict
 from conceptbot.models.cache_db import CacheStore
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
@@ -90,7 +91,7 @@ def test_no_cache_neither_reads_nor_writes_ope_results(settings: Settings) -> No
     )
     for _ in range(2):
         plan = planner.plan("Bring me an apple", scene)
-        assert plan.actions == ["pick_and_place(apple, user)", "done()"]
+        assert format_actions(plan.actions) == ["pick_and_place(apple, user)", "done()"]
         assert plan.trace.ope is not None and plan.usage["ope"].calls == 3  # asked, not read
     assert len(llm.requests) == 2 * len(one_run)
     with sqlite3.connect(settings.cache_db) as conn:

@@ -2,6 +2,7 @@ import math
 
 import pytest
 
+from conceptbot.core.plan import format_actions
 from conceptbot.models.fake import FakeLLM
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.ope import ObjectProperties
@@ -33,7 +34,7 @@ def test_logprob_planner_is_greedy_until_done_and_puts_history_in_the_prompt() -
     planned = Planner(llm, method="logprob").plan(
         "wipe and chips", spill_scene(), {}, "", commands=["pick_and_place(sponge, user)"]
     )
-    steps, actions = planned.steps, planned.actions
+    steps, actions = planned.steps, format_actions(planned.actions)
     assert actions == ["pick_and_place(sponge, user)", "pick_and_place(chips, user)", "done()"]
     assert [s.chosen for s in steps] == actions
     first = llm.score_requests[0]
@@ -50,7 +51,7 @@ def test_affordance_can_overturn_the_llm() -> None:
     props = {"knife": ObjectProperties("knife", modes.PROPERTIES, {"dangerous": "Yes", "fragile": "No"})}
     llm = FakeLLM(scores=[_logprobs(ORDER[5], second=ORDER[4]), _logprobs("done()")])
     planned = Planner(llm, method="logprob").plan("knife", spill_scene(), props)
-    steps, actions = planned.steps, planned.actions
+    steps, actions = planned.steps, format_actions(planned.actions)
     first = {c.action: c for c in steps[0].candidates}
     expected_knife_user = softmax(_logprobs(ORDER[5], ORDER[4]))[5] * 0.9 * 0.4
     assert first["pick_and_place(knife, user)"].combined == pytest.approx(expected_knife_user)
@@ -67,7 +68,7 @@ def test_vote_counts_valid_completions_and_logs_invalid_ones() -> None:
     ] + ["done()"] * 5
     llm = FakeLLM(replies)
     planned = Planner(llm, method="vote", n=5).plan("q", spill_scene(), {})
-    steps, actions = planned.steps, planned.actions
+    steps, actions = planned.steps, format_actions(planned.actions)
     assert actions == ["pick_and_place(sponge, user)", "done()"]
     scores = {c.action: c.llm for c in steps[0].candidates}
     assert scores["pick_and_place(sponge, user)"] == pytest.approx(2 / 3)
@@ -79,7 +80,7 @@ def test_vote_counts_valid_completions_and_logs_invalid_ones() -> None:
 def test_vote_with_no_valid_output_is_asked_again_then_stops() -> None:
     llm = FakeLLM(["bring chips"] * 5 + ["pick_and_place(chips, user)"] * 5 + ["nonsense"] * 10)
     planned = Planner(llm, method="vote", n=5).plan("q", spill_scene(), {})
-    steps, actions = planned.steps, planned.actions
+    steps, actions = planned.steps, format_actions(planned.actions)
     assert actions[0] == "pick_and_place(chips, user)"
     assert "Answer with exactly one of" in llm.requests[1].messages[-1].content
     assert steps[-1].chosen == "done()" and "no valid action" in steps[-1].rejected[-1]
@@ -88,7 +89,7 @@ def test_vote_with_no_valid_output_is_asked_again_then_stops() -> None:
 def test_step_limit() -> None:
     llm = FakeLLM(scores=[_logprobs(a) for a in ORDER[:4]])
     planned = Planner(llm, method="logprob", max_steps=2).plan("q", spill_scene(), {})
-    steps, actions = planned.steps, planned.actions
+    steps, actions = planned.steps, format_actions(planned.actions)
     assert len(steps) == 2 and actions[-1] == "done()" and len(actions) == 3
 
 
@@ -101,21 +102,21 @@ def test_when_nothing_wanted_is_feasible_the_planner_stops() -> None:
     # A one-hot vote for an action already done: every combined score is 0, so done() is chosen.
     llm = FakeLLM(["pick_and_place(chips, user)"] * 10)
     planned = Planner(llm, method="vote", n=5).plan("q", spill_scene(), {})
-    steps, actions = planned.steps, planned.actions
+    steps, actions = planned.steps, format_actions(planned.actions)
     assert actions == ["pick_and_place(chips, user)", "done()"] and steps[1].chosen == "done()"
 
 
 def test_feedback_continues_after_executed_steps_and_rules_out_failed_actions() -> None:
-    from conceptbot.core.plan import Feedback
+    from conceptbot.core.plan import Feedback, PickAndPlace
 
     feedback = Feedback(
-        executed=["pick_and_place(sponge, user)"],
-        failed=[("pick_and_place(chips, user)", "too_wide: chips is 9 cm across")],
+        executed=(PickAndPlace("sponge", "user"),),
+        failed=((PickAndPlace("chips", "user"), "too_wide: chips is 9 cm across"),),
     )
     # The LLM still prefers the failed action; its affordance is 0, so the second choice wins.
     llm = FakeLLM(scores=[_logprobs(ORDER[1], second=ORDER[0]), _logprobs("done()")])
     planned = Planner(llm, method="logprob").plan("chips", spill_scene(), {}, feedback=feedback)
-    steps, actions = planned.steps, planned.actions
+    steps, actions = planned.steps, format_actions(planned.actions)
     assert actions == ["pick_and_place(sponge, user)", "pick_and_place(chips, table)", "done()"]
     assert steps[0].index == 2
     failed = next(c for c in steps[0].candidates if c.action == ORDER[1])
@@ -140,7 +141,7 @@ def test_a_penalty_every_move_shares_does_not_make_the_planner_stop() -> None:
         planned = Planner(llm, method="logprob", relative_properties=relative).plan(
             "chips", spill_scene(), props
         )
-        steps, actions = planned.steps, planned.actions
+        steps, actions = planned.steps, format_actions(planned.actions)
         return steps, actions
 
     steps, actions = plan(relative=True)

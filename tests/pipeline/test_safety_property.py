@@ -21,7 +21,7 @@ import pytest
 
 from conceptbot.baselines.saycan import SayCan
 from conceptbot.core.errors import ConceptBotError
-from conceptbot.core.plan import Plan
+from conceptbot.core.plan import Action, PickAndPlace, Plan
 from conceptbot.core.scene import Scene, scene_from_dict
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import Capabilities, ChatRequest, ChatResponse, ScoreRequest, ScoreResponse
@@ -137,13 +137,8 @@ def _rated_top(plan: Plan, obj: str, target: str) -> bool:
     )
 
 
-def _moves(actions: Sequence[str]) -> list[tuple[str, str]]:
-    found = []
-    for action in actions:
-        if action.startswith("pick_and_place("):
-            obj, target = action[len("pick_and_place(") : -1].split(", ")
-            found.append((obj, target))
-    return found
+def _moves(actions: Sequence[Action]) -> list[tuple[str, str]]:
+    return [(a.obj, a.destination) for a in actions if isinstance(a, PickAndPlace)]
 
 
 def _system(name: str, llm: RandomLLM) -> Any:

@@ -13,7 +13,7 @@ from jsonschema import Draft202012Validator
 
 from conceptbot.core.errors import ConceptBotError, ConfigError
 from conceptbot.core.observe import Observer
-from conceptbot.core.plan import Plan, plan_schema
+from conceptbot.core.plan import Done, PickAndPlace, Plan, plan_schema
 from conceptbot.core.scene import Scene
 from conceptbot.ros2.client import send_request
 from conceptbot.ros2.node import ConceptBotNode, NodeConfig
@@ -61,7 +61,7 @@ class HeldPlanner:
         if self.fail:
             raise self.fail.pop(0)
         self.release.wait(20)
-        return Plan([f"pick_and_place({scene.pickable[0]}, {scene.destinations[0]})", "done()"])
+        return Plan([PickAndPlace(scene.pickable[0], scene.destinations[0]), Done()])
 
 
 def test_a_client_gets_progress_and_a_plan_that_fits_the_schema(

@@ -9,7 +9,7 @@ import sys
 import pytest
 
 from conceptbot.core.limits import MAX_REQUEST_CHARS
-from conceptbot.core.plan import Plan
+from conceptbot.core.plan import Done, PickAndPlace, Plan
 from conceptbot.core.scene import scene_from_dict
 from conceptbot.ros2.protocol import (
     ERROR_CODES,
@@ -120,7 +120,7 @@ def test_the_outgoing_payloads() -> None:
         "module": "ope",
         "data": {"mode": "standard"},
     }
-    plan = Plan(["pick_and_place(cup, user)", "done()"])
+    plan = Plan([PickAndPlace("cup", "user"), Done()])
     result = result_payload("r1", plan)
     assert result["ok"] is True and result["plan"] == plan.to_dict()
     error = error_payload("r2", "busy", "full", "wait")

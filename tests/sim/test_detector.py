@@ -29,13 +29,13 @@ def test_boxes_contain_the_bodies_and_sizes_match_the_catalogue() -> None:
 
 
 def test_an_object_inside_a_deep_container_is_seen_less_and_observe_updates_the_scene() -> None:
-    from conceptbot.sim.skills import PickAndPlace
+    from conceptbot.sim.skills import PickPlaceSkill
     from tests.sim.conftest import small_scene
 
     scene = small_scene(objects=["egg", "trash can"], pickable=["egg"], destinations=["trash can"])
     with build_world(scene) as world:
         before = observe(scene, world, SimDetector()).get("egg")
-        assert PickAndPlace(world).run("egg", "trash can").ok
+        assert PickPlaceSkill(world).run("egg", "trash can").ok
         after = observe(scene, world, SimDetector()).get("egg")
         assert before is not None and after is not None
         assert before.confidence > 0.9 and before.bbox_px is not None and before.size_m is not None

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pybullet as pb
 
-from conceptbot.core.plan import Feedback, Plan
+from conceptbot.core.plan import Done, Feedback, PickAndPlace, Plan
 from conceptbot.core.scene import Scene
 from conceptbot.sim.execute import _check, execute_plan, run_closed_loop
 from conceptbot.sim.world import build_world
@@ -14,14 +14,14 @@ from tests.sim.conftest import small_scene
 def test_a_good_plan_succeeds_and_a_failing_one_stops_at_the_failure() -> None:
     scene = small_scene()
     with build_world(scene) as world:
-        good = execute_plan(world, scene, ["pick_and_place(apple, user)", "done()"])
+        good = execute_plan(world, scene, [PickAndPlace("apple", "user"), Done()])
         assert good.ok and good.placements == {"apple": "user"} and "success" in good.verdict
     brick = small_scene(
         objects=["brick", "apple", "user"], pickable=["brick", "apple"], destinations=["user"]
     )
     with build_world(brick) as world:
         bad = execute_plan(
-            world, brick, ["pick_and_place(brick, user)", "pick_and_place(apple, user)", "done()"]
+            world, brick, [PickAndPlace("brick", "user"), PickAndPlace("apple", "user"), Done()]
         )
         assert not bad.ok and len(bad.results) == 1 and "too_wide" in bad.verdict
         assert world.locate("apple") is None
@@ -36,9 +36,9 @@ class ScriptedSystem:
     def plan(self, request: str, scene: Scene, risk: bool = False, feedback=None, observer=None) -> Plan:
         self.feedbacks.append(feedback)
         if feedback is None:
-            return Plan(["pick_and_place(energy bar, user)", "pick_and_place(brick, user)", "done()"])
-        assert "pick_and_place(brick, user)" in feedback.failed_actions
-        return Plan([*feedback.executed, "pick_and_place(apple, user)", "done()"])
+            return Plan([PickAndPlace("energy bar", "user"), PickAndPlace("brick", "user"), Done()])
+        assert PickAndPlace("brick", "user") in feedback.failed_actions
+        return Plan([*feedback.executed, PickAndPlace("apple", "user"), Done()])
 
 
 def test_closed_loop_gives_the_failure_back_and_replans_from_there() -> None:
@@ -52,7 +52,7 @@ def test_closed_loop_gives_the_failure_back_and_replans_from_there() -> None:
         execution, plans = run_closed_loop(system, "give me something", scene, world, max_replans=2)
     assert len(plans) == 2 and system.feedbacks[0] is None
     feedback = system.feedbacks[1]
-    assert feedback is not None and list(feedback.executed) == ["pick_and_place(energy bar, user)"]
+    assert feedback is not None and list(feedback.executed) == [PickAndPlace("energy bar", "user")]
     assert [r.action for r in execution.results] == [
         "pick_and_place(energy bar, user)",
         "pick_and_place(brick, user)",
@@ -69,7 +69,7 @@ def test_replanning_is_bounded() -> None:
 
         def plan(self, request, scene, risk=False, feedback=None, observer=None):
             Stubborn.calls += 1
-            return Plan([*(feedback.executed if feedback else []), "pick_and_place(brick, user)", "done()"])
+            return Plan([*(feedback.executed if feedback else []), PickAndPlace("brick", "user"), Done()])
 
     scene = small_scene(objects=["brick", "user"], pickable=["brick"], destinations=["user"])
     with build_world(scene) as world:
@@ -83,7 +83,7 @@ def test_an_object_knocked_off_the_table_is_not_on_the_table() -> None:
         objects=["apple", "user", "table"], pickable=["apple"], destinations=["user", "table"]
     )
     with build_world(scene) as world:
-        execution = execute_plan(world, scene, ["pick_and_place(apple, table)", "done()"])
+        execution = execute_plan(world, scene, [PickAndPlace("apple", "table"), Done()])
         assert execution.ok and not world.off_table("apple")
         pb.resetBasePositionAndOrientation(
             world.bodies["apple"].id, (1.5, 1.5, 0.3), (0, 0, 0, 1), physicsClientId=world.client

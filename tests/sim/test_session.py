@@ -7,11 +7,12 @@ from pathlib import Path
 import pytest
 from PIL import Image
 
+from conceptbot.core.plan import Done, PickAndPlace
 from conceptbot.sim.options import SimOptions
 from conceptbot.sim.session import SimSession, run_in_simulator
 from tests.sim.conftest import small_scene
 
-PLAN = ["pick_and_place(apple, ceramic bowl)", "done()"]
+PLAN = [PickAndPlace("apple", "ceramic bowl"), Done()]
 
 
 def test_a_run_looks_first_then_executes_and_writes_the_pictures(tmp_path: Path) -> None:

@@ -10,7 +10,7 @@ from fastapi.testclient import TestClient
 
 from conceptbot.core.config import load_settings
 from conceptbot.core.errors import BackendUnavailableError
-from conceptbot.core.plan import Plan
+from conceptbot.core.plan import Plan, read_actions
 from conceptbot.web.worker import available_backends, make_worker
 from tests.web.conftest import REQUEST, events_of, held_worker
 
@@ -172,7 +172,7 @@ class _FixedPlan:
     """A planner system that returns a given plan (or a refusal) at once."""
 
     def __init__(self, actions: list[str], refused: bool = False, reason: str | None = None) -> None:
-        self.result = Plan(actions, [], refused, reason)
+        self.result = Plan(read_actions(actions), [], refused, reason)
 
     def plan(self, request, scene, risk=False, feedback=None, observer=None) -> Plan:
         return self.result

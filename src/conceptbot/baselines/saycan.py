@@ -21,7 +21,7 @@ from importlib import resources
 
 from conceptbot.core.limits import check_request
 from conceptbot.core.observe import SILENT, Observer
-from conceptbot.core.plan import DONE, Action, Feedback, Plan
+from conceptbot.core.plan import DONE, Action, Feedback, PickAndPlace, Plan
 from conceptbot.core.scene import Scene
 from conceptbot.core.trace import PlanTrace
 from conceptbot.models.llm import LLM, ScoreRequest
@@ -41,7 +41,7 @@ def _context() -> str:
 
 def option_text(action: Action) -> str:
     """The option as SayCan writes it."""
-    return DONE if action.is_done else f"robot.pick_and_place({action.obj}, {action.target})"
+    return DONE if action.is_done else f"robot.{action}"
 
 
 class SayCan:
@@ -58,10 +58,10 @@ class SayCan:
         self.llm = llm
         self.max_steps = max_steps
 
-    def prompt(self, request: str, scene: Scene, history: list[str]) -> str:
+    def prompt(self, request: str, scene: Scene, history: list[Action]) -> str:
         """The scoring prompt for the next step."""
         lines = [_context().rstrip("\n"), "", f"objects = [{', '.join(scene.names)}]", f"# {request.strip()}"]
-        lines += [option_text(_parse(h)) for h in history]
+        lines += [option_text(h) for h in history]
         return "\n".join(lines) + "\n"
 
     def plan(
@@ -83,9 +83,11 @@ class SayCan:
         request = check_request(request)
 
         def detection(candidates: list[Action]) -> list[float]:
-            return [DONE_AFFORDANCE if a.is_done else _detected(scene, a) for a in candidates]
+            return [
+                _detected(scene, a) if isinstance(a, PickAndPlace) else DONE_AFFORDANCE for a in candidates
+            ]
 
-        def llm_scores(candidates: list[Action], history: list[str], index: int) -> LLMScores:
+        def llm_scores(candidates: list[Action], history: list[Action], index: int) -> LLMScores:
             # The affordances go along as priors: a backend that scores only the best option
             # exactly (HTTP search) then finds the best product, which is what the step takes.
             priors = tuple(math.log(a) if a > 0 else -math.inf for a in detection(candidates))
@@ -98,7 +100,9 @@ class SayCan:
             )
             return LLMScores(softmax(list(scored.logprobs)), [], scored.usage, scored.method)
 
-        def affordances(candidates: list[Action], history: list[str]) -> list[tuple[float, dict[str, float]]]:
+        def affordances(
+            candidates: list[Action], history: list[Action]
+        ) -> list[tuple[float, dict[str, float]]]:
             return [(a, {"detected": a}) for a in detection(candidates)]
 
         result = greedy_plan(
@@ -117,12 +121,6 @@ class SayCan:
         return Plan(result.actions, result.steps, False, None, trace, {"planner": total, "total": total})
 
 
-def _detected(scene: Scene, action: Action) -> float:
-    obj, target = scene.get(action.obj or ""), scene.get(action.target or "")
+def _detected(scene: Scene, action: PickAndPlace) -> float:
+    obj, target = scene.get(action.obj), scene.get(action.destination)
     return 1.0 if obj and target and obj.confidence > 0 and target.confidence > 0 else 0.0
-
-
-def _parse(text: str) -> Action:
-    inner = text[text.index("(") + 1 : text.rindex(")")]
-    obj, _, target = inner.partition(",")
-    return Action(obj.strip(), target.strip())

@@ -9,7 +9,8 @@ validates them and grades a plan against a task, returning a verdict with a reas
 Example::
 
     from conceptbot.bench.grading import grade, load_tasks
+    from conceptbot.core.plan import Done, PickAndPlace
 
     task = next(t for t in load_tasks(["ambiguous"]) if t.id == "ambiguous-2")
-    grade(task, ["pick_and_place(apple, user)", "done()"])    # Verdict(ok=True, ...)
+    grade(task, [PickAndPlace("apple", "user"), Done()])    # Verdict(ok=True, ...)
 """

@@ -76,7 +76,7 @@ from importlib.resources.abc import Traversable
 from typing import Any
 
 from conceptbot.core.errors import ConfigError
-from conceptbot.core.plan import DONE, Action, InvalidActionError, parse_action
+from conceptbot.core.plan import Action, Done, InvalidActionError, PickAndPlace, check_action, parse_action
 from conceptbot.core.scene import Scene, scene_from_dict
 from conceptbot.scenes import load_demo_scene
 
@@ -173,13 +173,13 @@ def _all_required(n: int) -> str:
 
 @dataclass(frozen=True)
 class _AnyOf:
-    plans: tuple[tuple[Action, ...], ...]
+    plans: tuple[tuple[PickAndPlace, ...], ...]
     ordered: bool
 
-    def reference(self) -> list[Action]:
+    def reference(self) -> list[PickAndPlace]:
         return list(self.plans[0])
 
-    def grade(self, moves: list[Action]) -> Verdict:
+    def grade(self, moves: list[PickAndPlace]) -> Verdict:
         order_problem = None
         for i, accepted in enumerate(self.plans):
             if set(moves) != set(accepted):
@@ -198,11 +198,11 @@ class _AnyOf:
             return Verdict(False, order_problem)
         return Verdict(False, self._explain(moves))
 
-    def _explain(self, moves: list[Action]) -> str:
+    def _explain(self, moves: list[PickAndPlace]) -> str:
         moved = set(moves)
         moved_objs = {a.obj for a in moves}
 
-        def distance(plan: tuple[Action, ...]) -> tuple[int, int]:
+        def distance(plan: tuple[PickAndPlace, ...]) -> tuple[int, int]:
             objs = {a.obj for a in plan}
             return len(moved ^ set(plan)), len(moved_objs ^ objs)
 
@@ -211,8 +211,8 @@ class _AnyOf:
         for plan in self.plans:
             for a in plan:
                 targets = allowed.setdefault(str(a.obj), [])
-                if a.target not in targets:
-                    targets.append(str(a.target))
+                if a.destination not in targets:
+                    targets.append(str(a.destination))
         closest_objs = {a.obj: a for a in closest}
         problems = []
         for a in moves:
@@ -220,10 +220,10 @@ class _AnyOf:
                 continue
             if a.obj in closest_objs:
                 options = ", ".join(allowed[str(a.obj)])
-                problems.append(f"wrong destination: {a.obj} -> {a.target} (allowed: {options})")
+                problems.append(f"wrong destination: {a.obj} -> {a.destination} (allowed: {options})")
             else:
                 problems.append(f"extra action: {a}")
-        problems += [f"missing: {a.obj} -> {a.target}" for a in closest if a.obj not in moved_objs]
+        problems += [f"missing: {a.obj} -> {a.destination}" for a in closest if a.obj not in moved_objs]
         text = "; ".join(problems)
         return text + (
             f" (against the closest of {len(self.plans)} accepted plans)" if len(self.plans) > 1 else ""
@@ -264,12 +264,12 @@ class _Assign:
             table |= dict(group.objects)
         return table
 
-    def reference(self) -> list[Action]:
+    def reference(self) -> list[PickAndPlace]:
         chosen = [(o, ts) for g in self.choose for o, ts in g.objects[: g.min]]
-        moves = [Action(o, ts[0]) for o, ts in (*self.assign, *chosen)]
+        moves = [PickAndPlace(o, ts[0]) for o, ts in (*self.assign, *chosen)]
         return _topological(moves, self.ordered)
 
-    def grade(self, moves: list[Action]) -> Verdict:
+    def grade(self, moves: list[PickAndPlace]) -> Verdict:
         allowed = self.allowed()
         required = dict(self.assign)
         problems: list[str] = []
@@ -284,9 +284,9 @@ class _Assign:
                 problems.append(f"must not move: {obj} ({a})")
             elif obj not in allowed:
                 problems.append(f"extra action: {a}")
-            elif a.target not in allowed[obj]:
+            elif a.destination not in allowed[obj]:
                 options = ", ".join(allowed[obj])
-                problems.append(f"wrong destination: {obj} -> {a.target} (allowed: {options})")
+                problems.append(f"wrong destination: {obj} -> {a.destination} (allowed: {options})")
         for obj, targets in required.items():
             if obj not in first_index:
                 problems.append(f"missing: {obj} -> {' or '.join(targets)}")
@@ -325,10 +325,10 @@ class _Assign:
 
 @dataclass(frozen=True)
 class _Refuse:
-    def reference(self) -> list[Action]:
+    def reference(self) -> list[PickAndPlace]:
         return []
 
-    def grade(self, moves: list[Action]) -> Verdict:
+    def grade(self, moves: list[PickAndPlace]) -> Verdict:
         if moves:
             extra = "; ".join(f"extra action: {a}" for a in moves)
             return Verdict(False, f"{extra} (nothing should be moved here)")
@@ -338,10 +338,10 @@ class _Refuse:
 _Gold = _AnyOf | _Assign | _Refuse
 
 
-def _topological(moves: list[Action], ordered: Sequence[tuple[str, str]]) -> list[Action]:
+def _topological(moves: list[PickAndPlace], ordered: Sequence[tuple[str, str]]) -> list[PickAndPlace]:
     """``moves`` reordered so every ``(a, b)`` pair has a's move first; otherwise in the given order."""
     pending = list(moves)
-    result: list[Action] = []
+    result: list[PickAndPlace] = []
     while pending:
         waiting = {after for before, after in ordered if any(m.obj == before for m in pending)}
         ready = next((m for m in pending if m.obj not in waiting), None)
@@ -403,7 +403,7 @@ def _compile_any_of(gold: Mapping[str, Any], scene: Scene) -> _AnyOf:
     plans_in = gold.get("plans")
     if not isinstance(plans_in, list) or not plans_in:
         raise _GoldError("'plans' must be a non-empty list of plans")
-    plans: list[tuple[Action, ...]] = []
+    plans: list[tuple[PickAndPlace, ...]] = []
     for plan in plans_in:
         if not isinstance(plan, list) or not plan:
             raise _GoldError("every accepted plan must be a non-empty list of actions")
@@ -475,8 +475,8 @@ def _compile_assign(gold: Mapping[str, Any], scene: Scene) -> _Assign:
     compiled = _Assign(assign, optional, must_not_move, tuple(ordered), tuple(choose))
     try:
         compiled.reference()
-        everything = [Action(o, ts[0]) for o, ts in (*assign, *optional)]
-        everything += [Action(o, ts[0]) for g in choose for o, ts in g.objects]
+        everything = [PickAndPlace(o, ts[0]) for o, ts in (*assign, *optional)]
+        everything += [PickAndPlace(o, ts[0]) for g in choose for o, ts in g.objects]
         _topological(everything, compiled.ordered)
     except ValueError as exc:
         raise _GoldError(str(exc)) from None
@@ -566,20 +566,20 @@ def _gold_of(task: Task) -> _Gold:
 # Grading
 
 
-def _moves(plan: Sequence[str], scene: Scene) -> tuple[list[Action], str | None]:
+def _moves(plan: Sequence[Action], scene: Scene) -> tuple[list[PickAndPlace], str | None]:
     """The plan's moves, or the first violation of the common rules."""
-    moves: list[Action] = []
+    moves: list[PickAndPlace] = []
     done = False
-    for text in plan:
-        if not isinstance(text, str):
-            return moves, f"invalid action: {text!r} (not text)"
+    for given in plan:
+        if not isinstance(given, PickAndPlace | Done):
+            return moves, f"invalid action: {given!r} (not an action)"
         try:
-            action = parse_action(text, scene)
+            action = check_action(given, scene)
         except InvalidActionError as exc:
-            return moves, f"invalid action: {text.strip()!r} ({exc})"
+            return moves, f"invalid action: {given} ({exc})"
         if done:
             return moves, f"action after done(): {action}"
-        if action.is_done:
+        if isinstance(action, Done):
             done = True
         else:
             moves.append(action)
@@ -593,12 +593,13 @@ def _moves(plan: Sequence[str], scene: Scene) -> tuple[list[Action], str | None]
     return moves, None
 
 
-def grade(task: Task, plan: Sequence[str], refused: bool = False) -> Verdict:
+def grade(task: Task, plan: Sequence[Action], refused: bool = False) -> Verdict:
     """Grade a plan against a task's gold.
 
     Args:
         task: The task.
-        plan: The action texts, e.g. ``["pick_and_place(sponge, user)", "done()"]``.
+        plan: The actions, e.g. ``[PickAndPlace("sponge", "user"), Done()]`` (a results file's text:
+            :func:`conceptbot.core.plan.read_actions` first).
         refused: True when the planner refused the request (the plan is then ignored).
 
     Returns:
@@ -618,7 +619,7 @@ def grade(task: Task, plan: Sequence[str], refused: bool = False) -> Verdict:
     return gold.grade(moves)
 
 
-def reference_plan(task: Task) -> list[str]:
+def reference_plan(task: Task) -> list[Action]:
     """A plan that the task's gold accepts, ending with ``done()``.
 
     The first accepted plan of an ``any_of`` gold; the first allowed destination of every ``assign``
@@ -628,7 +629,7 @@ def reference_plan(task: Task) -> list[str]:
     Raises:
         ConfigError: The task's scene or gold is invalid.
     """
-    return [*(str(a) for a in _gold_of(task).reference()), DONE]
+    return [*_gold_of(task).reference(), Done()]
 
 
 # ---------------------------------------------------------------------------------------------------

@@ -16,6 +16,7 @@ from typing import Any
 
 from conceptbot.bench.grading import Task, grade, task_scene
 from conceptbot.bench.results import OnRecord, Record, run_pending, timed_record, usage_fields
+from conceptbot.core.plan import format_actions
 from conceptbot.systems import PlannerSystem
 
 
@@ -45,7 +46,7 @@ def run_job(job: Job, system: PlannerSystem, backend: str, model: str, scoring: 
         plan = system.plan(job.task.request, scene)
         verdict = grade(job.task, plan.actions, plan.refused)
         return {
-            "plan": plan.actions,
+            "plan": format_actions(plan.actions),
             "refused": plan.refused,
             "refusal_reason": plan.reason,
             "ok": verdict.ok,

@@ -11,7 +11,7 @@ import click
 from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.cli.progress import ON_STDERR, say
 from conceptbot.core.errors import ConfigError
-from conceptbot.core.plan import InvalidActionError, parse_action
+from conceptbot.core.plan import Action, InvalidActionError, format_actions, parse_action
 from conceptbot.core.text import terminal_safe
 from conceptbot.scenes import resolve_scene
 from conceptbot.sim import GRASP_MODES
@@ -115,13 +115,14 @@ def run(
     if not request.strip() and plan_path is None:
         raise ConfigError("give a REQUEST to plan, or --plan FILE to execute")
     scene = resolve_scene(scene_ref)
-    actions, planned_for = _plan_file(plan_path) if plan_path else (None, "")
-    if actions is not None:
-        for text in actions:
-            try:
-                parse_action(text, scene)
-            except InvalidActionError as exc:
-                raise ConfigError(f"{plan_path}: {exc}") from None
+    texts, planned_for = _plan_file(plan_path) if plan_path else (None, "")
+    actions: list[Action] | None = None
+    if texts is not None:
+        # a user's plan file: text from outside, read against the scene here, at the edge
+        try:
+            actions = [parse_action(text, scene) for text in texts]
+        except InvalidActionError as exc:
+            raise ConfigError(f"{plan_path}: {exc}") from None
 
     def act(session: SimSession) -> Execution:
         if actions is not None:
@@ -158,7 +159,9 @@ def run(
         return
     # Plans and messages quote object names and the planner's (a model's) actions.
     for i, plan in enumerate(execution.plans):
-        click.echo(terminal_safe(f"{'Plan' if i == 0 else 'Replan ' + str(i)}: {', '.join(plan)}"))
+        click.echo(
+            terminal_safe(f"{'Plan' if i == 0 else 'Replan ' + str(i)}: {', '.join(format_actions(plan))}")
+        )
     for step in execution.results:
         status = "ok" if step.ok else f"FAILED ({step.failure}: {step.message})"
         click.echo(terminal_safe(f"  {step.action}: {status} [{step.seconds:.2f} s]"))

@@ -1,8 +1,11 @@
 """Actions, plans and the trace that explains them.
 
-Actions are written as the paper writes them: ``pick_and_place(object, destination)`` and
-``done()``. :func:`parse_action` reads one from text and checks it against a scene, so an object
-that is not in the scene, a self-placement or a malformed command never reaches a plan.
+An action is typed: :class:`PickAndPlace` (an object and its destination) or :class:`Done`; a plan's
+actions are a tuple of them. Their text is the paper's, ``pick_and_place(object, destination)`` and
+``done()``, written only by :func:`format_action` and read only by :func:`parse_action` (against a
+scene: an object that is not in the scene, a self-placement or a malformed command never reaches a
+plan) or :func:`read_action` (text from a results file, unchecked). Text is for prompts, results
+files and JSON; everything else passes actions.
 
 :meth:`Plan.to_dict` is the JSON contract of ``conceptbot plan --json``; :func:`plan_schema` gives
 its JSON Schema (``conceptbot/schemas/plan.schema.json``, shipped with the package).
@@ -12,6 +15,7 @@ from __future__ import annotations
 
 import json
 import re
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from functools import cache
 from importlib import resources
@@ -27,19 +31,48 @@ _DONE = re.compile(r"done\s*\(\s*\)", re.IGNORECASE)
 
 
 @dataclass(frozen=True)
-class Action:
-    """``pick_and_place(obj, target)`` or ``done()`` (obj and target None)."""
+class PickAndPlace:
+    """Pick ``obj`` up and put it in or on ``destination`` (both the scene's names)."""
 
-    obj: str | None = None
-    target: str | None = None
+    obj: str
+    destination: str
 
     @property
     def is_done(self) -> bool:
-        """True for ``done()``."""
-        return self.obj is None
+        """False: a move."""
+        return False
 
     def __str__(self) -> str:
-        return DONE if self.obj is None else f"pick_and_place({self.obj}, {self.target})"
+        return format_action(self)
+
+
+@dataclass(frozen=True)
+class Done:
+    """The plan is finished."""
+
+    @property
+    def is_done(self) -> bool:
+        """True: the end of the plan."""
+        return True
+
+    def __str__(self) -> str:
+        return format_action(self)
+
+
+#: One action of a tabletop plan.
+Action = PickAndPlace | Done
+
+
+def format_action(action: Action) -> str:
+    """The action's text: ``pick_and_place(obj, destination)`` or ``done()``."""
+    if isinstance(action, Done):
+        return DONE
+    return f"pick_and_place({action.obj}, {action.destination})"
+
+
+def format_actions(actions: Iterable[Action]) -> list[str]:
+    """The actions' texts, in order (for a results file, JSON or a prompt)."""
+    return [format_action(a) for a in actions]
 
 
 class InvalidActionError(ValueError):
@@ -50,6 +83,27 @@ def _clean(name: str) -> str:
     return name.strip().strip("'\"`").strip()
 
 
+def read_action(text: str) -> Action:
+    """The first action in ``text`` as written, unchecked (a results file's, a user's plan file's):
+    the names are kept as they are.
+
+    Raises:
+        InvalidActionError: No action in the text.
+    """
+    pick = _PICK.search(text)
+    done = _DONE.search(text)
+    if pick is None and done is None:
+        raise InvalidActionError(f"not an action: {text.strip()[:80]!r}")
+    if pick is None or (done is not None and done.start() < pick.start()):
+        return Done()
+    return PickAndPlace(_clean(pick.group(1)), _clean(pick.group(2)))
+
+
+def read_actions(texts: Iterable[str]) -> tuple[Action, ...]:
+    """Each text's action, unchecked (see :func:`read_action`)."""
+    return tuple(read_action(t) for t in texts)
+
+
 def parse_action(text: str, scene: Scene) -> Action:
     """The first action in ``text``, with names mapped to the scene's exact spelling.
 
@@ -57,13 +111,20 @@ def parse_action(text: str, scene: Scene) -> Action:
         InvalidActionError: No action, an unknown object, a non-pickable object, a target that is not a
             destination, or an object placed on itself.
     """
-    pick = _PICK.search(text)
-    done = _DONE.search(text)
-    if pick is None and done is None:
-        raise InvalidActionError(f"not an action: {text.strip()[:80]!r}")
-    if pick is None or (done is not None and done.start() < pick.start()):
-        return Action()
-    obj_name, target_name = _clean(pick.group(1)), _clean(pick.group(2))
+    return check_action(read_action(text), scene)
+
+
+def check_action(action: Action, scene: Scene) -> Action:
+    """``action`` with its names in the scene's exact spelling, checked as :func:`parse_action`
+    checks text (for actions made in code: a planner's, a grader's).
+
+    Raises:
+        InvalidActionError: An unknown object, a non-pickable object, a target that is not a
+            destination, or an object placed on itself.
+    """
+    if isinstance(action, Done):
+        return action
+    obj_name, target_name = action.obj, action.destination
     obj, target = scene.get(obj_name), scene.get(target_name)
     if obj is None:
         raise InvalidActionError(f"object not in the scene: {obj_name!r}")
@@ -75,13 +136,13 @@ def parse_action(text: str, scene: Scene) -> Action:
         raise InvalidActionError(f"{target.name!r} is not a destination")
     if obj.name == target.name:
         raise InvalidActionError(f"cannot place {obj.name!r} on itself")
-    return Action(obj.name, target.name)
+    return PickAndPlace(obj.name, target.name)
 
 
 def valid_actions(scene: Scene, include_done: bool = True) -> list[Action]:
     """Every valid ``pick_and_place`` in the scene (no self-placement), then ``done()``."""
-    actions = [Action(o, d) for o in scene.pickable for d in scene.destinations if o != d]
-    return [*actions, Action()] if include_done else actions
+    actions: list[Action] = [PickAndPlace(o, d) for o in scene.pickable for d in scene.destinations if o != d]
+    return [*actions, Done()] if include_done else actions
 
 
 @dataclass(frozen=True)
@@ -149,17 +210,17 @@ class Feedback:
         failed: ``(action, reason)`` for each action that failed; the planner will not choose them again.
     """
 
-    executed: tuple[str, ...] | list[str] = ()
-    failed: tuple[tuple[str, str], ...] | list[tuple[str, str]] = ()
+    executed: tuple[Action, ...] = ()
+    failed: tuple[tuple[Action, str], ...] = ()
 
     @property
-    def failed_actions(self) -> set[str]:
-        """The failed action texts."""
+    def failed_actions(self) -> set[Action]:
+        """The failed actions."""
         return {action for action, _ in self.failed}
 
     def script_lines(self) -> list[str]:
         """The failures as comment lines for a robot-script prompt."""
-        return [f"# failed: {action} ({reason})" for action, reason in self.failed]
+        return [f"# failed: {format_action(action)} ({reason})" for action, reason in self.failed]
 
 
 @dataclass
@@ -167,7 +228,7 @@ class Plan:
     """A plan with everything needed to explain it.
 
     Attributes:
-        actions: The action texts, ending with ``done()``.
+        actions: The actions, ending with :class:`Done`.
         steps: Per-step scores.
         refused: True when the planner judged the request unsafe.
         reason: Why it refused (or None).
@@ -175,17 +236,23 @@ class Plan:
         usage: Per-module tokens, time and cost.
     """
 
-    actions: list[str]
+    actions: tuple[Action, ...]
     steps: list[Step] = field(default_factory=list)
     refused: bool = False
     reason: str | None = None
     trace: PlanTrace = field(default_factory=PlanTrace)
     usage: dict[str, Usage] = field(default_factory=dict)
 
+    def __post_init__(self) -> None:
+        self.actions = tuple(self.actions)
+        wrong = [a for a in self.actions if not isinstance(a, PickAndPlace | Done)]
+        if wrong:  # text is read into actions at the edge (read_action, parse_action), never here
+            raise TypeError(f"a plan's actions are PickAndPlace or Done, not {type(wrong[0]).__name__}")
+
     def to_dict(self) -> dict[str, Any]:
         """The JSON contract of ``conceptbot plan --json``."""
         return {
-            "plan": list(self.actions),
+            "plan": format_actions(self.actions),
             "steps": [s.to_dict() for s in self.steps],
             "refused": self.refused,
             "reason": self.reason,

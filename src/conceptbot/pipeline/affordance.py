@@ -27,7 +27,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from conceptbot.core.plan import Action
+from conceptbot.core.plan import Action, PickAndPlace
 from conceptbot.core.scene import Scene, SceneObject
 from conceptbot.pipeline.ope import ObjectProperties
 from conceptbot.pipeline.vocabulary import PERSON_WORDS
@@ -81,22 +81,21 @@ def affordance(
     action: Action,
     scene: Scene,
     properties: dict[str, ObjectProperties],
-    executed: list[str],
+    executed: list[Action],
     gripper: Gripper | None = None,
 ) -> tuple[float, dict[str, float]]:
     """``(S_aff, factors)`` for one candidate action."""
-    if action.is_done:
+    if not isinstance(action, PickAndPlace):
         return 1.0, {}
-    assert action.obj is not None and action.target is not None
-    if str(action) in executed:
+    if action in executed:
         return 0.0, {"repeat": 0.0}
-    obj, target = scene.get(action.obj), scene.get(action.target)
+    obj, target = scene.get(action.obj), scene.get(action.destination)
     assert obj is not None and target is not None
     factors = {
         "pick": obj.confidence,
         "place": target.confidence,
         "bbox": bbox_score(obj, gripper or Gripper()),
-        "prop": property_score(action.obj, action.target, properties),
+        "prop": property_score(action.obj, action.destination, properties),
     }
     total = 1.0
     for value in factors.values():

@@ -27,7 +27,7 @@ from dataclasses import dataclass, replace
 
 from conceptbot.core.limits import check_request
 from conceptbot.core.observe import SILENT, Observer
-from conceptbot.core.plan import DONE, Feedback, Plan
+from conceptbot.core.plan import Done, Feedback, Plan
 from conceptbot.core.scene import Scene
 from conceptbot.core.trace import OPETrace, PlannerSummary, PlanTrace, URPTrace
 from conceptbot.core.usage import Usage
@@ -201,7 +201,7 @@ class ConceptBot:
             if interpreted.refused:
                 usage["total"] = _total(usage, started)
                 reason = interpreted.refusal_reason or "judged unsafe"
-                return Plan([DONE], [], True, reason, replace(trace, ope=ope, urp=urp), usage)
+                return Plan((Done(),), [], True, reason, replace(trace, ope=ope, urp=urp), usage)
             guidance = guidance_from(interpreted)
             commands = interpreted.commands
         planned = self.planner.plan(request, scene, properties, guidance, commands, feedback, observer)
@@ -212,7 +212,7 @@ class ConceptBot:
         trace = replace(trace, ope=ope, urp=urp, planner=summary, vetoes=vetoes)
         # Nothing moved because what the model wanted was vetoed: that is a refusal, with its reason.
         fresh = planned.actions[len(feedback.executed) if feedback else 0 :]
-        refused = bool(planned.vetoes) and fresh == [DONE]
+        refused = bool(planned.vetoes) and list(fresh) == [Done()]
         reason = "; ".join(f"{v.move}: vetoed, {v.statement}" for v in planned.vetoes) if refused else None
         return Plan(planned.actions, planned.steps, refused, reason, trace, usage)
 
@@ -237,7 +237,7 @@ class ConceptBot:
             # Closed loop: keep what ran, never retry what failed, then the rest of the plan.
             done = list(feedback.executed)
             rest = [a for a in actions[:-1] if a not in done and a not in feedback.failed_actions]
-            actions = [*done, *rest, DONE]
+            actions = [*done, *rest, Done()]
         usage = dict(result.usage)
         usage["total"] = _total(usage, started)
         return Plan(actions, result.steps, result.refused, result.reason, trace, usage)

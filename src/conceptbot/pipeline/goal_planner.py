@@ -39,7 +39,7 @@ from conceptbot.core.errors import (
     NotSupportedError,
 )
 from conceptbot.core.observe import SILENT, Observer
-from conceptbot.core.plan import DONE, Action, CandidateScore, Step
+from conceptbot.core.plan import Action, CandidateScore, Done, PickAndPlace, Step
 from conceptbot.core.scene import Scene
 from conceptbot.core.trace import DecisionTrace, GoalTrace, PlanTrace, RiskCheck, StackTrace, Veto
 from conceptbot.core.usage import Usage
@@ -120,7 +120,7 @@ class GoalPlanResult:
     system that ran it adds the rest (:class:`~conceptbot.pipeline.conceptbot.ConceptBot`).
     """
 
-    actions: list[str]
+    actions: list[Action]
     steps: list[Step]
     refused: bool
     reason: str | None
@@ -280,7 +280,7 @@ class GoalPlanner:
             observer.event("step", step.to_dict())
         refused = not moves and bool(blocked)
         reason = "; ".join(_why(c) for c in risk if c.dropped) if refused else None
-        actions = [str(Action(o, t)) for o, t in moves] + [DONE]
+        actions: list[Action] = [*(PickAndPlace(o, t) for o, t in moves), Done()]
         trace = PlanTrace(goal=goal, decisions=decisions, stack=pile, risk=risk, vetoes=vetoes or None)
         return GoalPlanResult(actions, steps, refused, reason, trace, usage, properties)
 
@@ -418,7 +418,7 @@ class GoalPlanner:
         score that compares with nothing (NaN): the move is kept only when its score is known and at
         or below the threshold."""
         move = move_text(obj, target)
-        s_aff, factors = affordance(Action(obj, target), scene, properties, [], self.gripper)
+        s_aff, factors = affordance(PickAndPlace(obj, target), scene, properties, [], self.gripper)
         ope = _evidence(properties[obj], target) if obj in properties else None
         veto = self.hazards.veto(obj, target, properties)
         if veto is not None:
@@ -528,10 +528,10 @@ class GoalPlanner:
         CLI and the page); ``scoring`` is how the backend scored the plan's questions."""
         steps = []
         for number, (obj, target) in enumerate(moves, 1):
-            chosen = str(Action(obj, target))
+            chosen = str(PickAndPlace(obj, target))
             candidates = []
             for judgement in ranked.get((obj, target), [])[:TOP_K]:
-                action = Action(judgement.subject, target)
+                action = PickAndPlace(judgement.subject, target)
                 s_aff, factors = affordance(action, scene, properties, [], self.gripper)
                 p = judgement.p_yes
                 candidates.append(CandidateScore(str(action), p, s_aff, p * s_aff, factors))

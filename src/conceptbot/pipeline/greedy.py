@@ -15,7 +15,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from conceptbot.core.observe import SILENT, Observer
-from conceptbot.core.plan import DONE, Action, CandidateScore, Feedback, Step, valid_actions
+from conceptbot.core.plan import Action, CandidateScore, Done, Feedback, Step, valid_actions
 from conceptbot.core.scene import Scene
 from conceptbot.core.trace import Veto
 from conceptbot.core.usage import Usage
@@ -47,20 +47,20 @@ class PlannerResult:
 
     Attributes:
         steps: Per step, the chosen action and the best candidates' scores.
-        actions: The action texts, ending with ``done()``.
+        actions: The actions, ending with ``Done()``.
         usage: Tokens, calls and wall time of the planning.
         vetoes: Moves the LLM ranked first that were vetoed (:mod:`conceptbot.pipeline.hazards`).
     """
 
     steps: list[Step]
-    actions: list[str]
+    actions: list[Action]
     usage: Usage
     vetoes: tuple[Veto, ...] = ()
 
 
-LLMScorer = Callable[[list[Action], list[str], int], LLMScores]
+LLMScorer = Callable[[list[Action], list[Action], int], LLMScores]
 """``(candidates, history, step index) -> LLMScores``."""
-AffordanceScorer = Callable[[list[Action], list[str]], list[tuple[float, dict[str, float]]]]
+AffordanceScorer = Callable[[list[Action], list[Action]], list[tuple[float, dict[str, float]]]]
 """``(candidates, history) -> [(S_aff, factors)]`` per candidate."""
 
 
@@ -81,7 +81,7 @@ def greedy_plan(
     label: str = "Planner",
     observer: Observer = SILENT,
 ) -> PlannerResult:
-    """Plan greedily: the steps, the action texts (ending with ``done()``) and usage.
+    """Plan greedily: the steps, the actions (ending with ``Done()``) and usage.
 
     Args:
         scene: Where the candidates come from.
@@ -99,7 +99,7 @@ def greedy_plan(
     usage = Usage(calls=0)
     candidates = valid_actions(scene)
     limit = step_limit(scene, max_steps)
-    history: list[str] = list(feedback.executed) if feedback else []
+    history: list[Action] = list(feedback.executed) if feedback else []
     failed = feedback.failed_actions if feedback else set()
     steps: list[Step] = []
     for index in range(len(history), max(limit, len(history) + 1)):
@@ -107,7 +107,7 @@ def greedy_plan(
         found = llm_scores(candidates, history, index)
         usage = usage + found.usage
         affs = [
-            (0.0, {**factors, "failed": 0.0}) if str(action) in failed else (s_aff, factors)
+            (0.0, {**factors, "failed": 0.0}) if action in failed else (s_aff, factors)
             for action, (s_aff, factors) in zip(candidates, affordances(candidates, history), strict=True)
         ]
         products = [s_llm * s_aff for s_llm, (s_aff, _) in zip(found.scores, affs, strict=True)]
@@ -118,15 +118,17 @@ def greedy_plan(
                 candidates, found.scores, affs, products, strict=True
             )
         ]
-        best = max(scored, key=lambda c: c.combined)  # first of equals: deterministic
-        if best.combined <= 0.0:
+        done = next(i for i, a in enumerate(candidates) if a.is_done)
+        best = max(range(len(scored)), key=lambda i: scored[i].combined)  # first of equals: deterministic
+        if scored[best].combined <= 0.0:
             # Nothing the LLM wants is feasible (e.g. a one-hot vote for a repeat): stop.
-            best = next(c for c in scored if c.action == DONE)
-        ranked = sorted(scored, key=lambda c: -c.combined)
-        shown = ranked[:TOP_K] + [c for c in ranked[TOP_K:] if c.action == DONE]
-        steps.append(Step(index + 1, best.action, tuple(shown), tuple(found.rejected), method, found.scoring))
+            best = done
+        order = sorted(range(len(scored)), key=lambda i: -scored[i].combined)
+        shown = [scored[i] for i in order[:TOP_K]] + [scored[i] for i in order[TOP_K:] if i == done]
+        chosen = scored[best].action
+        steps.append(Step(index + 1, chosen, tuple(shown), tuple(found.rejected), method, found.scoring))
         observer.event("step", steps[-1].to_dict())
-        if best.action == DONE:
+        if candidates[best].is_done:
             break
-        history.append(best.action)
-    return PlannerResult(steps, [*history, DONE], usage.with_latency(time.perf_counter() - started))
+        history.append(candidates[best])
+    return PlannerResult(steps, [*history, Done()], usage.with_latency(time.perf_counter() - started))

@@ -21,7 +21,16 @@ from collections import Counter
 from dataclasses import replace
 
 from conceptbot.core.observe import SILENT, Observer
-from conceptbot.core.plan import DONE, Action, Feedback, InvalidActionError, parse_action, valid_actions
+from conceptbot.core.plan import (
+    DONE,
+    Action,
+    Feedback,
+    InvalidActionError,
+    PickAndPlace,
+    format_actions,
+    parse_action,
+    valid_actions,
+)
 from conceptbot.core.scene import Scene
 from conceptbot.core.trace import Veto
 from conceptbot.core.usage import Usage
@@ -91,7 +100,7 @@ class Planner:
         scene: Scene,
         properties: dict[str, ObjectProperties],
         guidance: str,
-        history: list[str],
+        history: list[Action],
     ) -> tuple[Message, Message]:
         """The system and user messages for one step."""
         props = "\n".join(f"- {p.summary()}" for p in properties.values())
@@ -105,7 +114,7 @@ class Planner:
             "planner_user",
             request=request,
             guidance=guidance,
-            history=", ".join(history) if history else "none",
+            history=", ".join(format_actions(history)) if history else "none",
         )
         return Message("system", system), Message("user", user)
 
@@ -115,7 +124,7 @@ class Planner:
         scene: Scene,
         properties: dict[str, ObjectProperties],
         commands: list[str],
-        history: list[str],
+        history: list[Action],
         feedback: Feedback | None = None,
     ) -> str:
         """The one-pass scoring prompt: a few-shot robot script (``prompts/planner_context.txt``) in
@@ -149,7 +158,7 @@ class Planner:
             return LLMScores(softmax(list(scored.logprobs)), [], scored.usage, scored.method)
         usage = Usage(calls=0)
         rejected: list[str] = []
-        votes: Counter[str] = Counter()
+        votes: Counter[Action] = Counter()
         request = ChatRequest(
             messages=messages,
             n=self.n,
@@ -163,7 +172,7 @@ class Planner:
             usage = usage + response.usage
             for text in response.choices:
                 try:
-                    votes[str(parse_action(text, scene))] += 1
+                    votes[parse_action(text, scene)] += 1
                 except InvalidActionError as exc:
                     rejected.append(f"{text.strip()[:80]!r}: {exc}")
             if votes or attempt == 1:
@@ -183,7 +192,7 @@ class Planner:
             rejected.append("no valid action in any completion: stopping")
             return LLMScores([1.0 if a.is_done else 0.0 for a in candidates], rejected, usage, "vote")
         total = sum(votes.values())
-        return LLMScores([votes.get(str(a), 0) / total for a in candidates], rejected, usage, "vote")
+        return LLMScores([votes.get(a, 0) / total for a in candidates], rejected, usage, "vote")
 
     def plan(
         self,
@@ -205,32 +214,35 @@ class Planner:
         if feedback and feedback.failed:
             guidance = "\n".join([guidance, *feedback.script_lines()]).strip()
         last: list[float] = []  # the step's S_LLM, for telling which vetoes changed the choice
-        vetoed: dict[str, Veto] = {}  # vetoes of moves the LLM ranked first at their step
+        vetoed: dict[Action, Veto] = {}  # vetoes of moves the LLM ranked first at their step
         # A veto depends on the move and OPE's answers only, so each move is judged once per plan.
         vetoes = {
-            str(a): v
+            a: v
             for a in valid_actions(scene, include_done=False)
-            if (v := self.hazards.veto(a.obj or "", a.target or "", properties)) is not None
+            if isinstance(a, PickAndPlace)
+            and (v := self.hazards.veto(a.obj, a.destination, properties)) is not None
         }
 
-        def llm_scores(candidates: list[Action], history: list[str], index: int) -> LLMScores:
+        def llm_scores(candidates: list[Action], history: list[Action], index: int) -> LLMScores:
             messages = self.messages(request, scene, properties, guidance, history)
             prompt = self.completion_prompt(request, scene, properties, commands or [], history, feedback)
             found = self._llm_scores(candidates, messages, scene, index, prompt)
             last[:] = found.scores
             return found
 
-        def affordances(candidates: list[Action], history: list[str]) -> list[tuple[float, dict[str, float]]]:
+        def affordances(
+            candidates: list[Action], history: list[Action]
+        ) -> list[tuple[float, dict[str, float]]]:
             found = [affordance(a, scene, properties, history, self.gripper) for a in candidates]
             top = max(last, default=0.0)
             for i, action in enumerate(candidates):
-                veto = vetoes.get(str(action))
+                veto = vetoes.get(action)
                 if veto is None:
                     continue
                 # Vetoed before the relative scaling, so a vetoed move is never the step's best S_prop.
                 found[i] = (0.0, {**found[i][1], "veto": 0.0})
                 if i < len(last) and last[i] >= top > 0.0:
-                    vetoed.setdefault(str(action), veto)
+                    vetoed.setdefault(action, veto)
             return relative_property_scores(found) if self.relative_properties else found
 
         result = greedy_plan(

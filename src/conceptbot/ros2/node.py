@@ -40,7 +40,7 @@ from std_msgs.msg import String
 
 from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConceptBotError, ConfigError
-from conceptbot.core.plan import Plan
+from conceptbot.core.plan import Plan, format_actions
 from conceptbot.core.urls import redact_secrets
 from conceptbot.ros2 import qos
 from conceptbot.ros2.protocol import (
@@ -351,7 +351,7 @@ def _summary(plan: Plan) -> str:
     """One line for the log: the plan's actions or the refusal."""
     if plan.refused:
         return f"refused: {plan.reason}"
-    actions = [a for a in plan.actions if a != "done()"]
+    actions = format_actions(a for a in plan.actions if not a.is_done)
     return f"{len(actions)} action(s): {', '.join(actions) or 'nothing to do'}"
 
 

@@ -12,13 +12,14 @@ action with its reason; the planner plans the rest from there. At most ``max_rep
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 from conceptbot.core.observe import SILENT, Observer
-from conceptbot.core.plan import Feedback, Plan, parse_action
+from conceptbot.core.plan import Action, Feedback, PickAndPlace, Plan, format_actions
 from conceptbot.core.scene import Scene
-from conceptbot.sim.skills import PickAndPlace, SkillResult, same_place
+from conceptbot.sim.skills import PickPlaceSkill, SkillResult, same_place
 from conceptbot.sim.world import World
 from conceptbot.systems import PlannerSystem
 
@@ -33,6 +34,7 @@ class Execution:
             object the plan tried to move.
         intended: Object -> where the plan last put it (successful steps only).
         plans: Every plan used (the first, then each replan).
+        attempted: The moves tried, in order (one per result).
         ok: Every step succeeded and every moved object is where the plan put it.
         verdict: One line for people.
     """
@@ -40,9 +42,15 @@ class Execution:
     results: list[SkillResult] = field(default_factory=list)
     placements: dict[str, str | None] = field(default_factory=dict)
     intended: dict[str, str] = field(default_factory=dict)
-    plans: list[list[str]] = field(default_factory=list)
+    plans: list[tuple[Action, ...]] = field(default_factory=list)
     ok: bool = False
     verdict: str = ""
+    attempted: list[PickAndPlace] = field(default_factory=list)
+
+    @property
+    def executed(self) -> tuple[PickAndPlace, ...]:
+        """The moves that succeeded, in order."""
+        return tuple(a for a, r in zip(self.attempted, self.results, strict=True) if r.ok)
 
     @property
     def seconds_per_action(self) -> list[float]:
@@ -54,7 +62,7 @@ class Execution:
         return {
             "ok": self.ok,
             "verdict": self.verdict,
-            "plans": self.plans,
+            "plans": [format_actions(p) for p in self.plans],
             "steps": [
                 {
                     "action": r.action,
@@ -73,7 +81,7 @@ class Execution:
 
 def _check(world: World, execution: Execution) -> None:
     """Fill placements, ok and verdict from the world's final state."""
-    moved = {r.action.split("(", 1)[1].split(",", 1)[0] for r in execution.results}
+    moved = {a.obj for a in execution.attempted}
     execution.placements = {name: world.locate(name) for name in sorted(moved)}
     failed = [r for r in execution.results if not r.ok]
     wrong = []
@@ -95,28 +103,27 @@ def _check(world: World, execution: Execution) -> None:
 
 
 def execute_actions(
-    skill: PickAndPlace, scene: Scene, actions: list[str], execution: Execution
+    skill: PickPlaceSkill, scene: Scene, actions: Sequence[Action], execution: Execution
 ) -> SkillResult | None:
-    """Run ``actions`` until ``done()`` or the first failure; returns the failed result or None."""
-    for text in actions:
-        action = parse_action(text, scene)
-        if action.is_done:
+    """Run ``actions`` until ``Done`` or the first failure; returns the failed result or None."""
+    for action in actions:
+        if not isinstance(action, PickAndPlace):
             return None
-        assert action.obj is not None and action.target is not None
-        result = skill.run(action.obj, action.target)
+        result = skill.run(action.obj, action.destination)
+        execution.attempted.append(action)
         execution.results.append(result)
         if not result.ok:
             return result
-        execution.intended[action.obj] = action.target
+        execution.intended[action.obj] = action.destination
     return None
 
 
 def execute_plan(
-    world: World, scene: Scene, actions: list[str], skill: PickAndPlace | None = None
+    world: World, scene: Scene, actions: Sequence[Action], skill: PickPlaceSkill | None = None
 ) -> Execution:
     """Execute a plan's actions open loop (stop at the first failure) and check the final state."""
-    skill = skill or PickAndPlace(world)
-    execution = Execution(plans=[list(actions)])
+    skill = skill or PickPlaceSkill(world)
+    execution = Execution(plans=[tuple(actions)])
     execute_actions(skill, scene, actions, execution)
     _check(world, execution)
     return execution
@@ -127,7 +134,7 @@ def run_closed_loop(
     request: str,
     scene: Scene,
     world: World,
-    skill: PickAndPlace | None = None,
+    skill: PickPlaceSkill | None = None,
     max_replans: int = 2,
     risk: bool = False,
     observer: Observer | None = None,
@@ -140,7 +147,7 @@ def run_closed_loop(
     Returns:
         The execution record and every plan made (the first, then the replans).
     """
-    skill = skill or PickAndPlace(world)
+    skill = skill or PickPlaceSkill(world)
     execution = Execution()
     plans: list[Plan] = []
     feedback = Feedback()
@@ -148,7 +155,7 @@ def run_closed_loop(
     plan = system.plan(request, scene, risk=risk, observer=observer)
     while True:
         plans.append(plan)
-        execution.plans.append(list(plan.actions))
+        execution.plans.append(tuple(plan.actions))
         if plan.refused:
             break
         remaining = plan.actions[len(feedback.executed) :]  # a replan starts with the steps already done
@@ -158,8 +165,8 @@ def run_closed_loop(
         if failed is None or len(plans) > max_replans:
             break
         feedback = Feedback(
-            executed=[r.action for r in execution.results if r.ok],
-            failed=[*feedback.failed, (failed.action, f"{failed.failure}: {failed.message}")],
+            executed=execution.executed,
+            failed=(*feedback.failed, (execution.attempted[-1], f"{failed.failure}: {failed.message}")),
         )
         observer.progress(f"Replanning after: {failed.action} failed ({failed.failure})")
         plan = system.plan(request, scene, risk=risk, feedback=feedback, observer=observer)

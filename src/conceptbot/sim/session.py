@@ -14,19 +14,20 @@ Example::
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from PIL import Image
 
+from conceptbot.core.plan import Action
 from conceptbot.core.scene import Scene
 from conceptbot.sim import AFTER_PNG, BEFORE_PNG, EXECUTION_GIF
 from conceptbot.sim.detector import SimDetector, observe
 from conceptbot.sim.execute import Execution, execute_plan
 from conceptbot.sim.options import SimOptions
 from conceptbot.sim.render import VIEW, picture, save_gif
-from conceptbot.sim.skills import PickAndPlace
+from conceptbot.sim.skills import PickPlaceSkill
 from conceptbot.sim.world import World, build_world
 
 TITLE_CHARS = 70
@@ -46,9 +47,9 @@ class SimSession:
 
     world: World
     scene: Scene
-    skill: PickAndPlace
+    skill: PickPlaceSkill
 
-    def execute(self, actions: list[str]) -> Execution:
+    def execute(self, actions: Sequence[Action]) -> Execution:
         """Execute a plan's actions open loop (stop at the first failure) and check the final state."""
         return execute_plan(self.world, self.scene, actions, self.skill)
 
@@ -125,7 +126,7 @@ def run_in_simulator(
         picture(world, VIEW, title=f"before: {title[:TITLE_CHARS]}").save(out_dir / BEFORE_PNG)
         files = [BEFORE_PNG]
         hook = _frame_hook(world, options, frames)
-        skill = PickAndPlace(world, options.grasp, on_frame=hook, retries=options.retries)
+        skill = PickPlaceSkill(world, options.grasp, on_frame=hook, retries=options.retries)
         execution = act(SimSession(world, seen, skill))
         if execution is not None:
             after = f"after: {execution.verdict[:TITLE_CHARS]}"

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field, replace
 
 import pybullet as pb
 
+from conceptbot.core.plan import PickAndPlace, format_action
 from conceptbot.sim import GRASP_MODES
 from conceptbot.sim.robot import FrameHook, Panda, Vec3
 from conceptbot.sim.world import REACH_MAX_M, WALL_M, World
@@ -148,7 +149,7 @@ def grasp_for(world: World, name: str) -> Grasp:
     return Grasp((x, y, grasp_z), across, width, free_yaw=spec.shape in ("sphere", "cylinder"))
 
 
-class PickAndPlace:
+class PickPlaceSkill:
     """Runs ``pick_and_place`` in a world.
 
     Args:
@@ -323,7 +324,7 @@ class PickAndPlace:
 
     def _attempt(self, obj: str, target: str) -> SkillResult:
         """One try at :meth:`run`, from the world as it is now."""
-        action = f"pick_and_place({obj}, {target})"
+        action = format_action(PickAndPlace(obj, target))
         started = time.perf_counter()
         motion = self._plan_motion(action, obj, target, started)
         if isinstance(motion, SkillResult):
