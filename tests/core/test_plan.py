@@ -105,3 +105,27 @@ def test_a_plan_holds_typed_actions_only() -> None:
     ]
     with pytest.raises(TypeError, match="PickAndPlace or Done"):
         Plan(["pick_and_place(chips, user)", "done()"])  # type: ignore[list-item]
+
+
+def test_only_core_plan_writes_action_text() -> None:
+    """No module but ``core/plan.py`` builds an action's text ("pick_and_place(...)" in an f-string, a
+    bare "done()"): every other one passes actions and formats them with ``format_action(s)``. The
+    household's own actions are a world of their own (``household/``)."""
+    import ast
+    from pathlib import Path
+
+    import conceptbot
+
+    root = Path(conceptbot.__file__).parent
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        relative = path.relative_to(root).as_posix()
+        if relative == "core/plan.py" or relative.startswith("household/"):
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            built = isinstance(node, ast.JoinedStr) and any(
+                isinstance(v, ast.Constant) and "pick_and_place(" in str(v.value) for v in node.values
+            )
+            if built or (isinstance(node, ast.Constant) and node.value == "done()"):
+                found.append(f"{relative}:{node.lineno}")
+    assert found == []

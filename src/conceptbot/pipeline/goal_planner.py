@@ -39,7 +39,7 @@ from conceptbot.core.errors import (
     NotSupportedError,
 )
 from conceptbot.core.observe import SILENT, Observer
-from conceptbot.core.plan import Action, CandidateScore, Done, PickAndPlace, Step
+from conceptbot.core.plan import Action, CandidateScore, Done, PickAndPlace, Step, format_action
 from conceptbot.core.scene import Scene
 from conceptbot.core.trace import DecisionTrace, GoalTrace, PlanTrace, RiskCheck, StackTrace, Veto
 from conceptbot.core.usage import Usage
@@ -159,7 +159,7 @@ def _why(check: RiskCheck) -> str:
 def _failed(obj: str, target: str, message: str) -> Veto:
     """The veto of a move whose risk decision could not be made."""
     statement = f"the risk decision could not be made: {message}"
-    return Veto(f"pick_and_place({obj}, {target})", obj, target, "error", statement)
+    return Veto(format_action(PickAndPlace(obj, target)), obj, target, "error", statement)
 
 
 def _vetoed(veto: Veto, move: str, ope: str | None, s_aff: float) -> RiskCheck:

@@ -38,6 +38,7 @@ from functools import cache
 from importlib import resources
 from typing import Any
 
+from conceptbot.core.plan import PickAndPlace, format_action
 from conceptbot.core.trace import Veto
 from conceptbot.knowledge.base import Edge, KnowledgeGraph
 from conceptbot.pipeline.ope import ObjectProperties
@@ -141,7 +142,7 @@ class HazardCheck:
         """
         if not is_person(target):
             return None
-        move = f"pick_and_place({obj}, {target})"
+        move = format_action(PickAndPlace(obj, target))
         found = properties.get(obj)
         partner = properties.get(target)
         answer = found.answer if found is not None else None
