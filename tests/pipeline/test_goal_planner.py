@@ -273,6 +273,30 @@ def test_a_place_move_is_dropped_for_ope_rating_it_with_the_destination() -> Non
     )
 
 
+def test_with_risk_every_move_is_rated_and_one_rated_dangerous_is_dropped_unflagged() -> None:
+    # conceptbot plan --risk: the risk question calls the move safe, OPE still rates it
+    scene = scene_from_dict({"pickable_objects": ["foil tray"], "destinations": ["microwave"]})
+    ope = RatingOPE({"foil tray": (2, [("microwave", 5)])})
+    planner = GoalPlanner(
+        TargetFinder(FakeLLM(scores=[PRIOR, SAFE]), is_person),
+        Decider(FakeLLM(scores=[PRIOR, SAFE]), FactFinder(None)),
+        ope,
+    )
+    result = planner.plan("Put the foil tray in the microwave", scene, risk=True)
+    [check] = result.trace.risk
+    assert ope.rated == ["foil tray"] and check.dropped and result.refused
+    assert check.reason == "OPE rates the foil tray 5/5 dangerous with the microwave"
+    # without --risk the unflagged move is not rated, and stands
+    ope = RatingOPE({"foil tray": (2, [("microwave", 5)])})
+    llm = FakeLLM(scores=[PRIOR, SAFE])
+    planner = GoalPlanner(TargetFinder(llm, is_person), Decider(llm, FactFinder(None)), ope)
+    assert format_actions(planner.plan("Put the foil tray in the microwave", scene).actions) == [
+        "pick_and_place(foil tray, microwave)",
+        "done()",
+    ]
+    assert ope.rated == []
+
+
 def test_a_target_taking_one_object_ranks_by_the_decision_and_the_name_ranking_together() -> None:
     scores = [
         [-1.0, -1.0],  # content-free object

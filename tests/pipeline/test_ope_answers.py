@@ -53,3 +53,9 @@ def test_penalties_per_mode() -> None:
     assert tray.penalty("tray", "oven", False, oven) == pytest.approx(0.88 * 0.2 * 0.8)
     assert tray.penalty("tray", "oven", False, fragile_knife) == pytest.approx(0.88 * 0.2)
     assert Materials(("glass",), True).penalty("cup", "user", True, None) == 1.0
+
+
+def test_a_partner_listed_twice_counts_at_its_worst() -> None:
+    # the model may list a partner twice with different scores: a risk decision takes the highest
+    ball = RiskIndex(2, (Partner("bowl", 1), Partner("dog", 4), Partner("bowl", 5)))
+    assert ball.score_with("bowl") == 5 and ball.score_with("dog") == 4 and ball.score_with("cup") is None

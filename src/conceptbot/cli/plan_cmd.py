@@ -40,7 +40,12 @@ from conceptbot.systems import SYSTEMS, SystemOptions, build_system
     help="System: conceptbot (goal planner), urp (without OPE), nokg (no graph facts), saycan "
     "(baseline), paper / paper-nokg (the paper's step planner), ope (the paper's OPE-only ablation).",
 )
-@click.option("--risk", is_flag=True, help="Use the Risk Index (danger 1-5, DangerousWith) in OPE.")
+@click.option(
+    "--risk",
+    is_flag=True,
+    help="Rate with OPE's Risk Index (danger 1-5, DangerousWith): in the default system every move "
+    "before it is kept (slower: a rating per object); in --config paper the scene's objects.",
+)
 @click.option(
     "--method",
     type=click.Choice(METHODS),

@@ -212,8 +212,12 @@ class GoalPlanner:
         risk: bool = False,
         observer: Observer = SILENT,
     ) -> GoalPlanResult:
-        """Plan ``request`` in ``scene`` (``risk`` is accepted for the common interface: the goal
-        planner always rates objects handed to someone with the Risk Index).
+        """Plan ``request`` in ``scene``.
+
+        Objects handed to a child or an animal, and moves the risk question flags, are rated with
+        OPE's Risk Index before they are kept; with ``risk`` every move is (``conceptbot plan
+        --risk``), so a move OPE rates dangerous with its destination is dropped even where the
+        question did not flag it. Each rating is a JSON generation of several seconds.
 
         ``observer`` gets a progress message as each piece of work starts and the events ``goal``,
         ``decisions``, ``risk`` and one ``step`` per move, in that order, as each part is done."""
@@ -248,11 +252,11 @@ class GoalPlanner:
             # Objects handed to a child or an animal are rated first (the veto reads the ratings);
             # others only when the risk question flags their move (see _check): each rating is a
             # JSON generation of several seconds.
-            handed = [o for o, t in fresh if is_vulnerable(t)]
+            handed = [o for o, t in fresh if risk or is_vulnerable(t)]
             self._properties(request, scene, handed, properties, usage, observer)
             for obj, target in fresh:
                 checks[(obj, target)] = self._check(
-                    request, scene, obj, target, properties, usage, observer, asked
+                    request, scene, obj, target, properties, usage, observer, asked, rate=risk
                 )
             dropped = {m for m in fresh if checks[m].dropped}
             if not dropped:
@@ -410,8 +414,10 @@ class GoalPlanner:
         usage: dict[str, Usage],
         observer: Observer,
         asked: list[str],
+        rate: bool = False,
     ) -> RiskCheck:
-        """The risk decision and the affordance of one move.
+        """The risk decision and the affordance of one move (``rate``: OPE's Risk Index is asked for
+        it whatever the risk question says).
 
         A veto (:mod:`conceptbot.pipeline.hazards`) drops the move before the model is asked; a
         decision the backend cannot make (an error, a non-finite score) drops it too, and so does a
@@ -436,7 +442,7 @@ class GoalPlanner:
         limit = self.thresholds.risk if is_person(target) else self.thresholds.risk_place
         flagged = judgement.score > limit
         reason = None
-        if flagged or is_vulnerable(target):
+        if flagged or rate or is_vulnerable(target):
             # A flag from the question alone is no reason to drop a move ("give the crayons to the
             # toddler" was flagged on dev): OPE's Risk Index of the object is asked, and the move is
             # dropped for what it names, which the trace shows.

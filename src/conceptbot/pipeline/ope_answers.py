@@ -154,8 +154,10 @@ class RiskIndex:
         return cls(_int(values.get("dangerous")), partners, str(values.get("reason", "")))
 
     def score_with(self, other: str) -> int | None:
-        """The interaction score with ``other``, or None when none was given."""
-        return next((p.score for p in self.dangerous_with if p.object == other), None)
+        """The interaction score with ``other``, or None when none was given; the highest where the
+        model listed ``other`` more than once (a safety decision takes the worst it was told)."""
+        scores = [p.score for p in self.dangerous_with if p.object == other]
+        return max(scores) if scores else None
 
     def summary(self, name: str) -> str:
         """``tray: danger 2/5, dangerous with oven (5)``."""
