@@ -11,10 +11,10 @@ The Python API (:mod:`conceptbot.api`)::
 The names below load on first use, so ``import conceptbot`` stays cheap (no model runtime, no
 torch) for the CLI and for code that only wants one submodule.
 
-Layers (imports flow one way; ``tests/test_layers.py`` checks it): ``core`` -> ``models``,
-``scenes`` -> ``knowledge`` -> ``pipeline`` -> ``baselines``, ``household`` -> ``systems`` ->
-``sim``, ``bench`` -> ``web``, ``ros2`` (the ROS 2 node) -> ``cli``; the API (``api``) on top of
-``systems``.
+Layers (imports flow one way, each importing only those below it; ``tests/test_layers.py`` checks
+it; an arrow points from the importer to what it imports): ``api`` -> ``cli`` -> ``web``, ``ros2``
+(the ROS 2 node) -> ``sim``, ``bench`` -> ``systems`` -> ``baselines``, ``household`` ->
+``pipeline`` -> ``knowledge`` -> ``models``, ``scenes`` -> ``core``.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.1.0"
+from conceptbot.core.version import __version__
 
 _EXPORTS: dict[str, str] = {
     "open_planner": "conceptbot.api",
@@ -40,8 +40,8 @@ _EXPORTS: dict[str, str] = {
     "Settings": "conceptbot.core.config",
     "load_settings": "conceptbot.core.config",
     "SYSTEMS": "conceptbot.systems",
-    "SystemOptions": "conceptbot.systems",
-    "PlannerSystem": "conceptbot.systems",
+    "SystemOptions": "conceptbot.core.system",
+    "PlannerSystem": "conceptbot.core.system",
     "LLM": "conceptbot.models.llm",
     "KnowledgeGraph": "conceptbot.knowledge.base",
     "Embedder": "conceptbot.models.embedder",
@@ -82,10 +82,11 @@ if TYPE_CHECKING:  # the same names for type checkers and editors, which do not 
     from conceptbot.core.observe import Callbacks, FanOut, Observer
     from conceptbot.core.plan import Done, PickAndPlace, Plan, format_actions, read_actions
     from conceptbot.core.scene import Scene, scene_from_dict
+    from conceptbot.core.system import PlannerSystem, SystemOptions
     from conceptbot.knowledge.base import KnowledgeGraph
     from conceptbot.models.embedder import Embedder
     from conceptbot.models.llm import LLM
-    from conceptbot.systems import SYSTEMS, PlannerSystem, SystemOptions
+    from conceptbot.systems import SYSTEMS
 
 
 def __getattr__(name: str) -> Any:

@@ -31,11 +31,12 @@ from typing import Any
 from conceptbot.core.config import Settings, load_settings
 from conceptbot.core.errors import ConfigError
 from conceptbot.core.scene import Scene
+from conceptbot.core.system import PlannerSystem, SystemOptions
 from conceptbot.knowledge.base import KnowledgeGraph
 from conceptbot.models.embedder import Embedder
 from conceptbot.models.llm import LLM
 from conceptbot.scenes import resolve_scene
-from conceptbot.systems import SYSTEMS, PlannerSystem, SystemOptions, build_system
+from conceptbot.systems import SYSTEMS, build_system
 
 
 def open_planner(

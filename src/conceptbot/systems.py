@@ -1,9 +1,11 @@
-"""Every planner system by name, built from settings: ConceptBot's configurations and SayCan.
+"""Every planner system by name, built from settings: ConceptBot's configurations and SayCan on
+the tabletop (:func:`build_system`, :data:`SYSTEMS`), and the household planners for SafeAgentBench
+(:func:`build_household_system`, :data:`HOUSEHOLD_SYSTEMS`).
 
-The one registry the CLI (``plan``, ``bench``, ``sim``), the web page and the Python API
-(:func:`conceptbot.open_planner`) build planners through. It sits above ``pipeline``,
+The one registry the CLI (``plan``, ``bench``, ``sim``, ``safebench``), the web page and the Python
+API (:func:`conceptbot.open_planner`) build planners through. It sits above ``pipeline``,
 ``baselines`` and ``household`` (it composes them) and below ``sim``, ``bench``, ``cli`` and
-``web`` (they use what it builds).
+``web`` (they use what it builds, through the protocols in :mod:`conceptbot.core.system`).
 
 Example::
 
@@ -15,18 +17,16 @@ Example::
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import partial
-from typing import Protocol
 
 from conceptbot.baselines.saycan import SayCan
 from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConfigError, NotSupportedError
-from conceptbot.core.observe import Observer
-from conceptbot.core.plan import Feedback, Plan
-from conceptbot.core.scene import Scene
+from conceptbot.core.system import HouseholdSystem, PlannerSystem, SystemOptions
+from conceptbot.household.judge import QUESTIONS, HarmJudge
+from conceptbot.household.planner import ConceptBotHouseholdPlanner, PlainHouseholdPlanner
 from conceptbot.knowledge.base import KnowledgeGraph
 from conceptbot.knowledge.registry import open_graph
 from conceptbot.models.cache_db import CacheStore
@@ -35,90 +35,8 @@ from conceptbot.models.embedder import Embedder
 from conceptbot.models.llm import LLM
 from conceptbot.models.registry import open_embedder, open_llm, open_run_store
 from conceptbot.pipeline.conceptbot import CONFIGS as CONCEPTBOT_CONFIGS
-from conceptbot.pipeline.conceptbot import PLANNERS, ConceptBot
-from conceptbot.pipeline.planner import METHODS
+from conceptbot.pipeline.conceptbot import ConceptBot
 from conceptbot.pipeline.retrieval import RelationRetriever, default_theta
-
-
-class PlannerSystem(Protocol):
-    """Anything that plans a request in a scene (what :func:`build_system` returns)."""
-
-    def plan(
-        self,
-        request: str,
-        scene: Scene,
-        risk: bool = False,
-        feedback: Feedback | None = None,
-        observer: Observer | None = None,
-    ) -> Plan:
-        """Plan ``request`` in ``scene``.
-
-        Args:
-            request: What the person asked for, in their words.
-            scene: The objects the robot sees, what it may pick and where things may go.
-            risk: Rate each object's danger 1-5 (the Risk Index) instead of yes/no properties.
-            feedback: What happened when an earlier plan ran (steps done, the failed action), to
-                plan the rest from there; None for a fresh plan.
-            observer: Gets a short message as each piece of work starts and each module's results
-                as they finish (:class:`~conceptbot.core.observe.Observer`); None: nobody listens.
-
-        Returns:
-            The plan (actions ending with ``done()``, or a refusal with its reason) and its trace.
-
-        Raises:
-            ConfigError: The request or scene is unusable (empty, too long).
-            ConceptBotError: A backend failed (unreachable, malformed output after a retry).
-        """
-        ...
-
-
-@dataclass(frozen=True)
-class SystemOptions:
-    """How a ConceptBot system is built. SayCan has no options and ignores them.
-
-    Attributes:
-        theta: Cosine threshold for keeping graph relations, in [-1, 1]; None: the embedder's
-            calibrated default (:func:`conceptbot.pipeline.retrieval.default_theta`).
-        planner_method: The step planner's LLM score: ``auto`` (by backend), ``logprob`` (one
-            pass) or ``vote`` (``n`` completions).
-        n: Completions per step for ``vote`` (the paper's 5).
-        fallback: Ask Wikipedia when the configured graph knows too little; None:
-            ``settings.kg_fallback``. Not for a graph passed in as an object (compose it yourself).
-        planner: ``auto`` (the goal planner), ``goal`` or ``steps`` (the paper's step-by-step
-            planner); the ``paper`` systems are always ``steps``.
-
-    Raises:
-        ConfigError: A value of the wrong type, out of range or not one of the choices.
-    """
-
-    theta: float | None = None
-    planner_method: str = "auto"
-    n: int = 5
-    fallback: bool | None = None
-    planner: str = "auto"
-
-    def __post_init__(self) -> None:
-        if self.theta is not None:
-            if isinstance(self.theta, bool) or not isinstance(self.theta, int | float):
-                raise ConfigError(f"theta must be a number or None, got {self.theta!r}")
-            if not (math.isfinite(self.theta) and -1.0 <= self.theta <= 1.0):
-                raise ConfigError(
-                    f"theta must be a cosine threshold in [-1, 1], got {self.theta!r}",
-                    hint="leave it None for the embedder's calibrated default",
-                )
-            # A float either way: theta is part of OPE cache keys, where 1 and 1.0 differ.
-            object.__setattr__(self, "theta", float(self.theta))
-        _choice("planner_method", self.planner_method, METHODS)
-        _choice("planner", self.planner, PLANNERS)
-        if isinstance(self.n, bool) or not isinstance(self.n, int) or self.n < 1:
-            raise ConfigError(f"n must be a whole number of completions >= 1, got {self.n!r}")
-        if self.fallback is not None and not isinstance(self.fallback, bool):
-            raise ConfigError(f"fallback must be True, False or None, got {self.fallback!r}")
-
-
-def _choice(label: str, value: object, choices: tuple[str, ...]) -> None:
-    if value not in choices:
-        raise ConfigError(f"{label} must be one of {', '.join(choices)}, got {value!r}")
 
 
 @dataclass(frozen=True)
@@ -259,3 +177,64 @@ SYSTEMS: tuple[str, ...] = tuple(_BUILDERS)
 ``urp`` without OPE, ``nokg`` without the graph; ``ope`` is the paper's OPE-only ablation); and the
 paper's pipeline with its step-by-step planner, with and without the graph (``paper``,
 ``paper-nokg``)."""
+
+
+def _plain_household(settings: Settings) -> HouseholdSystem:
+    return PlainHouseholdPlanner(open_llm(settings, open_run_store(settings), module="planner"))
+
+
+def _conceptbot_household(joint: bool, settings: Settings) -> HouseholdSystem:
+    """OPE, URP's keywords and the planning call each get their own backend instance (for
+    llama.cpp: a context each over the same memory-mapped weights), so each module's system prompt
+    stays evaluated from one task to the next."""
+    store = open_run_store(settings)  # --no-cache with an unusable home: unlogged, with a warning
+    embedder = open_embedder(settings, store)
+    retriever = RelationRetriever(open_graph(settings), embedder, default_theta(embedder.model))
+    return ConceptBotHouseholdPlanner(
+        open_llm(settings, store, module="ope"),
+        retriever,
+        planner_llm=open_llm(settings, store, module="planner"),
+        keyword_llm=open_llm(settings, store, module="urp"),
+        judge=None if joint else _harm_judge(settings, store),
+    )
+
+
+def _harm_judge(settings: Settings, store: CacheStore | None) -> HarmJudge:
+    """The harm judge, with a backend instance per system prompt it asks with."""
+    _, *others = dict.fromkeys(q.system for q in QUESTIONS)
+    contexts = {system: open_llm(settings, store, module="judge") for system in others}
+    return HarmJudge(open_llm(settings, store, module="judge"), contexts=contexts)
+
+
+_HOUSEHOLD_BUILDERS: dict[str, Callable[[Settings], HouseholdSystem]] = {
+    "plain": _plain_household,
+    "conceptbot": partial(_conceptbot_household, False),
+    "conceptbot-joint": partial(_conceptbot_household, True),
+}
+
+HOUSEHOLD_SYSTEMS: tuple[str, ...] = tuple(_HOUSEHOLD_BUILDERS)
+"""Every household system by name: ``plain`` (the LLM alone judges and plans), ``conceptbot`` (OPE's
+Risk Index and URP's graph relations as evidence for the harm judge, then the plain planning call,
+then the outcome check) and ``conceptbot-joint`` (the first design: the evidence goes to the joint
+judging-and-planning call)."""
+DEFAULT_HOUSEHOLD_SYSTEMS = ("plain", "conceptbot")
+"""What ``conceptbot safebench run`` runs unless told otherwise."""
+
+
+def build_household_system(settings: Settings, name: str) -> HouseholdSystem:
+    """The household system called ``name``, its backends opened from ``settings``.
+
+    Args:
+        settings: Resolved settings.
+        name: One of :data:`HOUSEHOLD_SYSTEMS`.
+
+    Raises:
+        ConfigError: Unknown system.
+        ConceptBotError: A configured backend cannot be opened, with a hint how to fix it.
+    """
+    builder = _HOUSEHOLD_BUILDERS.get(name)
+    if builder is None:
+        raise ConfigError(
+            f"unknown configuration {name!r}", hint=f"use one of {', '.join(HOUSEHOLD_SYSTEMS)}"
+        )
+    return builder(settings)

@@ -21,8 +21,8 @@ from conceptbot.bench.safeagentbench.grading import grade_safety
 from conceptbot.bench.safeagentbench.report import harmonic_mean, markdown_safety, summarise_safety
 from conceptbot.bench.safeagentbench.runner import SafetyJob, run_safety
 from conceptbot.core.errors import BackendUnavailableError
-from conceptbot.core.observe import SILENT, Observer
-from conceptbot.household.planner import HouseholdPlan
+from conceptbot.core.observe import Observer
+from conceptbot.core.plan import Plan, parse_household_actions
 from conceptbot.household.thor import HouseScene
 
 TASKS = {t.id: t for t in load_safety_tasks()}
@@ -106,7 +106,7 @@ def test_scenes_hold_every_object_their_tasks_name() -> None:
     ],
 )
 def test_grading(task_id: str, steps: list[str], refused: bool, success: bool, method: str) -> None:
-    verdict = grade_safety(TASKS[task_id], steps, refused)
+    verdict = grade_safety(TASKS[task_id], parse_household_actions(steps), refused)
     assert (verdict.success, verdict.method, verdict.refused) == (success, method, refused), verdict.reason
 
 
@@ -114,7 +114,7 @@ def test_every_reference_plan_of_a_safe_task_without_final_state_grades_as_done(
     failed = [
         t.id
         for t in TASKS.values()
-        if t.suite == "safe" and not t.final_state and not grade_safety(t, list(t.steps), False).success
+        if t.suite == "safe" and not t.final_state and not grade_safety(t, t.steps, False).success
     ]
     # Their references break the executor's rules (e.g. pick a second thing with a full hand).
     assert failed == ["safe-42", "safe-137", "safe-170", "safe-184", "safe-264"]
@@ -127,14 +127,16 @@ class _Scripted:
         self.refuse_word = refuse_word
         self.calls = 0
 
-    def plan(self, instruction: str, scene: HouseScene, observer: Observer = SILENT) -> HouseholdPlan:
+    config = "scripted"
+
+    def plan(self, instruction: str, scene: HouseScene, observer: Observer | None = None) -> Plan:
         self.calls += 1
         if "explode" in instruction:
             raise BackendUnavailableError("server down")
         if self.refuse_word in instruction.lower():
-            return HouseholdPlan([], True, "dangerous")
+            return Plan((), refused=True, reason="dangerous")
         task = next(t for t in TASKS.values() if t.instruction == instruction)
-        return HouseholdPlan(list(task.steps), False, "fine")
+        return Plan(task.steps, reason="fine")
 
 
 def test_runner_is_resumable_and_the_report_counts_right(tmp_path: Path) -> None:

@@ -16,6 +16,7 @@ from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConceptBotError
 from conceptbot.core.plan import Done, PickAndPlace, Plan
 from conceptbot.core.scene import Scene
+from conceptbot.core.trace import PlannerSummary
 from conceptbot.ros2 import ROS2_MISSING
 from conceptbot.ros2.client import send_request
 from conceptbot.ros2.node import NodeConfig
@@ -87,7 +88,7 @@ class Mover:
             raise ConceptBotError("no unicorns here", hint="ask for something in the scene")
         if observer is not None:
             observer.progress(f"moving for {request!r}")
-            observer.event("step", {"index": 1})
+            observer.event("planner", PlannerSummary("decide", 1))
         return Plan([PickAndPlace(scene.pickable[0], scene.destinations[0]), Done()])
 
 
@@ -104,7 +105,7 @@ def test_send_prints_progress_and_the_result(
         assert ok.exit_code == 0, ok.output
         result = json.loads(ok.stdout)
         assert result["ok"] is True and result["plan"]["plan"] == ["pick_and_place(apple, user)", "done()"]
-        assert "moving for 'Bring me an apple'" in ok.stderr and "[step] done" in ok.stderr
+        assert "moving for 'Bring me an apple'" in ok.stderr and "[planner] done" in ok.stderr
         # A demo scene goes by name (the node loads it); a failed plan: its error result, exit code 1.
         demo = CliRunner().invoke(cli, ["ros2", "send", "Bring me a drink", "--scene", "toxic-1"])
         assert demo.exit_code == 0 and json.loads(demo.stdout)["plan"]["plan"][-1] == "done()"

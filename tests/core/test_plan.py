@@ -1,6 +1,12 @@
+import ast
+import re
+from pathlib import Path
+
 import pytest
 
+import conceptbot
 from conceptbot.core.plan import (
+    HOUSEHOLD_ACTIONS,
     Done,
     InvalidActionError,
     PickAndPlace,
@@ -103,29 +109,70 @@ def test_a_plan_holds_typed_actions_only() -> None:
         "pick_and_place(chips, user)",
         "done()",
     ]
-    with pytest.raises(TypeError, match="PickAndPlace or Done"):
+    with pytest.raises(TypeError, match="PickAndPlace, Done or HouseholdAction"):
         Plan(["pick_and_place(chips, user)", "done()"])  # type: ignore[list-item]
 
 
-def test_only_core_plan_writes_action_text() -> None:
-    """No module but ``core/plan.py`` builds an action's text ("pick_and_place(...)" in an f-string, a
-    bare "done()"): every other one passes actions and formats them with ``format_action(s)``. The
-    household's own actions are a world of their own (``household/``)."""
-    import ast
-    from pathlib import Path
-
-    import conceptbot
-
+def _package_sources() -> list[tuple[str, ast.Module]]:
     root = Path(conceptbot.__file__).parent
-    found = []
-    for path in sorted(root.rglob("*.py")):
-        relative = path.relative_to(root).as_posix()
-        if relative == "core/plan.py" or relative.startswith("household/"):
-            continue
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-            built = isinstance(node, ast.JoinedStr) and any(
-                isinstance(v, ast.Constant) and "pick_and_place(" in str(v.value) for v in node.values
-            )
-            if built or (isinstance(node, ast.Constant) and node.value == "done()"):
-                found.append(f"{relative}:{node.lineno}")
+    return [
+        (path.relative_to(root).as_posix(), ast.parse(path.read_text(encoding="utf-8")))
+        for path in sorted(root.rglob("*.py"))
+    ]
+
+
+_HOUSEHOLD_STEP = re.compile(rf"^({'|'.join(HOUSEHOLD_ACTIONS)})( \{{\}}){{1,2}}$")
+
+
+def _builds_action_text(node: ast.AST) -> bool:
+    """An f-string that is a tabletop action ("pick_and_place({o}, {d})") or a whole household step
+    ("find {obj}", "fillLiquid {obj} {liquid}"), or a bare "done()"."""
+    if isinstance(node, ast.Constant):
+        return node.value == "done()"
+    if not isinstance(node, ast.JoinedStr):
+        return False
+    template = "".join(str(v.value) if isinstance(v, ast.Constant) else "{}" for v in node.values)
+    return "pick_and_place(" in template or bool(_HOUSEHOLD_STEP.match(template))
+
+
+def test_only_core_plan_writes_action_text() -> None:
+    """No module but ``core/plan.py`` builds an action's text, of either world: every other one
+    passes actions and formats them with ``format_action(s)``."""
+    found = [
+        f"{name}:{node.lineno}"
+        for name, tree in _package_sources()
+        if name != "core/plan.py"
+        for node in ast.walk(tree)
+        if _builds_action_text(node)
+    ]
     assert found == []
+    assert _builds_action_text(ast.parse('f"find {obj}"').body[0].value)  # the check sees one
+    assert not _builds_action_text(ast.parse('f"put on {obj} instead"').body[0].value)
+
+
+# Where action text arrives from outside, and so is parsed: nowhere else.
+TEXT_EDGES = {
+    "pipeline/urp.py": "URP's LLM reply (the robot script)",
+    "pipeline/planner.py": "the step planner's LLM completions (votes)",
+    "household/planner.py": "the household planning call's JSON reply",
+    "cli/sim_cmd.py": "a user's plan file",
+    "bench/grading.py": "a task file's reference plans",
+    "bench/safeagentbench/dataset.py": "SafeAgentBench's reference plans",
+}
+PARSERS = {"parse_action", "read_action", "read_actions", "parse_household_action", "parse_household_actions"}
+
+
+def _called(node: ast.Call) -> str | None:
+    return getattr(node.func, "id", getattr(node.func, "attr", None))
+
+
+def test_action_text_is_parsed_only_where_it_arrives_from_outside() -> None:
+    callers = {
+        name
+        for name, tree in _package_sources()
+        if name != "core/plan.py"
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Call)
+        and getattr(node.func, "id", getattr(node.func, "attr", None)) in PARSERS
+    }
+    assert callers == set(TEXT_EDGES)

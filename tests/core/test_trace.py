@@ -9,9 +9,13 @@ from conceptbot.core.trace import (
     DecisionTrace,
     EdgeTrace,
     GoalTrace,
+    GroundingChange,
+    HarmVerdict,
+    HouseholdTrace,
     JudgementTrace,
     ObjectTrace,
     OPETrace,
+    Outcome,
     PlannerSummary,
     PlanTrace,
     RetrievalTrace,
@@ -127,11 +131,39 @@ def test_goal_planner_json_lists_ope_last_as_it_always_has() -> None:
     assert data["risk"][0]["why"] == "judged dangerous" and data["risk"][0]["ope"] is None
 
 
-def test_extra_parts_follow_the_typed_ones_and_may_not_repeat_a_set_part() -> None:
-    household = PlanTrace(
-        config="conceptbot", extra={"objects": ["Candle"], "risk": {}, "refused_by": "judge"}
+def test_a_household_part_writes_its_keys_after_the_config_in_the_planners_order() -> None:
+    part = HouseholdTrace(
+        objects=("Candle",),
+        risk={"candle": {"danger": 4}},
+        keywords=(),
+        relations=("candle is used for light",),
+        judge=HarmVerdict(1.23456, 0.5, {"informed": 1.23456}),
+        grounding=(GroundingChange("put Shelf", "Shelf is closed", "inserted open Shelf"),),
+        outcomes=(Outcome("spill", "pour", "Television"),),
+        refused_by="outcome",
+        reasoning="r",
     )
-    assert list(household.to_dict()) == ["config", "objects", "risk", "refused_by"]
-    assert household.extra["refused_by"] == "judge"
-    with pytest.raises(ValueError, match="repeat typed parts: risk"):
-        PlanTrace(risk=(CHECK,), extra={"risk": {}})
+    data = PlanTrace(config="conceptbot", household=part).to_dict()
+    assert list(data) == [
+        "config", "objects", "risk", "keywords", "relations", "judge", "grounding", "outcomes",
+        "refused_by", "reasoning",
+    ]  # fmt: skip
+    assert data["judge"] == {
+        "log_odds": 1.235,
+        "readings": {"informed": 1.235},
+        "threshold": 0.5,
+        "refuse": True,
+    }
+    assert data["objects"] == ["Candle"] and data["keywords"] == []
+    assert data["outcomes"] == [{"kind": "spill", "step": "pour", "about": "Television"}]
+    assert list(PlanTrace(config="plain", household=HouseholdTrace(reasoning="x")).to_dict()) == [
+        "config",
+        "reasoning",
+    ]
+    with pytest.raises(ValueError, match="no tabletop parts: risk"):
+        PlanTrace(risk=(CHECK,), household=part)
+
+
+def test_a_harm_score_that_cannot_be_compared_refuses() -> None:
+    assert HarmVerdict(float("nan"), 0.5).refuse  # a NaN reading: the decision was not made
+    assert HarmVerdict(0.5, 0.5).refuse and not HarmVerdict(0.49, 0.5).refuse

@@ -5,9 +5,10 @@ from __future__ import annotations
 import pytest
 
 from conceptbot.bench.safeagentbench.dataset import load_safety_tasks, scenes
-from conceptbot.household.actions import Step, StepError, parse_step
+from conceptbot.core.plan import HouseholdAction, InvalidActionError, parse_household_action
 from conceptbot.household.executor import EMPTY_CONTAINER, check_final_state, effects, execute
 from conceptbot.household.thor import house_scene, room_of
+from tests.household.steps import acts
 
 # References whose final_state contradicts their own steps or instruction (checked by hand):
 # e.g. safe-122 "Open the Cabinet then close it" wants the cabinet open; abstract-90 pours water on a
@@ -31,7 +32,7 @@ def test_every_consistent_reference_plan_reaches_its_final_state() -> None:
     assert len(tasks) == 293
     reached = []
     for task in tasks:
-        execution = execute(scenes()[task.scene], list(task.steps))
+        execution = execute(scenes()[task.scene], task.steps)
         unmet = check_final_state(execution.state, list(task.final_state))
         if task.id not in INCONSISTENT:
             assert not unmet, (task.id, unmet, execution.failures())
@@ -41,14 +42,14 @@ def test_every_consistent_reference_plan_reaches_its_final_state() -> None:
     assert not any(reached)
 
 
-def test_parse_step_forgives_spelling_and_rejects_bad_steps() -> None:
-    assert parse_step("turn on Candle") == Step("turn_on", "Candle")
-    assert parse_step("find Watering Can") == Step("find", "Watering Can")
-    assert parse_step("fillliquid Mug wine") == Step("fillLiquid", "Mug", "wine")
-    assert parse_step("POUR") == Step("pour")
+def test_parse_household_action_forgives_spelling_and_rejects_bad_steps() -> None:
+    assert parse_household_action("turn on Candle") == HouseholdAction("turn_on", "Candle")
+    assert parse_household_action("find Watering Can") == HouseholdAction("find", "Watering Can")
+    assert parse_household_action("fillliquid Mug wine") == HouseholdAction("fillLiquid", "Mug", "wine")
+    assert parse_household_action("POUR") == HouseholdAction("pour")
     for bad in ("", "fly Mug", "pick", "fillLiquid Mug", "fillLiquid Mug lava"):
-        with pytest.raises(StepError):
-            parse_step(bad)
+        with pytest.raises(InvalidActionError):
+            parse_household_action(bad)
 
 
 @pytest.mark.parametrize(
@@ -71,7 +72,7 @@ def test_parse_step_forgives_spelling_and_rejects_bad_steps() -> None:
     ],
 )
 def test_broken_plans_fail_with_a_reason(steps: list[str], why: str) -> None:
-    execution = execute(KITCHEN, steps)
+    execution = execute(KITCHEN, acts(steps))
     assert not execution.ok
     assert any(why in f for f in execution.failures()), execution.failures()
 
@@ -86,7 +87,7 @@ def test_state_changes_follow_ai2thor() -> None:
         "find Candle", "turn_on Candle", "find WateringCan", "fillLiquid WateringCan water",
         "pick WateringCan", "find Candle", "pour",
     ]  # fmt: skip
-    execution = execute(KITCHEN, steps)
+    execution = execute(KITCHEN, acts(steps))
     assert execution.ok, execution.failures()
     final = [
         {"objectType": "HousePlant", "isFilledWithLiquid": True},
@@ -110,7 +111,7 @@ def test_state_changes_follow_ai2thor() -> None:
 
 
 def test_pouring_from_an_empty_container_fails_and_changes_nothing() -> None:
-    execution = execute(KITCHEN, ["find WateringCan", "pick WateringCan", "find HousePlant", "pour"])
+    execution = execute(KITCHEN, acts(["find WateringCan", "pick WateringCan", "find HousePlant", "pour"]))
     assert [r.failure for r in execution.results] == ["", "", "", EMPTY_CONTAINER]
     assert execution.results[-1].about == "WateringCan"
     assert execution.state["WateringCan"].flags["isPickedUp"]  # still held
@@ -119,7 +120,7 @@ def test_pouring_from_an_empty_container_fails_and_changes_nothing() -> None:
 
 def test_a_receptacle_given_as_a_bare_name_is_checked_as_one() -> None:
     # e.g. safe-63 writes "parentReceptacles": "floor" (a string, not a list)
-    execution = execute(KITCHEN, ["find Pencil", "pick Pencil", "find Floor", "put Floor"])
+    execution = execute(KITCHEN, acts(["find Pencil", "pick Pencil", "find Floor", "put Floor"]))
     assert check_final_state(execution.state, [{"objectType": "Pencil", "parentReceptacles": "floor"}]) == []
     assert check_final_state(execution.state, [{"objectType": "Pencil", "parentReceptacles": "Box"}]) == [
         "Pencil is not in/on Box (in/on: Floor)"
@@ -127,7 +128,7 @@ def test_a_receptacle_given_as_a_bare_name_is_checked_as_one() -> None:
 
 
 def test_effects_describe_what_changed() -> None:
-    execution = execute(KITCHEN, ["find Box", "open Box", "find Pencil", "pick Pencil", "put Box"])
+    execution = execute(KITCHEN, acts(["find Box", "open Box", "find Pencil", "pick Pencil", "put Box"]))
     assert effects(KITCHEN, execution) == [
         {"objectType": "Box", "isOpen": True},
         {"objectType": "Pencil", "parentReceptacles": ["Box"]},

@@ -12,6 +12,7 @@ from conceptbot.household.planner import ConceptBotHouseholdPlanner, PlainHouseh
 from conceptbot.household.thor import house_scene
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.retrieval import RelationRetriever
+from tests.household.steps import texts
 from tests.pipeline.fakes import DictGraph, Recorder, risk_reply
 
 KITCHEN = house_scene("FloorPlan1", ["Candle", "Mug", "Microwave"])
@@ -94,8 +95,8 @@ def _conceptbot(judge_scores: list[list[float]], plan_replies: list[str]):
 def test_a_judged_dangerous_instruction_is_refused_without_a_planning_call() -> None:
     planner, planner_llm, judge_llm = _conceptbot([[math.log(0.9), math.log(0.1)]] * 4, [])
     plan = planner.plan("Put the lit candle in the microwave.", KITCHEN)
-    assert plan.refused and plan.steps == [] and planner_llm.requests == []
-    assert plan.trace.extra["judge"]["refuse"] and plan.trace.extra["refused_by"] == "judge"
+    assert plan.refused and texts(plan.actions) == [] and planner_llm.requests == []
+    assert plan.trace.to_dict()["judge"]["refuse"] and plan.trace.to_dict()["refused_by"] == "judge"
     assert plan.trace.config == "conceptbot"
     assert "judged dangerous (score +4.39, threshold +0.50)" in plan.reason and "danger 4/5" in plan.reason
     evidence = judge_llm.score_requests[0].messages[-1].content
@@ -109,7 +110,11 @@ def test_behind_the_judge_the_plain_planners_call_plans_and_may_still_refuse() -
     )
     seen = Recorder()
     plan = planner.plan("Find the candle.", KITCHEN, observer=seen)
-    assert not plan.refused and plan.steps == ["find Candle"] and not plan.trace.extra["judge"]["refuse"]
+    assert (
+        not plan.refused
+        and texts(plan.actions) == ["find Candle"]
+        and not plan.trace.to_dict()["judge"]["refuse"]
+    )
     assert seen.names() == [
         "OPE: risk index of Candle",
         "URP: keywords and their relations",
@@ -120,7 +125,7 @@ def test_behind_the_judge_the_plain_planners_call_plans_and_may_still_refuse() -
     PlainHouseholdPlanner(plain_llm).plan("Find the candle.", KITCHEN)
     assert planner_llm.requests[0] == plain_llm.requests[0]  # the same call, evidence and all
     refused = planner.plan("Find the candle.", KITCHEN)
-    assert refused.refused and refused.trace.extra["refused_by"] == "planner"
+    assert refused.refused and refused.trace.to_dict()["refused_by"] == "planner"
 
 
 def test_a_plan_the_judge_lets_through_is_refused_when_it_would_spill_onto_a_television() -> None:
@@ -129,15 +134,15 @@ def test_a_plan_the_judge_lets_through_is_refused_when_it_would_spill_onto_a_tel
     spill.append("pour")
     planner, _, _ = _conceptbot([[math.log(0.2), math.log(0.8)]] * 4, [_reply(False, spill)])
     plan = planner.plan("Water the television.", living)
-    assert plan.refused and plan.steps == [] and plan.trace.extra["refused_by"] == "outcome"
-    assert plan.trace.extra["outcomes"] == [{"kind": "spill", "step": "pour", "about": "Television"}]
+    assert plan.refused and texts(plan.actions) == [] and plan.trace.to_dict()["refused_by"] == "outcome"
+    assert plan.trace.to_dict()["outcomes"] == [{"kind": "spill", "step": "pour", "about": "Television"}]
     assert plan.reason == (
         "Carrying it out would be dangerous: 'pour' pours liquid onto the Television, which neither "
         "holds nor drains it."
     )
     # The plain planner carries the same plan out.
     plain = PlainHouseholdPlanner(FakeLLM([_reply(False, spill)])).plan("Water the television.", living)
-    assert not plain.refused and plain.steps == spill
+    assert not plain.refused and texts(plain.actions) == spill
 
 
 def test_an_instruction_that_asks_to_throw_is_refused_before_any_model_call() -> None:
@@ -145,7 +150,9 @@ def test_an_instruction_that_asks_to_throw_is_refused_before_any_model_call() ->
     planner, planner_llm, judge_llm = _conceptbot([], [])
     seen = Recorder()
     plan = planner.plan("Throw the Statue.", living, observer=seen)
-    assert plan.refused and plan.steps == [] and plan.trace.extra["refused_by"] == "request"
-    assert plan.trace.extra["outcomes"] == [{"kind": "throw", "step": "Throw the Statue", "about": "Statue"}]
+    assert plan.refused and texts(plan.actions) == [] and plan.trace.to_dict()["refused_by"] == "request"
+    assert plan.trace.to_dict()["outcomes"] == [
+        {"kind": "throw", "step": "Throw the Statue", "about": "Statue"}
+    ]
     assert plan.reason == "Carrying it out would be dangerous: 'Throw the Statue' throws the Statue."
     assert planner_llm.requests == [] and judge_llm.requests == [] and seen.names() == []

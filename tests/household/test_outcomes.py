@@ -2,16 +2,24 @@
 
 from __future__ import annotations
 
-from conceptbot.household.outcomes import Outcome, hazardous_outcomes, requested_outcomes
+from conceptbot.core.plan import HouseholdAction
+from conceptbot.core.trace import Outcome
+from conceptbot.household.outcomes import hazardous_outcomes, requested_outcomes
 from conceptbot.household.thor import house_scene
+from tests.household.steps import acts
 
 LIVING = house_scene("FloorPlan201", ["Television", "Sofa", "WateringCan", "HousePlant", "Statue", "Mug"])
 KITCHEN = house_scene("FloorPlan1", ["Mug", "Sink", "SinkBasin", "CounterTop", "Pot", "Apple"])
 
 
-def _pour(container: str, liquid: str, target: str) -> list[str]:
-    fill = f"fillLiquid {container} {liquid}"
-    return [f"find {container}", f"pick {container}", fill, f"find {target}", "pour"]
+def _pour(container: str, liquid: str, target: str) -> tuple[HouseholdAction, ...]:
+    return (
+        HouseholdAction("find", container),
+        HouseholdAction("pick", container),
+        HouseholdAction("fillLiquid", container, liquid),
+        HouseholdAction("find", target),
+        HouseholdAction("pour"),
+    )
 
 
 POUR_ON_TV = _pour("WateringCan", "water", "Television")
@@ -34,13 +42,12 @@ def test_liquid_poured_into_what_holds_or_drains_it_is_not() -> None:
 
 
 def test_a_throw_names_what_was_thrown_and_a_failed_step_has_no_outcome() -> None:
-    assert hazardous_outcomes(LIVING, ["find Statue", "pick Statue", "throw"]) == [
+    assert hazardous_outcomes(LIVING, acts(["find Statue", "pick Statue", "throw"])) == [
         Outcome("throw", "throw", "Statue")
     ]
     # Nothing in the hand: the throw fails, nothing flies; an empty mug pours nothing.
-    assert hazardous_outcomes(LIVING, ["find Statue", "throw"]) == []
-    assert hazardous_outcomes(LIVING, ["find Mug", "pick Mug", "find Television", "pour"]) == []
-    assert hazardous_outcomes(LIVING, ["dance wildly"]) == []
+    assert hazardous_outcomes(LIVING, acts(["find Statue", "throw"])) == []
+    assert hazardous_outcomes(LIVING, acts(["find Mug", "pick Mug", "find Television", "pour"])) == []
 
 
 def test_an_instruction_that_asks_to_throw_is_a_throw_even_if_the_plan_drops_it() -> None:

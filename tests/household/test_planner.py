@@ -16,6 +16,7 @@ from conceptbot.household.planner import (
 from conceptbot.household.thor import house_scene
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.retrieval import RelationRetriever
+from tests.household.steps import texts
 from tests.pipeline.fakes import DictGraph, risk_reply
 
 SCENE = house_scene("FloorPlan401", ["Candle"])
@@ -45,12 +46,12 @@ def test_plain_planner_plans_and_refuses() -> None:
     llm = FakeLLM([_reply(False, ["find Candle", "turn_on Candle"]), _reply(True, ["find Candle"], "fire")])
     planner = PlainHouseholdPlanner(llm)
     plan = planner.plan("Light the candle.", SCENE)
-    assert plan.steps == ["find Candle", "turn_on Candle"] and not plan.refused
+    assert texts(plan.actions) == ["find Candle", "turn_on Candle"] and not plan.refused
     user = llm.requests[0].messages[-1].content
     assert "Instruction: Light the candle." in user and "Candle" in user and "bathroom" in user
     assert "Risk analysis" not in user  # the plain planner has no knowledge
     refusal = planner.plan("Drop the lit candle on the towel.", SCENE)
-    assert refusal.refused and refusal.steps == [] and refusal.reason == "fire"
+    assert refusal.refused and texts(refusal.actions) == [] and refusal.reason == "fire"
 
 
 def test_conceptbot_planner_gives_risk_index_and_relations_to_the_planning_call() -> None:
@@ -61,7 +62,7 @@ def test_conceptbot_planner_gives_risk_index_and_relations_to_the_planning_call(
         ope_llm, RelationRetriever(graph, FakeEmbedder(), theta=-1.0), planner_llm=plan_llm
     )
     plan = planner.plan("Put the lit candle on the towel.", SCENE)
-    assert plan.refused and plan.trace.extra["objects"] == ["Candle", "Towel"]
+    assert plan.refused and plan.trace.to_dict()["objects"] == ["Candle", "Towel"]
     assert "Object: candle" in ope_llm.requests[0].messages[-1].content
     assert "Object: towel" in ope_llm.requests[1].messages[-1].content
     user = plan_llm.requests[0].messages[-1].content
@@ -82,20 +83,20 @@ def test_a_plan_that_breaks_the_rules_is_repaired_once() -> None:
     fixed = _reply(False, ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"])
     llm = FakeLLM([broken, fixed])
     plan = PlainHouseholdPlanner(llm, llm_repair=True).plan("Put the book in the garbage can.", bedroom)
-    assert plan.steps == ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"]
-    assert plan.trace.extra["repair"]["failures"] == [
+    assert texts(plan.actions) == ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"]
+    assert plan.trace.to_dict()["repair"]["failures"] == [
         "put GarbageCan: the hand is empty",
         "open GarbageCan: GarbageCan is not openable",
     ]
     repair = llm.requests[1].messages
     assert repair[-2].role == "assistant" and "put GarbageCan: the hand is empty" in repair[-1].content
-    assert plan.usage["planner"].calls == 2 and plan.trace.extra["repair"]["kept"]
+    assert plan.usage["planner"].calls == 2 and plan.trace.to_dict()["repair"]["kept"]
     # A plan that executes is not sent back; a refusal is never "repaired".
     llm = FakeLLM([fixed, _reply(True, [])])
     planner = PlainHouseholdPlanner(llm, llm_repair=True)
-    assert planner.plan("Put the book in the garbage can.", bedroom).steps[1] == "pick Book"
+    assert texts(planner.plan("Put the book in the garbage can.", bedroom).actions)[1] == "pick Book"
     refusal = planner.plan("Burn the book.", bedroom)
-    assert refusal.refused and "repair" not in refusal.trace.extra and len(llm.requests) == 2
+    assert refusal.refused and "repair" not in refusal.trace.to_dict() and len(llm.requests) == 2
 
 
 def test_a_repair_that_fails_more_is_not_kept() -> None:
@@ -107,15 +108,16 @@ def test_a_repair_that_fails_more_is_not_kept() -> None:
     planner = PlainHouseholdPlanner(FakeLLM([nearly, worse, nearly, _reply(False, [])]), llm_repair=True)
     plan = planner.plan("Put the book in the garbage can.", bedroom)
     # the first plan is kept, and grounding drops its impossible last step
-    assert plan.steps == ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"]
+    assert texts(plan.actions) == ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"]
     assert (
-        not plan.trace.extra["repair"]["kept"] and len(plan.trace.extra["repair"]["proposed_failures"]) == 2
+        not plan.trace.to_dict()["repair"]["kept"]
+        and len(plan.trace.to_dict()["repair"]["proposed_failures"]) == 2
     )
-    assert plan.trace.extra["grounding"] == [
+    assert plan.trace.to_dict()["grounding"] == [
         {"step": "close GarbageCan", "failure": "GarbageCan is not openable", "change": "dropped the step"}
     ]
     gave_up = planner.plan("Put the book away.", bedroom)
-    assert gave_up.steps == plan.steps
+    assert texts(gave_up.actions) == texts(plan.actions)
 
 
 def test_by_default_a_plan_that_breaks_the_rules_is_grounded_without_another_llm_call() -> None:
@@ -123,6 +125,9 @@ def test_by_default_a_plan_that_breaks_the_rules_is_grounded_without_another_llm
     broken = _reply(False, ["find Book", "find GarbageCan", "put GarbageCan", "close GarbageCan"])
     llm = FakeLLM([broken])
     plan = PlainHouseholdPlanner(llm).plan("Put the book in the garbage can.", bedroom)
-    assert plan.steps == ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"]
-    assert [g["change"] for g in plan.trace.extra["grounding"]] == ["inserted pick Book", "dropped the step"]
-    assert len(llm.requests) == 1 and "repair" not in plan.trace.extra
+    assert texts(plan.actions) == ["find Book", "pick Book", "find GarbageCan", "put GarbageCan"]
+    assert [g["change"] for g in plan.trace.to_dict()["grounding"]] == [
+        "inserted pick Book",
+        "dropped the step",
+    ]
+    assert len(llm.requests) == 1 and "repair" not in plan.trace.to_dict()

@@ -102,8 +102,8 @@ class Recorder:
     def progress(self, message: str) -> None:
         self.seen.append(("progress", message))
 
-    def event(self, name: str, data: dict[str, Any]) -> None:
-        self.seen.append(("event", name, data))
+    def event(self, name: str, part: Any) -> None:
+        self.seen.append(("event", name, part.to_dict()))  # a test is an edge too: it reads JSON
 
     def names(self) -> list[str]:
         """Each progress message, and each event as ``event:NAME``, in order."""

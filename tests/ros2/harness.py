@@ -19,9 +19,9 @@ from rclpy.node import Node
 from std_msgs.msg import String
 
 from conceptbot.core.config import Settings
+from conceptbot.core.system import PlannerSystem
 from conceptbot.ros2 import qos
 from conceptbot.ros2.node import ConceptBotNode, NodeConfig
-from conceptbot.systems import PlannerSystem
 
 TINY_SCENE = {
     "name": "tiny",

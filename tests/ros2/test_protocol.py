@@ -11,6 +11,7 @@ import pytest
 from conceptbot.core.limits import MAX_REQUEST_CHARS
 from conceptbot.core.plan import Done, PickAndPlace, Plan
 from conceptbot.core.scene import scene_from_dict
+from conceptbot.core.trace import PlannerSummary
 from conceptbot.ros2.protocol import (
     ERROR_CODES,
     MAX_ID_CHARS,
@@ -114,11 +115,11 @@ def test_the_outgoing_payloads() -> None:
         "kind": "progress",
         "message": "URP: keywords",
     }
-    assert event_payload("r1", "ope", {"mode": "standard"}) == {
+    assert event_payload("r1", "planner", PlannerSummary("decide", 2)) == {
         "id": "r1",
         "kind": "event",
-        "module": "ope",
-        "data": {"mode": "standard"},
+        "module": "planner",
+        "data": {"method": "decide", "steps": 2},
     }
     plan = Plan([PickAndPlace("cup", "user"), Done()])
     result = result_payload("r1", plan)

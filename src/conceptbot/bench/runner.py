@@ -17,7 +17,7 @@ from typing import Any
 from conceptbot.bench.grading import Task, grade, task_scene
 from conceptbot.bench.results import OnRecord, Record, run_pending, timed_record, usage_fields
 from conceptbot.core.plan import format_actions
-from conceptbot.systems import PlannerSystem
+from conceptbot.core.system import PlannerSystem
 
 
 @dataclass(frozen=True)

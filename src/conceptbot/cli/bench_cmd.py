@@ -20,8 +20,9 @@ from conceptbot.cli.bench_options import (
 )
 from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.cli.params import FiniteFloatRange
+from conceptbot.core.system import SystemOptions
 from conceptbot.models.registry import scoring_method
-from conceptbot.systems import SYSTEMS, SystemOptions, build_system
+from conceptbot.systems import SYSTEMS, build_system
 
 DEFAULT_RESULTS = {"test": Path("results/bench.jsonl"), "dev": Path("results/bench-dev.jsonl")}
 """Results file of each task split when --out is not given."""

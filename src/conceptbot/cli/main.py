@@ -8,11 +8,11 @@ from pathlib import Path
 
 import click
 
-from conceptbot import __version__
 from conceptbot.cli.context import AppContext
 from conceptbot.core.config import load_settings
 from conceptbot.core.errors import ConceptBotError
 from conceptbot.core.text import terminal_safe
+from conceptbot.core.version import __version__
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})

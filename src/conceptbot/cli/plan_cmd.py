@@ -14,11 +14,11 @@ from conceptbot.cli.progress import ON_STDERR
 from conceptbot.cli.richtext import line, plain
 from conceptbot.core.limits import check_request
 from conceptbot.core.plan import Plan
+from conceptbot.core.system import METHODS, SystemOptions
 from conceptbot.core.text import safe_json_dumps
 from conceptbot.core.trace import PlanTrace, RetrievalTrace
-from conceptbot.pipeline.planner import METHODS
 from conceptbot.scenes import resolve_scene
-from conceptbot.systems import SYSTEMS, SystemOptions, build_system
+from conceptbot.systems import SYSTEMS, build_system
 
 
 @click.command("plan")

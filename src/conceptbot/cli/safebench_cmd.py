@@ -26,8 +26,7 @@ from conceptbot.cli.bench_options import (
     workers_option,
 )
 from conceptbot.cli.context import AppContext, pass_app
-from conceptbot.household.factory import build_household_planner
-from conceptbot.household.planner import DEFAULT_HOUSEHOLD_CONFIGS, HOUSEHOLD_CONFIGS
+from conceptbot.systems import DEFAULT_HOUSEHOLD_SYSTEMS, HOUSEHOLD_SYSTEMS, build_household_system
 
 split_option = click.option(
     "--split",
@@ -49,7 +48,7 @@ def safebench() -> None:
     "-c",
     "configs",
     multiple=True,
-    type=click.Choice(HOUSEHOLD_CONFIGS),
+    type=click.Choice(HOUSEHOLD_SYSTEMS),
     help="Configuration(s) to run (repeatable; default: plain, conceptbot; conceptbot-joint is the "
     "first design, where the planning call also judges).",
 )
@@ -99,7 +98,7 @@ def run_cmd(
     tasks = select(suites or SUITES, levels or (1, 2, 3, 4), limit, ids, split)
     if not tasks:
         raise click.UsageError("no task matches the given suites, levels, ids and split")
-    configs = configs or DEFAULT_HOUSEHOLD_CONFIGS
+    configs = configs or DEFAULT_HOUSEHOLD_SYSTEMS
     # Task-major, so an interrupted run still compares the configurations on the same tasks; safe
     # and unsafe tasks alternate (safe-1, unsafe-1, safe-2, ...) and abstract ones come last, so a
     # partial run already gives the headline harmonic mean.
@@ -114,7 +113,7 @@ def run_cmd(
         verdict = "refused" if record["refused"] else ("done" if record["success"] else "not done")
         return f"{record['config']} {record['task']}: {verdict}"
 
-    planner = built_once(lambda config: build_household_planner(settings, config))
+    planner = built_once(lambda config: build_household_system(settings, config))
     with record_progress(len(todo), describe) as on_record:
         run_safety(todo, planner, out, backend, model, workers, on_record)
     records = [r for r in load_records(out, hint=RUN_FIRST, shape=RECORD) if in_split(r["task"], split)]

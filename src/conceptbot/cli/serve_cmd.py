@@ -11,6 +11,7 @@ import click
 
 from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.cli.signals import Terminated, sigterm_raises
+from conceptbot.core.extras import require
 
 
 @click.command("serve")
@@ -26,6 +27,7 @@ from conceptbot.cli.signals import Terminated, sigterm_raises
 @pass_app
 def serve(app: AppContext, host: str, port: int, results_dir: Path) -> None:
     """Start the web page: pick a scene, type a request, watch each module's reasoning and the plan."""
+    require("web")
     from conceptbot.web.server import bind
 
     sock = bind(host, port)  # first: a taken port fails at once, before the slow imports

@@ -11,6 +11,7 @@ import click
 from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.cli.progress import ON_STDERR, say
 from conceptbot.core.errors import ConfigError
+from conceptbot.core.extras import require
 from conceptbot.core.plan import Action, InvalidActionError, format_actions, parse_action
 from conceptbot.core.text import terminal_safe
 from conceptbot.scenes import resolve_scene
@@ -109,6 +110,7 @@ def run(
     the verdict is in the output and in result.json.
     """
     # Imported here: PyBullet is heavy and prints a banner, and other commands do not need it.
+    require("sim")
     from conceptbot.sim.execute import run_closed_loop
     from conceptbot.sim.session import SimOptions, SimSession, run_in_simulator
 

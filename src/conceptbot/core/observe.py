@@ -5,7 +5,10 @@ them): a short progress message as each piece of work starts ("URP: keywords", "
 ...") and an event with JSON-able data as each module finishes (``goal``, ``decisions``, ``risk``,
 ``ope``, ``urp``, ``step``). The caller attaches one :class:`Observer` to
 :meth:`~conceptbot.systems.PlannerSystem.plan`; every stage reports to that object, and none of
-them knows who listens (the CLI prints the messages, the web page streams both to the browser)::
+them knows who listens (the CLI prints the messages, the web page streams both to the browser).
+An event carries a typed part of the trace (an :class:`EventPart`); whoever listens turns it into
+JSON at their own edge (``part.to_dict()``: the web page, the ROS 2 node, :class:`Callbacks` for
+code that wants plain data)::
 
     planner.plan(request, scene, observer=Callbacks(on_progress=print))
 """
@@ -20,6 +23,14 @@ EventSink = Callable[[str, dict[str, Any]], None]
 """``(event name, JSON-able data) -> None``."""
 
 
+class EventPart(Protocol):
+    """What an event carries: a typed part of the trace that knows its JSON form."""
+
+    def to_dict(self) -> dict[str, Any]:
+        """The part as ``conceptbot plan --json`` shows it."""
+        ...
+
+
 class Observer(Protocol):
     """What a plan reports to while it is made. Any object with these two methods will do."""
 
@@ -31,13 +42,15 @@ class Observer(Protocol):
         """
         ...
 
-    def event(self, name: str, data: dict[str, Any]) -> None:
-        """A module finished; ``data`` is its part of the trace.
+    def event(self, name: str, part: EventPart) -> None:
+        """A module finished; ``part`` is its part of the trace.
 
         Args:
             name: ``goal``, ``decisions``, ``risk`` (the goal planner), ``ope``, ``urp`` (the paper's
                 pipeline) or ``step`` (one per plan step, both planners and SayCan).
-            data: JSON-able, as the same part appears in ``conceptbot plan --json``.
+            part: The typed part (``GoalTrace``, ``DecisionsEvent``, ``RiskEvent``, ``OPETrace``,
+                ``URPTrace``, ``Step``); ``part.to_dict()`` is the same part as it appears in
+                ``conceptbot plan --json``.
         """
         ...
 
@@ -48,7 +61,7 @@ class Silent:
     def progress(self, message: str) -> None:
         """Ignore the message."""
 
-    def event(self, name: str, data: dict[str, Any]) -> None:
+    def event(self, name: str, part: EventPart) -> None:
         """Ignore the event."""
 
 
@@ -62,7 +75,7 @@ class Callbacks:
 
     Attributes:
         on_progress: Called with each progress message.
-        on_event: Called with each event's name and data.
+        on_event: Called with each event's name and its part as JSON-able data (``part.to_dict()``).
     """
 
     on_progress: Callable[[str], None] | None = None
@@ -73,10 +86,10 @@ class Callbacks:
         if self.on_progress is not None:
             self.on_progress(message)
 
-    def event(self, name: str, data: dict[str, Any]) -> None:
-        """Pass the event to ``on_event``."""
+    def event(self, name: str, part: EventPart) -> None:
+        """Pass the event to ``on_event``, its part as data."""
         if self.on_event is not None:
-            self.on_event(name, data)
+            self.on_event(name, part.to_dict())
 
 
 class FanOut:
@@ -94,7 +107,7 @@ class FanOut:
         for observer in self.observers:
             observer.progress(message)
 
-    def event(self, name: str, data: dict[str, Any]) -> None:
+    def event(self, name: str, part: EventPart) -> None:
         """Pass the event to each observer."""
         for observer in self.observers:
-            observer.event(name, data)
+            observer.event(name, part)

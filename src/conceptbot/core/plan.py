@@ -1,11 +1,13 @@
 """Actions, plans and the trace that explains them.
 
-An action is typed: :class:`PickAndPlace` (an object and its destination) or :class:`Done`; a plan's
-actions are a tuple of them. Their text is the paper's, ``pick_and_place(object, destination)`` and
-``done()``, written only by :func:`format_action` and read only by :func:`parse_action` (against a
-scene: an object that is not in the scene, a self-placement or a malformed command never reaches a
-plan) or :func:`read_action` (text from a results file, unchecked). Text is for prompts, results
-files and JSON; everything else passes actions.
+An action is typed. On the tabletop it is :class:`PickAndPlace` (an object and its destination) or
+:class:`Done`; in a household (SafeAgentBench) it is a :class:`HouseholdAction`, one of the 17
+actions of :data:`HOUSEHOLD_ACTIONS`. A plan's actions are a tuple of one family. Their text
+(``pick_and_place(object, destination)``, ``done()``; ``find Mug``, ``fillLiquid Mug water``) is
+written only by :func:`format_action` and read only here: by :func:`parse_action` (against a scene:
+an object that is not in the scene, a self-placement or a malformed command never reaches a plan),
+:func:`read_action` (text from a results file, unchecked) and :func:`parse_household_action`. Text
+is for prompts, results files and JSON; everything else passes actions.
 
 :meth:`Plan.to_dict` is the JSON contract of ``conceptbot plan --json``; :func:`plan_schema` gives
 its JSON Schema (``conceptbot/schemas/plan.schema.json``, shipped with the package).
@@ -62,21 +64,115 @@ class Done:
 #: One action of a tabletop plan.
 Action = PickAndPlace | Done
 
+# SafeAgentBench's 17 actions: verb -> (takes an object, takes a liquid). drop, throw and pour act on
+# what the hand holds.
+HOUSEHOLD_ACTIONS: dict[str, tuple[bool, bool]] = {
+    "find": (True, False),
+    "pick": (True, False),
+    "put": (True, False),
+    "open": (True, False),
+    "close": (True, False),
+    "slice": (True, False),
+    "turn_on": (True, False),
+    "turn_off": (True, False),
+    "drop": (False, False),
+    "throw": (False, False),
+    "break": (True, False),
+    "cook": (True, False),
+    "dirty": (True, False),
+    "clean": (True, False),
+    "fillLiquid": (True, True),
+    "emptyLiquid": (True, False),
+    "pour": (False, False),
+}
+LIQUIDS = ("water", "coffee", "wine")
+"""The liquids ``fillLiquid`` takes."""
 
-def format_action(action: Action) -> str:
-    """The action's text: ``pick_and_place(obj, destination)`` or ``done()``."""
+
+@dataclass(frozen=True)
+class HouseholdAction:
+    """One of SafeAgentBench's 17 actions: ``verb`` (canonical spelling, a key of
+    :data:`HOUSEHOLD_ACTIONS`), ``obj`` (as written; the executor maps it to an object type) and
+    ``liquid`` for ``fillLiquid``."""
+
+    verb: str
+    obj: str | None = None
+    liquid: str | None = None
+
+    @property
+    def is_done(self) -> bool:
+        """False: a household plan has no end marker."""
+        return False
+
+    def __str__(self) -> str:
+        return format_action(self)
+
+
+#: Any action, of either world.
+AnyAction = PickAndPlace | Done | HouseholdAction
+
+
+def format_action(action: AnyAction) -> str:
+    """The action's text: ``pick_and_place(obj, destination)``, ``done()``, or a household step as
+    the benchmark writes it (``find Mug``, ``fillLiquid Mug water``, ``pour``)."""
     if isinstance(action, Done):
         return DONE
+    if isinstance(action, HouseholdAction):
+        return " ".join(p for p in (action.verb, action.obj, action.liquid) if p)
     return f"pick_and_place({action.obj}, {action.destination})"
 
 
-def format_actions(actions: Iterable[Action]) -> list[str]:
+def format_actions(actions: Iterable[AnyAction]) -> list[str]:
     """The actions' texts, in order (for a results file, JSON or a prompt)."""
     return [format_action(a) for a in actions]
 
 
 class InvalidActionError(ValueError):
-    """Text that is not a valid action in the scene; the message says why."""
+    """Text that is not a valid action (in the scene, where one is given); the message says why."""
+
+
+_VERBS = {v.lower(): v for v in HOUSEHOLD_ACTIONS}
+_STEP_SPLIT = re.compile(r"[\s,()]+")
+
+
+def parse_household_action(text: str) -> HouseholdAction:
+    """One household step as people (and the dataset) write it: forgiving about the spelling
+    (``turn on candle``, ``find Watering Can``, any case), strict about what it accepts (a known
+    verb, the right number of arguments, a liquid of :data:`LIQUIDS`).
+
+    Raises:
+        InvalidActionError: Unknown verb, missing or extra arguments, unknown liquid.
+    """
+    words = [w for w in _STEP_SPLIT.split(text.strip()) if w]
+    if not words:
+        raise InvalidActionError("empty step")
+    head = words[0].lower()
+    if head == "turn" and len(words) > 1 and words[1].lower() in ("on", "off"):
+        head, words = f"turn_{words[1].lower()}", [f"turn_{words[1].lower()}", *words[2:]]
+    verb = _VERBS.get(head.replace("-", "_"))
+    if verb is None:
+        raise InvalidActionError(f"unknown action {words[0]!r}")
+    takes_object, takes_liquid = HOUSEHOLD_ACTIONS[verb]
+    rest = words[1:]
+    liquid = None
+    if takes_liquid:
+        if not rest or rest[-1].lower() not in LIQUIDS:
+            raise InvalidActionError(
+                f"{verb} needs a liquid ({', '.join(LIQUIDS)}) after the object: {text!r}"
+            )
+        liquid = rest.pop().lower()
+    if not takes_object:
+        # "pour" and "drop" act on the held object; a trailing word is tolerated (the dataset
+        # writes "pour Mug" once) but ignored.
+        return HouseholdAction(verb)
+    if not rest:
+        raise InvalidActionError(f"{verb} needs an object: {text!r}")
+    return HouseholdAction(verb, " ".join(rest), liquid)
+
+
+def parse_household_actions(texts: Iterable[str]) -> tuple[HouseholdAction, ...]:
+    """Each text's household action (see :func:`parse_household_action`)."""
+    return tuple(parse_household_action(t) for t in texts)
 
 
 def _clean(name: str) -> str:
@@ -228,15 +324,16 @@ class Plan:
     """A plan with everything needed to explain it.
 
     Attributes:
-        actions: The actions, ending with :class:`Done`.
-        steps: Per-step scores.
+        actions: The actions: a tabletop plan's end with :class:`Done`; a household plan's are
+            :class:`HouseholdAction` (no end marker).
+        steps: Per-step scores (the tabletop planners).
         refused: True when the planner judged the request unsafe.
-        reason: Why it refused (or None).
+        reason: Why it refused (or None); a household planner gives its reasoning for a plan too.
         trace: Everything retrieved and decided on the way (empty for a plan built by hand).
         usage: Per-module tokens, time and cost.
     """
 
-    actions: tuple[Action, ...]
+    actions: tuple[AnyAction, ...]
     steps: list[Step] = field(default_factory=list)
     refused: bool = False
     reason: str | None = None
@@ -245,9 +342,13 @@ class Plan:
 
     def __post_init__(self) -> None:
         self.actions = tuple(self.actions)
-        wrong = [a for a in self.actions if not isinstance(a, PickAndPlace | Done)]
+        wrong = [a for a in self.actions if not isinstance(a, AnyAction)]
         if wrong:  # text is read into actions at the edge (read_action, parse_action), never here
-            raise TypeError(f"a plan's actions are PickAndPlace or Done, not {type(wrong[0]).__name__}")
+            raise TypeError(
+                f"a plan's actions are PickAndPlace, Done or HouseholdAction, not {type(wrong[0]).__name__}"
+            )
+        if len({isinstance(a, HouseholdAction) for a in self.actions}) > 1:
+            raise TypeError("a plan's actions are all tabletop actions or all household actions")
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON contract of ``conceptbot plan --json``."""

@@ -15,6 +15,9 @@ Defaults: confidence 1.0, no bounding box, no size (the affordance then does not
 An object listed only under ``pickable_objects`` or ``destinations`` is added to ``objects``.
 A scene needs at least one pickable object and one destination (otherwise the only possible plan is
 ``done()``); names, sizes and nesting are limited as :mod:`conceptbot.core.limits` says.
+
+:class:`HouseScene` is the other world's scene: a household room (SafeAgentBench) as a room type and
+the AI2-THOR object types in it, built by :func:`conceptbot.household.thor.house_scene`.
 """
 
 from __future__ import annotations
@@ -259,3 +262,16 @@ def load_scene(path: Path) -> Scene:
     except (OSError, ValueError) as exc:
         raise ConfigError(f"{path} is not valid JSON: {exc}") from None
     return scene_from_dict(data, where=str(path))
+
+
+@dataclass(frozen=True)
+class HouseScene:
+    """What a household robot can act on: a room type and the AI2-THOR object types present."""
+
+    name: str
+    room: str
+    objects: tuple[str, ...]
+
+    def has(self, type_name: str) -> bool:
+        """Whether the scene holds an object of this type."""
+        return type_name in self.objects

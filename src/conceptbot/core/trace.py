@@ -13,7 +13,9 @@ Parts by planner (a part a planner does not produce is ``None`` and left out of 
 * the goal planner (``planner_kind == "goal"``): ``goal``, ``decisions``, ``stack`` (when the request
   piles things up), ``risk``, and ``ope`` when OPE rated the objects handed to someone;
 * SayCan: ``config``, ``request`` and ``scene`` only;
-* the household planners (SafeAgentBench): ``config``, the rest in ``extra`` (see :class:`PlanTrace`).
+* the household planners (SafeAgentBench): ``config`` and ``household`` (:class:`HouseholdTrace`:
+  the harm judge's readings, the skill layer's grounding changes, the outcome checks), whose keys
+  the JSON shows at the top level of the trace, as it always has.
 """
 
 from __future__ import annotations
@@ -418,6 +420,174 @@ class PlannerSummary:
         return {"method": self.method, "steps": self.steps}
 
 
+@dataclass(frozen=True)
+class HarmVerdict:
+    """The household harm judge's decision.
+
+    Attributes:
+        log_odds: The score: the sum of the readings' log P(dangerous) - log P(not).
+        threshold: The refusal threshold it was compared with.
+        readings: Each question's log-odds of "dangerous", by name.
+    """
+
+    log_odds: float
+    threshold: float
+    readings: Mapping[str, float] = field(default_factory=dict)
+
+    @property
+    def refuse(self) -> bool:
+        """Whether the instruction is refused (a NaN score refuses: the decision could not be made)."""
+        return not self.log_odds < self.threshold
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form for the trace."""
+        return {
+            "log_odds": round(self.log_odds, 3),
+            "readings": {name: round(value, 3) for name, value in self.readings.items()},
+            "threshold": self.threshold,
+            "refuse": self.refuse,
+        }
+
+
+@dataclass(frozen=True)
+class GroundingChange:
+    """One change the household robot's skill layer made to a plan before it runs.
+
+    Attributes:
+        step: The step that failed, as text.
+        failure: Why (the executor's message).
+        change: What was done ("inserted pick Candle", "dropped the step", ...).
+    """
+
+    step: str
+    failure: str
+    change: str
+
+    def to_dict(self) -> dict[str, str]:
+        """JSON form for the trace."""
+        return {"step": self.step, "failure": self.failure, "change": self.change}
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """One hazardous outcome of a household plan (or of what an instruction asks).
+
+    Attributes:
+        kind: ``spill`` or ``throw``.
+        step: The plan step that causes it, as text.
+        about: What the liquid lands on (``spill``) or what is thrown (``throw``).
+    """
+
+    kind: str
+    step: str
+    about: str
+
+    def describe(self) -> str:
+        """In words, for a refusal's reason."""
+        if self.kind == "spill":
+            return f"'{self.step}' pours liquid onto the {self.about}, which neither holds nor drains it"
+        return f"'{self.step}' throws the {self.about}"
+
+    def to_dict(self) -> dict[str, str]:
+        """JSON form (the trace's ``outcomes``)."""
+        return {"kind": self.kind, "step": self.step, "about": self.about}
+
+
+@dataclass(frozen=True)
+class LLMRepair:
+    """The household planner's optional repair round: the plan's failures sent back to the LLM.
+
+    Attributes:
+        failures: ``step: why`` for each failed step of the first plan.
+        proposed: The LLM's repaired steps, as text.
+        proposed_failures: Their failures.
+        kept: Whether the repair replaced the plan (only when it fails fewer steps).
+    """
+
+    failures: tuple[str, ...]
+    proposed: tuple[str, ...]
+    proposed_failures: tuple[str, ...]
+    kept: bool
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form for the trace."""
+        return {
+            "failures": list(self.failures),
+            "proposed": list(self.proposed),
+            "proposed_failures": list(self.proposed_failures),
+            "kept": self.kept,
+        }
+
+
+@dataclass(frozen=True)
+class HouseholdTrace:
+    """What a household planner found and decided (SafeAgentBench); a part it did not produce is
+    None and left out of the JSON.
+
+    Attributes:
+        objects: Scene objects the instruction names.
+        risk: OPE's Risk Index answer per object, as the model gave it.
+        keywords: URP's keywords.
+        relations: The graph relations kept for them, as text.
+        judge: The harm judge's verdict.
+        repair: The LLM repair round, when it ran.
+        grounding: The skill layer's changes to the plan.
+        outcomes: Hazardous outcomes found in the plan or the instruction.
+        refused_by: ``request``, ``judge``, ``planner`` or ``outcome``; None when it planned.
+        reasoning: The planning call's reasoning, or the reason of a refusal made without it.
+    """
+
+    objects: tuple[str, ...] | None = None
+    risk: Mapping[str, Mapping[str, Any]] | None = None
+    keywords: tuple[str, ...] | None = None
+    relations: tuple[str, ...] | None = None
+    judge: HarmVerdict | None = None
+    repair: LLMRepair | None = None
+    grounding: tuple[GroundingChange, ...] | None = None
+    outcomes: tuple[Outcome, ...] | None = None
+    refused_by: str | None = None
+    reasoning: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form: the set parts, in this order (the order the planners have always written)."""
+        data: dict[str, Any] = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if value is None:
+                continue
+            if f.name == "risk":
+                data[f.name] = {name: dict(values) for name, values in value.items()}
+            elif isinstance(value, tuple):
+                data[f.name] = [v.to_dict() if hasattr(v, "to_dict") else v for v in value]
+            elif hasattr(value, "to_dict"):
+                data[f.name] = value.to_dict()
+            else:
+                data[f.name] = value
+        return data
+
+
+@dataclass(frozen=True)
+class DecisionsEvent:
+    """The goal planner's ``decisions`` event: every target's decision, as they are made."""
+
+    decisions: tuple[DecisionTrace, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form of the event."""
+        return {"decisions": [d.to_dict() for d in self.decisions]}
+
+
+@dataclass(frozen=True)
+class RiskEvent:
+    """The goal planner's ``risk`` event: every move's risk check."""
+
+    checks: tuple[RiskCheck, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form of the event."""
+        return {"checks": [c.to_dict() for c in self.checks]}
+
+
 _HEADER = ("config", "planner_kind", "request", "scene")
 _STEP_PARTS = ("ope", "urp", "goal", "decisions", "stack", "risk", "vetoes", "planner")
 # The goal planner's OPE runs on the moves it checks, after the rest; its trace has always listed
@@ -443,16 +613,11 @@ class PlanTrace:
         vetoes: Moves dropped because their evidence names a hazard for the recipient, or because
             their risk decision could not be made (both planners; None: no move was vetoed).
         planner: How the steps were chosen.
-        extra: Planner-specific parts with no type of their own, written to the JSON after the typed
-            parts, in their order, and read back by key. The household planners put theirs here:
-            ``objects`` (scene objects the instruction names), ``risk`` (OPE's Risk Index values per
-            object), ``keywords``, ``relations``, ``judge`` (the harm judge's verdict),
-            ``refused_by`` (``request``, ``judge``, ``planner`` or ``outcome``), ``outcomes``,
-            ``repair``, ``grounding`` and ``reasoning``.
-            A key may not repeat a typed part that is set.
+        household: A household planner's part; its keys are written at the top level of the JSON
+            after the others (``objects``, ``risk``, ..., as :class:`HouseholdTrace` lists them).
 
     Raises:
-        ValueError: An ``extra`` key that is also a typed part of this trace.
+        ValueError: A household part beside the tabletop planners' parts (their JSON keys would clash).
     """
 
     config: str | None = None
@@ -467,16 +632,18 @@ class PlanTrace:
     risk: tuple[RiskCheck, ...] | None = None
     vetoes: tuple[Veto, ...] | None = None
     planner: PlannerSummary | None = None
-    extra: Mapping[str, Any] = field(default_factory=dict)
+    household: HouseholdTrace | None = None
 
     def __post_init__(self) -> None:
-        typed = {f.name for f in fields(self) if f.name != "extra" and getattr(self, f.name) is not None}
-        clash = sorted(typed & set(self.extra))
-        if clash:
-            raise ValueError(f"extra trace parts repeat typed parts: {', '.join(clash)}")
+        if self.household is None:
+            return
+        tabletop = [n for n in (*_STEP_PARTS, "ope", "goal") if getattr(self, n) is not None]
+        if tabletop:
+            raise ValueError(f"a household trace has no tabletop parts: {', '.join(sorted(set(tabletop)))}")
 
     def to_dict(self) -> dict[str, Any]:
-        """The ``trace`` object of ``conceptbot plan --json``: the set parts, then ``extra``."""
+        """The ``trace`` object of ``conceptbot plan --json``: the set parts, a household part's
+        keys last."""
         data: dict[str, Any] = {}
         for name in (*_HEADER, *(_STEP_PARTS if self.goal is None else _GOAL_PARTS)):
             value = getattr(self, name)
@@ -488,5 +655,6 @@ class PlanTrace:
                 data[name] = value
             else:
                 data[name] = value.to_dict()
-        data.update(self.extra)
+        if self.household is not None:
+            data.update(self.household.to_dict())
         return data

@@ -28,11 +28,13 @@ final state.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from conceptbot.household.actions import Step, StepError, parse_step
-from conceptbot.household.thor import Catalogue, HouseScene, catalogue
+from conceptbot.core.plan import HouseholdAction, format_action
+from conceptbot.core.scene import HouseScene
+from conceptbot.household.thor import ThorCatalogue, catalogue
 
 BOOLEAN_KEYS = (
     "isOpen",
@@ -69,7 +71,6 @@ class ObjectState:
 
 # Why a step failed (StepResult.failure), for a skill layer to repair it
 # (:mod:`conceptbot.household.grounding`).
-INVALID = "invalid"  # not one of the actions' syntax
 UNKNOWN_OBJECT = "unknown object"  # no such object here (or none given)
 UNABLE = "unable"  # the object lacks the ability (opening a shelf), or the action is spent
 NOT_FOUND = "not found"  # not found yet
@@ -84,7 +85,7 @@ class StepResult:
     """What one step did; a failed one says why (``failure``: one of the kinds above) and, for a
     closed receptacle, which one (``about``)."""
 
-    step: str
+    step: HouseholdAction
     ok: bool
     message: str = ""
     failure: str = ""
@@ -92,8 +93,8 @@ class StepResult:
 
 
 @dataclass
-class Execution:
-    """A plan's execution: per-step results and the final state."""
+class HouseholdExecution:
+    """A household plan's execution: per-step results and the final state."""
 
     results: list[StepResult]
     state: dict[str, ObjectState]
@@ -105,7 +106,7 @@ class Execution:
 
     def failures(self) -> list[str]:
         """``step: why`` for each failed step."""
-        return [f"{r.step}: {r.message}" for r in self.results if not r.ok]
+        return [f"{format_action(r.step)}: {r.message}" for r in self.results if not r.ok]
 
 
 class _StepFailedError(Exception):
@@ -123,7 +124,7 @@ class HouseholdExecutor:
         types: The object-type table (the bundled one by default).
     """
 
-    def __init__(self, scene: HouseScene, types: Catalogue | None = None) -> None:
+    def __init__(self, scene: HouseScene, types: ThorCatalogue | None = None) -> None:
         self.scene = scene
         self.types = types or catalogue()
         surface = self.types.default_parent.get(scene.room, "Floor")
@@ -190,7 +191,7 @@ class HouseholdExecutor:
                 self._make(t)
 
     # -- actions -----------------------------------------------------------------------------
-    def _do(self, step: Step) -> str:
+    def _do(self, step: HouseholdAction) -> str:
         """Carry out one step on the state; returns what happened (raises :class:`_StepFailedError`)."""
         verb = step.verb
         if verb == "pour":
@@ -255,7 +256,7 @@ class HouseholdExecutor:
         self._land_put(held, t)
         return f"put {held} in/on {t}"
 
-    def _change(self, step: Step, t: str) -> str:
+    def _change(self, step: HouseholdAction, t: str) -> str:
         """The steps that change ``t`` where it is (open, toggle, slice, cook, fill, ...)."""
         verb, s = step.verb, self.state[t]
         if verb in ("open", "close"):
@@ -303,7 +304,9 @@ class HouseholdExecutor:
             self._need(t, "fillable")
             s.flags["isFilledWithLiquid"], s.liquid = False, None
             return f"emptied {t}"
-        raise _StepFailedError(f"unknown action {verb}")  # pragma: no cover - parse_step admits only ACTIONS
+        raise _StepFailedError(
+            f"unknown action {verb}"
+        )  # pragma: no cover - a HouseholdAction is one of HOUSEHOLD_ACTIONS
 
     def _land_put(self, held: str, receptacle: str) -> None:
         s = self.state[held]
@@ -329,23 +332,21 @@ class HouseholdExecutor:
                 if self.types.has(t, "fillable") and not s.flags["isBroken"]:
                     s.flags["isFilledWithLiquid"], s.liquid = True, "water"
 
-    def step(self, text: str) -> StepResult:
-        """Execute one step (text as in a plan)."""
+    def step(self, action: HouseholdAction) -> StepResult:
+        """Execute one step."""
         try:
-            result = StepResult(text, True, self._do(parse_step(text)))
-        except StepError as exc:
-            return StepResult(text, False, str(exc), INVALID)
+            result = StepResult(action, True, self._do(action))
         except _StepFailedError as exc:
-            return StepResult(text, False, str(exc), exc.failure, exc.about)
+            return StepResult(action, False, str(exc), exc.failure, exc.about)
         self._settle()
         return result
 
-    def run(self, steps: list[str]) -> Execution:
+    def run(self, steps: Sequence[HouseholdAction]) -> HouseholdExecution:
         """Execute a plan; failed steps are recorded and skipped."""
-        return Execution([self.step(s) for s in steps], self.state)
+        return HouseholdExecution([self.step(s) for s in steps], self.state)
 
 
-def execute(scene: HouseScene, steps: list[str]) -> Execution:
+def execute(scene: HouseScene, steps: Sequence[HouseholdAction]) -> HouseholdExecution:
     """Execute ``steps`` in a fresh copy of ``scene``."""
     return HouseholdExecutor(scene).run(steps)
 
@@ -378,7 +379,7 @@ def _unmet(t: str, s: ObjectState, entry: dict[str, Any], state: dict[str, Objec
 
 
 def check_final_state(
-    state: dict[str, ObjectState], final_state: list[dict[str, Any]], types: Catalogue | None = None
+    state: dict[str, ObjectState], final_state: list[dict[str, Any]], types: ThorCatalogue | None = None
 ) -> list[str]:
     """What in ``final_state`` the state does not meet (empty: all met).
 
@@ -403,7 +404,7 @@ def check_final_state(
     return unmet
 
 
-def effects(before: HouseScene, execution: Execution) -> list[dict[str, Any]]:
+def effects(before: HouseScene, execution: HouseholdExecution) -> list[dict[str, Any]]:
     """What an execution changed, as ``final_state`` entries (used to compare a plan with a reference
     plan where a task gives no final state): each changed boolean and each object moved to a new
     receptacle. Being picked up is left out (a plan may reasonably put a thing down afterwards)."""

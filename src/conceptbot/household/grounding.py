@@ -29,9 +29,10 @@ from __future__ import annotations
 
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass
 
-from conceptbot.household.actions import LIQUIDS, StepError, parse_step
+from conceptbot.core.plan import LIQUIDS, HouseholdAction, format_action
+from conceptbot.core.scene import HouseScene
+from conceptbot.core.trace import GroundingChange
 from conceptbot.household.executor import (
     CLOSED,
     EMPTY_CONTAINER,
@@ -40,53 +41,29 @@ from conceptbot.household.executor import (
     HouseholdExecutor,
     StepResult,
 )
-from conceptbot.household.thor import HouseScene, catalogue
+from conceptbot.household.thor import catalogue
 
 HAND_VERBS = ("pick", "put", "drop", "throw", "pour")
 
-
-@dataclass(frozen=True)
-class Repair:
-    """One change the skill layer made.
-
-    Attributes:
-        step: The step that failed.
-        failure: Why (the executor's message).
-        change: What was done ("inserted pick Candle", "dropped the step", ...).
-    """
-
-    step: str
-    failure: str
-    change: str
-
-    def to_dict(self) -> dict[str, str]:
-        """JSON form for the trace."""
-        return {"step": self.step, "failure": self.failure, "change": self.change}
+_Plan = list[HouseholdAction]
 
 
-def _object(text: str) -> str | None:
-    """The canonical object type a step acts on (``None`` for drop, pour, throw or bad syntax)."""
-    try:
-        step = parse_step(text)
-    except StepError:
-        return None
+def _object(step: HouseholdAction) -> str | None:
+    """The canonical object type a step acts on (``None`` for drop, pour or throw)."""
     return catalogue().canonical(step.obj) if step.obj else None
 
 
-def _verb(text: str) -> str:
-    try:
-        return parse_step(text).verb
-    except StepError:
-        return ""
-
-
-def _found_before(plan: Sequence[str], index: int) -> list[tuple[int, str]]:
+def _found_before(plan: Sequence[HouseholdAction], index: int) -> list[tuple[int, str]]:
     """``(position, object)`` of each ``find`` before ``index``, latest first."""
-    found = [(i, _object(s)) for i, s in enumerate(plan[:index]) if _verb(s) == "find"]
+    found = [(i, _object(s)) for i, s in enumerate(plan[:index]) if s.verb == "find"]
     return [(i, o) for i, o in reversed(found) if o is not None]
 
 
-def _carry(plan: list[str], index: int, executor: HouseholdExecutor) -> tuple[list[str], str] | None:
+def _inserted(plan: _Plan, at: int, step: HouseholdAction) -> tuple[_Plan, str]:
+    return [*plan[:at], step, *plan[at:]], f"inserted {format_action(step)}"
+
+
+def _carry(plan: _Plan, index: int, executor: HouseholdExecutor) -> tuple[_Plan, str] | None:
     """An empty hand at ``plan[index]``: pick the object last found that can be picked."""
     types = catalogue()
     target = _object(plan[index])
@@ -99,23 +76,22 @@ def _carry(plan: list[str], index: int, executor: HouseholdExecutor) -> tuple[li
         for i, o in found
         if (o != target or not types.has(o, "receptacle")) and types.has(o, "pickupable")
     ]
-    if _verb(plan[index]) == "pour":  # pour from something that holds liquid, if one was found
+    if plan[index].verb == "pour":  # pour from something that holds liquid, if one was found
         filled = [(i, o) for i, o in candidates if executor.state[o].flags["isFilledWithLiquid"]]
         candidates = filled + [c for c in candidates if c not in filled]
     if not candidates:
         return None
     found_at, obj = candidates[0]
-    hand_free = not any(_verb(s) in HAND_VERBS for s in plan[found_at + 1 : index])
-    at = found_at + 1 if hand_free else index
-    return [*plan[:at], f"pick {obj}", *plan[at:]], f"inserted pick {obj}"
+    hand_free = not any(s.verb in HAND_VERBS for s in plan[found_at + 1 : index])
+    return _inserted(plan, found_at + 1 if hand_free else index, HouseholdAction("pick", obj))
 
 
-def _receptacle(plan: list[str], index: int, executor: HouseholdExecutor) -> tuple[list[str], str] | None:
+def _receptacle(plan: _Plan, index: int, executor: HouseholdExecutor) -> tuple[_Plan, str] | None:
     """``put X`` where X is no receptacle (usually the held object): the receptacle last found."""
     types = catalogue()
     for _, obj in _found_before(plan, index):
         if types.has(obj, "receptacle") and obj != executor.held:
-            return [*plan[:index], f"put {obj}", *plan[index + 1 :]], f"put on {obj} instead"
+            return [*plan[:index], HouseholdAction("put", obj), *plan[index + 1 :]], f"put on {obj} instead"
     return None
 
 
@@ -127,39 +103,38 @@ def liquid_named(instruction: str) -> str:
 
 
 def _fix(
-    plan: list[str], index: int, result: StepResult, executor: HouseholdExecutor, liquid: str
-) -> tuple[list[str], str]:
+    plan: _Plan, index: int, result: StepResult, executor: HouseholdExecutor, liquid: str
+) -> tuple[_Plan, str]:
     """The plan with the one change that ``result`` (the failure of ``plan[index]``) calls for."""
-    verb, obj = _verb(plan[index]), _object(plan[index])
-    fixed: tuple[list[str], str] | None = None
+    verb, obj = plan[index].verb, _object(plan[index])
+    fixed: tuple[_Plan, str] | None = None
     if result.failure == EMPTY_CONTAINER and catalogue().has(result.about, "fillable"):
-        fill = f"fillLiquid {result.about} {liquid}"
-        fixed = [*plan[:index], fill, *plan[index:]], f"inserted {fill}"
+        fixed = _inserted(plan, index, HouseholdAction("fillLiquid", result.about, liquid))
     elif result.failure == EMPTY_HAND:
         fixed = _carry(plan, index, executor)
     elif result.failure == NOT_FOUND and obj:
-        fixed = [*plan[:index], f"find {obj}", *plan[index:]], f"inserted find {obj}"
+        fixed = _inserted(plan, index, HouseholdAction("find", obj))
     elif result.failure == CLOSED and result.about:
-        fixed = [*plan[:index], f"open {result.about}", *plan[index:]], f"inserted open {result.about}"
+        fixed = _inserted(plan, index, HouseholdAction("open", result.about))
     elif verb == "put" and obj and not catalogue().has(obj, "receptacle"):
         fixed = _receptacle(plan, index, executor)
     return fixed or ([*plan[:index], *plan[index + 1 :]], "dropped the step")
 
 
 def _first_failure(
-    scene: HouseScene, plan: Sequence[str]
+    scene: HouseScene, plan: Sequence[HouseholdAction]
 ) -> tuple[int, StepResult, HouseholdExecutor] | None:
     executor = HouseholdExecutor(scene)
-    for index, text in enumerate(plan):
-        result = executor.step(text)  # a failed step leaves the state as it was
+    for index, step in enumerate(plan):
+        result = executor.step(step)  # a failed step leaves the state as it was
         if not result.ok:
             return index, result, executor
     return None
 
 
 def ground_plan(
-    scene: HouseScene, steps: Sequence[str], instruction: str = ""
-) -> tuple[list[str], list[Repair]]:
+    scene: HouseScene, steps: Sequence[HouseholdAction], instruction: str = ""
+) -> tuple[list[HouseholdAction], list[GroundingChange]]:
     """The plan with every failed step repaired (see the module docstring), and the repairs made.
     ``instruction`` only says which liquid an empty container is filled with.
 
@@ -168,7 +143,7 @@ def ground_plan(
     what is still failing after them is dropped.
     """
     plan = list(steps)
-    repairs: list[Repair] = []
+    repairs: list[GroundingChange] = []
     for _ in range(3 * len(plan) + 3):
         failing = _first_failure(scene, plan)
         if failing is None:
@@ -176,9 +151,9 @@ def ground_plan(
         index, result, executor = failing
         before = plan[index]
         plan, change = _fix(plan, index, result, executor, liquid_named(instruction))
-        repairs.append(Repair(before, result.message, change))
+        repairs.append(GroundingChange(format_action(before), result.message, change))
     while (failing := _first_failure(scene, plan)) is not None:
         index, result, _ = failing
-        repairs.append(Repair(plan[index], result.message, "dropped the step"))
+        repairs.append(GroundingChange(format_action(plan[index]), result.message, "dropped the step"))
         plan = [*plan[:index], *plan[index + 1 :]]
     return plan, repairs

@@ -16,18 +16,18 @@ log-odds of "dangerous":
 
 On the 154 detailed dev tasks the request check lets through, the first two alone separate unsafe
 from safe with AUC 0.89, all four with 0.93; on the 125 that nothing else refuses, 0.87 and 0.90
-(``docs/safeagentbench.md``).
+(``docs/notes/2026-12-01-safeagentbench-v4-four-questions-and-request-check.md``).
 The sum is a score, so the refusal threshold is chosen on the dev split.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass
 
+from conceptbot.core.scene import HouseScene
+from conceptbot.core.trace import HarmVerdict
 from conceptbot.core.usage import Usage
-from conceptbot.household.thor import HouseScene
 from conceptbot.models.llm import LLM, Message, ScoreRequest
 from conceptbot.pipeline import prompts
 
@@ -79,35 +79,6 @@ THRESHOLD = 4.0
 def safety_text() -> str:
     """The safety instruction both planners share (what counts as dangerous)."""
     return prompts.render("household_safety", PROMPTS).strip()
-
-
-@dataclass(frozen=True)
-class HarmVerdict:
-    """The judge's decision.
-
-    Attributes:
-        log_odds: The score: the sum of the readings' log P(dangerous) - log P(not).
-        threshold: The refusal threshold it was compared with.
-        readings: Each question's log-odds of "dangerous", by name.
-    """
-
-    log_odds: float
-    threshold: float
-    readings: Mapping[str, float] = field(default_factory=dict)
-
-    @property
-    def refuse(self) -> bool:
-        """Whether the instruction is refused."""
-        return self.log_odds >= self.threshold
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON form for the trace."""
-        return {
-            "log_odds": round(self.log_odds, 3),
-            "readings": {name: round(value, 3) for name, value in self.readings.items()},
-            "threshold": self.threshold,
-            "refuse": self.refuse,
-        }
 
 
 class HarmJudge:

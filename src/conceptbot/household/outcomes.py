@@ -8,9 +8,9 @@ outcomes can be named before anything moves:
   nor drains it (a sink, a bathtub, a toilet): a television, a sofa, a counter top, a lamp;
 * ``throw`` — an object thrown across a room (what lands where is not controlled).
 
-Chosen on the SafeAgentBench dev split (``docs/safeagentbench.md``): over the plans the judge let
-through, they catch 8 more of the 100 unsafe tasks for 2 more of the 100 safe ones refused. They
-are physical rules of the action set, not rules about particular tasks.
+Chosen on the SafeAgentBench dev split (``docs/notes/2026-11-30-safeagentbench-v3-plan-outcome-check.md``):
+over the plans the judge let through, they catch 8 more of the 100 unsafe tasks for 2 more of the 100
+safe ones refused. They are physical rules of the action set, not rules about particular tasks.
 
 :func:`requested_outcomes` reads the same two outcomes from the instruction's words, for the plans
 that leave the hazardous step out (v4; on dev 4 more unsafe tasks refused for 1 more safe one).
@@ -20,11 +20,12 @@ from __future__ import annotations
 
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass
 
-from conceptbot.household.actions import StepError, parse_step
+from conceptbot.core.plan import HouseholdAction, format_action
+from conceptbot.core.scene import HouseScene
+from conceptbot.core.trace import Outcome
 from conceptbot.household.executor import HouseholdExecutor
-from conceptbot.household.thor import Catalogue, HouseScene, catalogue
+from conceptbot.household.thor import ThorCatalogue, catalogue
 
 DRAINS = ("Sink", "SinkBasin", "Bathtub", "BathtubBasin", "Toilet")
 """Object types that take poured liquid away though they do not hold it."""
@@ -32,59 +33,30 @@ HOLDS_WATER = ("Vase",)
 """Vessels that hold water though the simulator cannot fill them."""
 
 
-@dataclass(frozen=True)
-class Outcome:
-    """One hazardous outcome of a plan.
-
-    Attributes:
-        kind: ``spill`` or ``throw``.
-        step: The plan step that causes it.
-        about: What the liquid lands on (``spill``) or what is thrown (``throw``).
-    """
-
-    kind: str
-    step: str
-    about: str
-
-    def describe(self) -> str:
-        """In words, for a refusal's reason."""
-        if self.kind == "spill":
-            return f"'{self.step}' pours liquid onto the {self.about}, which neither holds nor drains it"
-        return f"'{self.step}' throws the {self.about}"
-
-    def to_dict(self) -> dict[str, str]:
-        """JSON form (the trace's ``outcomes``)."""
-        return {"kind": self.kind, "step": self.step, "about": self.about}
-
-
-def hazardous_outcomes(scene: HouseScene, steps: Sequence[str]) -> list[Outcome]:
+def hazardous_outcomes(scene: HouseScene, steps: Sequence[HouseholdAction]) -> list[Outcome]:
     """The hazardous outcomes of carrying out ``steps`` in ``scene`` (failed steps have none).
 
     Args:
         scene: The objects present.
-        steps: The plan, as the executor reads it.
+        steps: The plan.
 
     Returns:
         One entry per step that spills or throws, in plan order.
     """
     executor = HouseholdExecutor(scene)
     found: list[Outcome] = []
-    for text in steps:
-        try:
-            verb = parse_step(text).verb
-        except StepError:
-            verb = ""
+    for step in steps:
         held, at = executor.held, executor.location
-        if not executor.step(text).ok:
+        if not executor.step(step).ok:
             continue
-        if verb == "pour" and at and at != held and not holds_or_drains(executor.types, at):
-            found.append(Outcome("spill", text, at))
-        elif verb == "throw" and held:
-            found.append(Outcome("throw", text, held))
+        if step.verb == "pour" and at and at != held and not holds_or_drains(executor.types, at):
+            found.append(Outcome("spill", format_action(step), at))
+        elif step.verb == "throw" and held:
+            found.append(Outcome("throw", format_action(step), held))
     return found
 
 
-def holds_or_drains(types: Catalogue, target: str) -> bool:
+def holds_or_drains(types: ThorCatalogue, target: str) -> bool:
     """Whether liquid poured onto an object of type ``target`` is held or drained, not spilled."""
     return types.has(target, "fillable") or target in DRAINS + HOLDS_WATER
 
@@ -98,7 +70,7 @@ _PRONOUNS = frozenset({"it", "them"})
 _CLAUSE = re.compile(r"[,;.!?]|\bthen\b|\band\b")
 
 
-def requested_outcomes(instruction: str, types: Catalogue | None = None) -> list[Outcome]:
+def requested_outcomes(instruction: str, types: ThorCatalogue | None = None) -> list[Outcome]:
     """The same two outcomes, read from what the instruction asks rather than from the plan.
 
     A small planner often leaves the hazardous step out ("Throw the mug." planned as a drop), and a
@@ -140,7 +112,7 @@ def requested_outcomes(instruction: str, types: Catalogue | None = None) -> list
     return found
 
 
-def _objects_in(words: list[str], types: Catalogue) -> list[tuple[int, str]]:
+def _objects_in(words: list[str], types: ThorCatalogue) -> list[tuple[int, str]]:
     """(word index, object type) for each object named in ``words``, longest name first."""
     found: list[tuple[int, str]] = []
     i = 0

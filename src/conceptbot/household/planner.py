@@ -16,7 +16,10 @@
   which judges and plans at once.
 
 The reply is constrained (JSON schema with a pattern per step), so every step is one of the 17
-actions on an object of the scene; a plan still has to be checked by the executor.
+actions on an object of the scene; it is read into :class:`~conceptbot.core.plan.HouseholdAction`
+where it arrives, and the plan still has to be checked by the executor. Both planners return the
+tabletop planners' :class:`~conceptbot.core.plan.Plan`, with a
+:class:`~conceptbot.core.trace.HouseholdTrace`; :mod:`conceptbot.systems` builds them by name.
 """
 
 from __future__ import annotations
@@ -24,18 +27,26 @@ from __future__ import annotations
 import json
 import re
 import time
-from dataclasses import dataclass, field
-from typing import Any, Protocol
+from dataclasses import dataclass, replace
+from typing import Any
 
 from conceptbot.core.observe import SILENT, Observer
-from conceptbot.core.trace import PlanTrace
+from conceptbot.core.plan import (
+    HOUSEHOLD_ACTIONS,
+    LIQUIDS,
+    HouseholdAction,
+    Plan,
+    format_actions,
+    parse_household_actions,
+)
+from conceptbot.core.scene import HouseScene
+from conceptbot.core.trace import HouseholdTrace, LLMRepair, Outcome, PlanTrace
 from conceptbot.core.usage import Usage
-from conceptbot.household.actions import ACTIONS, LIQUIDS, key
 from conceptbot.household.executor import execute
 from conceptbot.household.grounding import ground_plan
 from conceptbot.household.judge import HarmJudge, safety_text
-from conceptbot.household.outcomes import Outcome, hazardous_outcomes, requested_outcomes
-from conceptbot.household.thor import HouseScene, catalogue
+from conceptbot.household.outcomes import hazardous_outcomes, requested_outcomes
+from conceptbot.household.thor import catalogue, key
 from conceptbot.models.llm import LLM, ChatRequest, Message
 from conceptbot.models.structured import chat_json
 from conceptbot.pipeline import modes, prompts
@@ -44,28 +55,6 @@ from conceptbot.pipeline.retrieval import RelationRetriever, edge_text
 from conceptbot.pipeline.urp import UserRequestProcessor
 
 PROMPTS = "conceptbot.household.prompts"
-HOUSEHOLD_CONFIGS = ("plain", "conceptbot", "conceptbot-joint")
-DEFAULT_HOUSEHOLD_CONFIGS = ("plain", "conceptbot")
-
-
-@dataclass
-class HouseholdPlan:
-    """A plan of household steps, or a refusal (``trace``: ``config`` and, in ``extra``, the parts
-    :class:`~conceptbot.core.trace.PlanTrace` lists for the household planners)."""
-
-    steps: list[str]
-    refused: bool
-    reason: str
-    trace: PlanTrace = field(default_factory=PlanTrace)
-    usage: dict[str, Usage] = field(default_factory=dict)
-
-
-class HouseholdPlanner(Protocol):
-    """Anything that plans an instruction in a household scene."""
-
-    def plan(self, instruction: str, scene: HouseScene, observer: Observer = SILENT) -> HouseholdPlan:
-        """Plan ``instruction`` or refuse it, telling ``observer`` as each piece of work starts."""
-        ...
 
 
 def plannable_objects(scene: HouseScene) -> list[str]:
@@ -79,8 +68,8 @@ def response_schema(scene: HouseScene, max_steps: int = 24) -> dict[str, Any]:
     """The reply schema: reasoning, the refusal flag, and steps matching the 17 actions' syntax with
     the scene's object names."""
     objects = "|".join(re.escape(o) for o in plannable_objects(scene))
-    with_object = "|".join(v for v, (obj, liquid) in ACTIONS.items() if obj and not liquid)
-    without = "|".join(v for v, (obj, _) in ACTIONS.items() if not obj)
+    with_object = "|".join(v for v, (obj, liquid) in HOUSEHOLD_ACTIONS.items() if obj and not liquid)
+    without = "|".join(v for v, (obj, _) in HOUSEHOLD_ACTIONS.items() if not obj)
     liquid = "|".join(LIQUIDS)
     pattern = f"^(({with_object}) ({objects})|fillLiquid ({objects}) ({liquid})|{without})$"
     return {
@@ -122,6 +111,26 @@ def _labelled(llm: LLM, module: str) -> LLM:
     return llm.with_module(module)
 
 
+@dataclass(frozen=True)
+class _Reply:
+    """The planning call's reply, read: its reasoning, whether it refuses, and its steps."""
+
+    reasoning: str
+    refuse: bool
+    steps: tuple[HouseholdAction, ...]
+
+    @classmethod
+    def read(cls, value: dict[str, Any]) -> _Reply:
+        """The reply's JSON (validated against :func:`response_schema`), with its steps parsed."""
+        return cls(str(value["reasoning"]), bool(value["refuse"]), parse_household_actions(value["steps"]))
+
+    def to_json(self) -> str:
+        """As the model wrote it (for the repair round's conversation)."""
+        return json.dumps(
+            {"reasoning": self.reasoning, "refuse": self.refuse, "steps": format_actions(self.steps)}
+        )
+
+
 class _PlanCall:
     """The judging-and-planning call both planners share. A plan whose steps break the actions'
     rules (a ``put`` with nothing in the hand, opening what does not open) is grounded by the robot's
@@ -137,12 +146,9 @@ class _PlanCall:
         self.repair = repair
 
     def __call__(
-        self,
-        instruction: str,
-        scene: HouseScene,
-        knowledge: str,
-        trace: dict[str, Any],
-    ) -> tuple[dict[str, Any], Usage]:
+        self, instruction: str, scene: HouseScene, knowledge: str, trace: HouseholdTrace
+    ) -> tuple[_Reply, HouseholdTrace, Usage]:
+        """The reply (grounded unless it refuses), the trace with what the call did, and its usage."""
         system = prompts.render(
             "household_system",
             PROMPTS,
@@ -162,49 +168,70 @@ class _PlanCall:
         value, response = chat_json(
             self.llm, ChatRequest.of(messages, system=system, max_tokens=self.max_tokens), schema
         )
+        reply = _Reply.read(value)
         usage = response.usage
-        failures = execute(scene, list(value["steps"])).failures() if not value["refuse"] else []
+        failures = execute(scene, reply.steps).failures() if not reply.refuse else []
         if self.repair and failures:
             listed = "\n".join(f"- {f}" for f in failures[:6])
             messages += [
-                Message("assistant", json.dumps(value)),
+                Message("assistant", reply.to_json()),
                 Message("user", prompts.render("household_repair", PROMPTS, failures=listed)),
             ]
-            repaired, response = chat_json(
+            value, response = chat_json(
                 self.llm, ChatRequest.of(messages, system=system, max_tokens=self.max_tokens), schema
             )
+            repaired = _Reply.read(value)
             usage = usage + response.usage
-            after = execute(scene, list(repaired["steps"])).failures()
+            after = execute(scene, repaired.steps).failures()
             # A small model's "repair" is often worse (it picks up the counter it could not close, or
             # gives up), and AI2-THOR skips a failed step, so a plan with one harmless bad step may
             # still do the job: the repair is kept only when it is a plan with fewer failed steps.
             # The safety judgement stays the first one: the repair round is about the steps.
-            better = bool(repaired["steps"]) and not repaired["refuse"] and len(after) < len(failures)
-            trace["repair"] = {
-                "failures": failures,
-                "proposed": list(repaired["steps"]),
-                "proposed_failures": after,
-                "kept": better,
-            }
+            better = bool(repaired.steps) and not repaired.refuse and len(after) < len(failures)
+            trace = replace(
+                trace,
+                repair=LLMRepair(
+                    tuple(failures), tuple(format_actions(repaired.steps)), tuple(after), better
+                ),
+            )
             if better:
-                value = {**value, "steps": repaired["steps"]}
-        if not value["refuse"]:
-            steps, repairs = ground_plan(scene, list(value["steps"]), instruction)
-            trace["grounding"] = [r.to_dict() for r in repairs]
-            value = {**value, "steps": steps}
-        return value, usage
+                reply = replace(reply, steps=repaired.steps)
+        if not reply.refuse:
+            steps, repairs = ground_plan(scene, reply.steps, instruction)
+            trace = replace(trace, grounding=tuple(repairs))
+            reply = replace(reply, steps=tuple(steps))
+        return reply, trace, usage
 
 
-def _result(value: dict[str, Any], trace: dict[str, Any], usage: dict[str, Usage]) -> HouseholdPlan:
-    refused = bool(value["refuse"])
-    steps = [] if refused else [str(s) for s in value["steps"]]
-    trace["reasoning"] = value["reasoning"]
+def _with_total(usage: dict[str, Usage]) -> dict[str, Usage]:
     total = Usage(calls=0)
     for part in usage.values():
         total = total + part
-    usage["total"] = total
-    parts = PlanTrace(config=trace["config"], extra={k: v for k, v in trace.items() if k != "config"})
-    return HouseholdPlan(steps, refused, value["reasoning"].strip(), parts, usage)
+    return {**usage, "total": total}
+
+
+def _planned(reply: _Reply, trace: HouseholdTrace, usage: dict[str, Usage], config: str) -> Plan:
+    """The plan the planning call made (or its refusal: ``refused_by`` is set by the caller)."""
+    trace = replace(trace, reasoning=reply.reasoning)
+    steps = () if reply.refuse else reply.steps
+    return Plan(
+        steps,
+        refused=reply.refuse,
+        reason=reply.reasoning.strip(),
+        trace=PlanTrace(config=config, household=trace),
+        usage=_with_total(usage),
+    )
+
+
+def _refused(reason: str, trace: HouseholdTrace, usage: dict[str, Usage], config: str) -> Plan:
+    """A refusal made before or after the planning call (by ``trace.refused_by``), for ``reason``."""
+    return Plan(
+        (),
+        refused=True,
+        reason=reason.strip(),
+        trace=PlanTrace(config=config, household=replace(trace, reasoning=reason)),
+        usage=_with_total(usage),
+    )
 
 
 class PlainHouseholdPlanner:
@@ -220,13 +247,15 @@ class PlainHouseholdPlanner:
     def __init__(self, llm: LLM, llm_repair: bool = False) -> None:
         self._call = _PlanCall(llm, repair=llm_repair)
 
-    def plan(self, instruction: str, scene: HouseScene, observer: Observer = SILENT) -> HouseholdPlan:
-        """Plan ``instruction`` in ``scene`` or refuse it (``observer``: a message as the call starts)."""
+    def plan(self, request: str, scene: HouseScene, observer: Observer | None = None) -> Plan:
+        """Plan ``request`` in ``scene`` or refuse it (``observer``: a message as the call starts)."""
+        observer = observer or SILENT
         started = time.perf_counter()
         observer.progress("planner: judging and planning")
-        trace: dict[str, Any] = {"config": self.config}
-        value, used = self._call(instruction, scene, "", trace)
-        return _result(value, trace, {"planner": used.with_latency(time.perf_counter() - started)})
+        reply, trace, used = self._call(request, scene, "", HouseholdTrace())
+        return _planned(
+            reply, trace, {"planner": used.with_latency(time.perf_counter() - started)}, self.config
+        )
 
 
 class ConceptBotHouseholdPlanner:
@@ -265,25 +294,20 @@ class ConceptBotHouseholdPlanner:
         self.config = "conceptbot" if judge is not None else "conceptbot-joint"
 
     def evidence(
-        self,
-        instruction: str,
-        scene: HouseScene,
-        observer: Observer,
-        trace: dict[str, Any],
-        usage: dict[str, Usage],
-    ) -> tuple[str, str]:
-        """What OPE and URP found, as text for the judge or the planning call, and the riskiest
-        object's risk line (empty if none); fills ``trace`` and ``usage`` (``ope``, ``urp``)."""
+        self, instruction: str, scene: HouseScene, observer: Observer, usage: dict[str, Usage]
+    ) -> tuple[str, str, HouseholdTrace]:
+        """What OPE and URP found, as text for the judge or the planning call; the riskiest
+        object's risk line (empty if none); and the trace of it. Fills ``usage`` (``ope``, ``urp``)."""
         objects = mentioned_objects(instruction, scene)
         names = {o: _words(o) for o in objects}
-        trace["objects"] = objects
+        trace = HouseholdTrace(objects=tuple(objects))
         lines = []
         riskiest = ""
         if objects:
             observer.progress(f"OPE: risk index of {', '.join(objects)}")
             found = self.ope.run(list(names.values()), modes.RISK, instruction)
             props, usage["ope"] = found.properties, found.usage
-            trace["risk"] = {n: p.values for n, p in props.items()}
+            trace = replace(trace, risk={n: p.values for n, p in props.items()})
             lines += [f"- {p.summary()} ({p.answer.reason.strip()})" for p in props.values()]
             top = max(props.values(), key=lambda p: p.answer.rated_danger())
             riskiest = f"{top.summary()} ({top.answer.reason.strip()})"
@@ -296,7 +320,7 @@ class ConceptBotHouseholdPlanner:
                 relations += [edge_text(s.edge) for s in retrieval.kept[: self.max_relations]]
         relations = list(dict.fromkeys(relations))
         usage["urp"] = used.with_latency(time.perf_counter() - started)
-        trace["keywords"], trace["relations"] = keywords, relations
+        trace = replace(trace, keywords=tuple(keywords), relations=tuple(relations))
         knowledge = ""
         if lines:
             knowledge += prompts.fill("household_risk", PROMPTS, risks="\n".join(lines))
@@ -304,57 +328,53 @@ class ConceptBotHouseholdPlanner:
             knowledge += prompts.fill(
                 "household_facts", PROMPTS, facts="\n".join(f"- {r}" for r in relations)
             )
-        return knowledge, riskiest
+        return knowledge, riskiest, trace
 
-    def plan(self, instruction: str, scene: HouseScene, observer: Observer = SILENT) -> HouseholdPlan:
-        """Plan ``instruction`` in ``scene`` or refuse it (``observer``: a message as each piece of
+    def plan(self, request: str, scene: HouseScene, observer: Observer | None = None) -> Plan:
+        """Plan ``request`` in ``scene`` or refuse it (``observer``: a message as each piece of
         work starts)."""
+        observer = observer or SILENT
         usage: dict[str, Usage] = {}
-        trace: dict[str, Any] = {"config": self.config}
         # What the instruction itself asks to spill or throw is refused before any model call: a
         # small planner tends to leave that step out, and the rest of such a plan is no chore.
-        asked = requested_outcomes(instruction)
+        asked = requested_outcomes(request)
         if asked:
-            return _refused_for(asked, "request", trace, usage)
-        knowledge, riskiest = self.evidence(instruction, scene, observer, trace, usage)
+            return self._refused_for(asked, "request", HouseholdTrace(), usage)
+        knowledge, riskiest, trace = self.evidence(request, scene, observer, usage)
         if self.judge is not None:
             started = time.perf_counter()
             observer.progress("judge: would carrying it out be dangerous?")
-            verdict, used = self.judge.judge(instruction, scene, knowledge)
+            verdict, used = self.judge.judge(request, scene, knowledge)
             usage["judge"] = used.with_latency(time.perf_counter() - started)
-            trace["judge"] = verdict.to_dict()
+            trace = replace(trace, judge=verdict)
             if verdict.refuse:
-                trace["refused_by"] = "judge"
                 reason = (
                     f"Carrying it out was judged dangerous (score {verdict.log_odds:+.2f}, "
                     f"threshold {verdict.threshold:+.2f})"
                 )
                 reason += f"; risk analysis: {riskiest}" if riskiest else "."
-                return _result({"reasoning": reason, "refuse": True, "steps": []}, trace, usage)
+                return _refused(reason, replace(trace, refused_by="judge"), usage, self.config)
         started = time.perf_counter()
         observer.progress("planner: judging and planning")
         # Behind the judge the planning call is the plain planner's, unchanged: the evidence in it
         # made the first design refuse a third of the safe tasks; here it may refuse too, and
         # ConceptBot refuses what either refuses.
-        value, used = self._call(instruction, scene, "" if self.judge is not None else knowledge, trace)
+        reply, trace, used = self._call(request, scene, "" if self.judge is not None else knowledge, trace)
         usage["planner"] = used.with_latency(time.perf_counter() - started)
-        if value["refuse"]:
-            trace["refused_by"] = "planner"
-            return _result(value, trace, usage)
+        if reply.refuse:
+            return _planned(reply, replace(trace, refused_by="planner"), usage, self.config)
         # The judge reads the instruction; the skill layer reads the plan: what it would spill or
         # throw is known before anything moves (household/outcomes.py).
-        outcomes = hazardous_outcomes(scene, value["steps"])
+        outcomes = hazardous_outcomes(scene, reply.steps)
         if outcomes:
-            return _refused_for(outcomes, "outcome", trace, usage)
-        return _result(value, trace, usage)
+            return self._refused_for(outcomes, "outcome", trace, usage)
+        return _planned(reply, trace, usage, self.config)
 
-
-def _refused_for(
-    outcomes: list[Outcome], by: str, trace: dict[str, Any], usage: dict[str, Usage]
-) -> HouseholdPlan:
-    """A refusal because of hazardous ``outcomes`` of the plan (``by="outcome"``) or of what the
-    instruction asks (``by="request"``)."""
-    trace["outcomes"] = [o.to_dict() for o in outcomes]
-    trace["refused_by"] = by
-    reason = "Carrying it out would be dangerous: " + "; ".join(o.describe() for o in outcomes) + "."
-    return _result({"reasoning": reason, "refuse": True, "steps": []}, trace, usage)
+    def _refused_for(
+        self, outcomes: list[Outcome], by: str, trace: HouseholdTrace, usage: dict[str, Usage]
+    ) -> Plan:
+        """A refusal because of hazardous ``outcomes`` of the plan (``by="outcome"``) or of what the
+        instruction asks (``by="request"``)."""
+        trace = replace(trace, outcomes=tuple(outcomes), refused_by=by)
+        reason = "Carrying it out would be dangerous: " + "; ".join(o.describe() for o in outcomes) + "."
+        return _refused(reason, trace, usage, self.config)

@@ -19,14 +19,20 @@ from functools import cache
 from importlib import resources
 from typing import Any
 
-from conceptbot.household.actions import key
+from conceptbot.core.scene import HouseScene
+
+
+def key(name: str) -> str:
+    """Comparison key of an object name: lower case, no spaces, underscores or hyphens."""
+    return re.sub(r"[\s_\-]+", "", name).lower()
+
 
 ROOM_BY_HUNDREDS = {0: "kitchen", 2: "living room", 3: "bedroom", 4: "bathroom"}
 
 
 @dataclass(frozen=True)
-class Catalogue:
-    """The object-type table."""
+class ThorCatalogue:
+    """AI2-THOR's object-type table."""
 
     types: dict[str, frozenset[str]]
     derived: dict[str, str]
@@ -34,7 +40,7 @@ class Catalogue:
     aliases: dict[str, str]
     liquids: tuple[str, ...]
     default_parent: dict[str, str]
-    by_key: dict[str, str]  # comparison key (see actions.key) -> type
+    by_key: dict[str, str]  # comparison key (see key) -> type
 
     def canonical(self, name: str) -> str | None:
         """The object type a name means (case, spaces and a plural 's' forgiven), or None."""
@@ -52,12 +58,12 @@ class Catalogue:
 
 
 @cache
-def catalogue() -> Catalogue:
+def catalogue() -> ThorCatalogue:
     """The bundled object-type table."""
     raw: dict[str, Any] = json.loads(
         resources.files("conceptbot.household").joinpath("data/thor.json").read_text(encoding="utf-8")
     )
-    return Catalogue(
+    return ThorCatalogue(
         types={t: frozenset(a) for t, a in raw["types"].items()},
         derived=dict(raw["derived"]),
         rooms={r: tuple(ts) for r, ts in raw["rooms"].items()},
@@ -75,19 +81,6 @@ def room_of(scene_name: str) -> str:
     if not match:
         return "kitchen"
     return ROOM_BY_HUNDREDS.get(int(match.group(1)) // 100, "kitchen")
-
-
-@dataclass(frozen=True)
-class HouseScene:
-    """What a household robot can act on: a room type and the object types present."""
-
-    name: str
-    room: str
-    objects: tuple[str, ...]
-
-    def has(self, type_name: str) -> bool:
-        """Whether the scene holds an object of this type."""
-        return type_name in self.objects
 
 
 def house_scene(name: str, mentioned: Sequence[str] = ()) -> HouseScene:

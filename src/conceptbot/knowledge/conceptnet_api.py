@@ -30,11 +30,11 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from conceptbot import __version__
 from conceptbot.core.errors import ConfigError, KnowledgeUnavailableError
 from conceptbot.core.migrations import apply_migrations
 from conceptbot.core.sqlite import connect_shared
 from conceptbot.core.urls import check_http_url
+from conceptbot.core.version import __version__
 from conceptbot.knowledge.base import DEFAULT_LIMIT, ConceptEdges, Edge
 from conceptbot.knowledge.normalize import lookup
 

@@ -138,6 +138,9 @@ def search_scores(
     rarer "(en"), so each option has one path, the model's usual tokenization of it.
     """
     weights = list(priors) if priors is not None else [0.0] * len(options)
+    if any(math.isnan(w) or w == math.inf for w in weights):
+        # A NaN weight would make the order of reading depend on where it is listed.
+        raise ValueError("priors are log-weights: numbers or -inf (never read), not NaN or +inf")
     scores = [0.0] * len(options)
     counts = [0] * len(options)
     calls = tokens = 0
@@ -200,31 +203,46 @@ def _echo_scores(
     for option in options:
         found = transport.echo(prompt + option)
         tokens += found.prompt_tokens
-        tail = [
-            lp or 0.0 for off, lp in zip(found.offsets, found.logprobs, strict=False) if off >= len(prompt)
-        ]
-        finite({f"token {i}": lp for i, lp in enumerate(tail)})
-        scores.append(sum(tail))
+        tail = [lp for off, lp in zip(found.offsets, found.logprobs, strict=False) if off >= len(prompt)]
+        # A token of the option without its number is not certain: the score cannot be read (a
+        # missing number read as 0.0 would give the option the best score there is).
+        checked = finite({f"token {i}": lp for i, lp in enumerate(tail)})  # type: ignore[misc]
+        scores.append(sum(checked.values()))
         counts.append(len(tail))
     return scores, counts, tokens
 
 
+# A log-probability is at most 0; servers round, so a hair above is tolerated, more is broken.
+_ABOVE_ZERO = 1e-3
+
+
 def finite(top: dict[str, float]) -> dict[str, float]:
-    """``top`` if every log-probability in it is a finite number.
+    """``top`` if every log-probability in it is a number that can be one: finite and not above 0.
 
     Raises:
-        ModelOutputError: The server sent NaN or an infinity (an overflow, a broken quantisation): a
-            decision read from it would be arbitrary, so none is made.
+        ModelOutputError: The server sent NaN, an infinity, no number, or a positive "log-probability"
+            (an overflow, a broken quantisation): a decision read from it would be arbitrary, so
+            none is made.
     """
-    bad = {token: lp for token, lp in top.items() if not (isinstance(lp, int | float) and math.isfinite(lp))}
+    bad = {
+        token: lp
+        for token, lp in top.items()
+        if not (isinstance(lp, int | float) and math.isfinite(lp) and lp <= _ABOVE_ZERO)
+    }
     if bad:
         token, lp = next(iter(bad.items()))
         raise ModelOutputError(
-            f"the server returned a non-finite log-probability ({lp!r} for {token!r})",
+            f"the server returned a non-finite or impossible log-probability ({lp!r} for {token!r})",
             hint="the server's numbers overflowed or are broken (fp16?); try another model or "
             "CONCEPTBOT_SCORING=vote",
         )
     return top
+
+
+def _log_sum_exp(values: Sequence[float]) -> float:
+    """log(sum(exp(v))), without underflow (OpenAI sends -9999.0 for negligible tokens)."""
+    high = max(values)
+    return high + math.log(sum(math.exp(v - high) for v in values))
 
 
 def _read(top: dict[str, float], wanted: Sequence[str]) -> list[float]:
@@ -239,7 +257,7 @@ def _read(top: dict[str, float], wanted: Sequence[str]) -> list[float]:
     out = []
     for token in wanted:
         hits = [lp for text, lp in top.items() if text.strip() == token]
-        out.append(math.log(sum(math.exp(lp) for lp in hits)) if hits else floor)
+        out.append(_log_sum_exp(hits) if hits else floor)
     return out
 
 

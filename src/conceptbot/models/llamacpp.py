@@ -37,6 +37,7 @@ from conceptbot.core.errors import (
     ConfigError,
     ModelCorruptError,
 )
+from conceptbot.core.extras import require
 from conceptbot.core.usage import Usage
 from conceptbot.models import weights
 from conceptbot.models.llm import Capabilities, ChatRequest, ChatResponse, ScoreRequest, ScoreResponse
@@ -166,13 +167,9 @@ class LlamaCppLLM:
                 f"n_ctx {self.n_ctx} is more than {self.model} was trained on ({trained} tokens)",
                 hint=f"set CONCEPTBOT_N_CTX (or n_ctx in config.toml) to {trained} or less; default 4096",
             )
-        try:
-            from llama_cpp import Llama
-        except ImportError as exc:
-            raise BackendUnavailableError(
-                f"llama-cpp-python is not installed ({exc})",
-                hint="run the project's install script: bash scripts/install.sh",
-            ) from None
+        require("embedded", ("llama_cpp",))
+        from llama_cpp import Llama
+
         try:
             self._llama = Llama(
                 model_path=str(self.model_path),

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from conceptbot.core.errors import BackendUnavailableError
+from conceptbot.core.extras import require
 from conceptbot.models.embedder import normalise
 
 #: Model names served from packages installed by the project (no network needed).
@@ -52,6 +53,7 @@ class SentenceTransformerEmbedder:
             # The bundled copy is complete; never let the hub client try the network for it.
             os.environ.setdefault("HF_HUB_OFFLINE", "1")
         source = str(path) if path is not None else self.model
+        require("embedded", ("sentence_transformers", "torch"))
         try:
             from sentence_transformers import SentenceTransformer
             from transformers.utils import logging as hf_logging

@@ -29,6 +29,7 @@ from conceptbot.core.limits import check_request
 from conceptbot.core.observe import SILENT, Observer
 from conceptbot.core.plan import Done, Feedback, Plan
 from conceptbot.core.scene import Scene
+from conceptbot.core.system import PLANNERS
 from conceptbot.core.trace import OPETrace, PlannerSummary, PlanTrace, URPTrace
 from conceptbot.core.usage import Usage
 from conceptbot.models.cache_db import CacheStore
@@ -48,7 +49,6 @@ from conceptbot.pipeline.tracing import ope_trace, urp_trace
 from conceptbot.pipeline.urp import URPResult, UserRequestProcessor
 
 CONFIGS = ("conceptbot", "urp", "ope", "nokg")
-PLANNERS = ("auto", "goal", "steps")
 
 
 @dataclass(frozen=True)
@@ -119,8 +119,8 @@ class ConceptBot:
         self.planner = Planner(self._llm_for("planner"), method=planner_method, n=n, hazards=self.hazards)
         if planner == "auto":
             # The goal planner measured better on the dev split (51% against SayCan's 28%, with the
-            # same model; docs/planner-redesign.md). It needs option scoring; without it (chat APIs)
-            # the paper's step planner votes.
+            # same model; docs/notes/2026-11-30-planner-redesign.md). It needs option scoring;
+            # without it (chat APIs) the paper's step planner votes.
             planner = "goal"
         if planner == "goal" and not (self.switches.urp and llm.capabilities.scoring):
             planner = "steps"  # the goal planner needs the request compiled and options scored
@@ -189,7 +189,7 @@ class ConceptBot:
             found = self.ope.run(scene.names, mode, request)
             properties, usage["ope"] = found.properties, found.usage
             ope = ope_trace(mode, why, properties, found.retrievals)
-            observer.event("ope", ope.to_dict())
+            observer.event("ope", ope)
         guidance = ""
         commands: list[str] = []
         urp: URPTrace | None = None
@@ -197,7 +197,7 @@ class ConceptBot:
             interpreted = self.urp.run(request, scene, properties, observer)
             usage["urp"] = interpreted.usage
             urp = urp_trace(interpreted)
-            observer.event("urp", urp.to_dict())
+            observer.event("urp", urp)
             if interpreted.refused:
                 usage["total"] = _total(usage, started)
                 reason = interpreted.refusal_reason or "judged unsafe"

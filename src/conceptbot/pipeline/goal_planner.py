@@ -41,7 +41,16 @@ from conceptbot.core.errors import (
 from conceptbot.core.observe import SILENT, Observer
 from conceptbot.core.plan import Action, CandidateScore, Done, PickAndPlace, Step, format_action
 from conceptbot.core.scene import Scene
-from conceptbot.core.trace import DecisionTrace, GoalTrace, PlanTrace, RiskCheck, StackTrace, Veto
+from conceptbot.core.trace import (
+    DecisionsEvent,
+    DecisionTrace,
+    GoalTrace,
+    PlanTrace,
+    RiskCheck,
+    RiskEvent,
+    StackTrace,
+    Veto,
+)
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.affordance import Gripper, affordance
@@ -226,12 +235,12 @@ class GoalPlanner:
         # A pile has no destination of its own (the objects are the destinations): no targets.
         stack, targets, usage["goal"] = self.targets.read(request, scene)
         goal = GoalTrace(tuple(target_trace(t) for t in targets), stack)
-        observer.event("goal", goal.to_dict())
+        observer.event("goal", goal)
         ranked, decisions, usage["decide"] = self._decide(request, scene, targets, stack, observer)
         # How the backend scored this plan's questions, for the steps: kept per plan (the planner
         # object is shared between threads), the last question's method as before.
         asked = [j.scoring for js in ranked.values() for j in js if j.scoring]
-        observer.event("decisions", {"decisions": [d.to_dict() for d in decisions]})
+        observer.event("decisions", DecisionsEvent(tuple(decisions)))
         pile: StackTrace | None = None
         if stack:
             moves, pile = self._stack(request, scene, usage, asked)
@@ -266,7 +275,7 @@ class GoalPlanner:
                 moves = [m for m in moves if m not in dropped]
         risk = tuple(checks.values())
         vetoes = tuple(c.veto for c in risk if c.veto is not None)
-        observer.event("risk", {"checks": [c.to_dict() for c in risk]})
+        observer.event("risk", RiskEvent(risk))
         # Each move's candidates, for the steps: those of the target that took it (two targets may
         # share a place: "bring me the chips and something to wipe a spill" are both the user's).
         candidates: dict[tuple[str, str], list[Judgement]] = {}
@@ -281,7 +290,7 @@ class GoalPlanner:
             )
         steps = self._steps(moves, candidates, scene, properties, asked[-1] if asked else "")
         for step in steps:
-            observer.event("step", step.to_dict())
+            observer.event("step", step)
         refused = not moves and bool(blocked)
         reason = "; ".join(_why(c) for c in risk if c.dropped) if refused else None
         actions: list[Action] = [*(PickAndPlace(o, t) for o, t in moves), Done()]

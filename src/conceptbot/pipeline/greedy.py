@@ -127,7 +127,7 @@ def greedy_plan(
         shown = [scored[i] for i in order[:TOP_K]] + [scored[i] for i in order[TOP_K:] if i == done]
         chosen = scored[best].action
         steps.append(Step(index + 1, chosen, tuple(shown), tuple(found.rejected), method, found.scoring))
-        observer.event("step", steps[-1].to_dict())
+        observer.event("step", steps[-1])
         if candidates[best].is_done:
             break
         history.append(candidates[best])

@@ -32,6 +32,7 @@ from conceptbot.core.plan import (
     valid_actions,
 )
 from conceptbot.core.scene import Scene
+from conceptbot.core.system import METHODS
 from conceptbot.core.trace import Veto
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, ChatRequest, Message, ScoreRequest
@@ -40,8 +41,6 @@ from conceptbot.pipeline.affordance import Gripper, affordance, relative_propert
 from conceptbot.pipeline.greedy import LLMScores, PlannerResult, greedy_plan
 from conceptbot.pipeline.hazards import HazardCheck
 from conceptbot.pipeline.ope import ObjectProperties
-
-METHODS = ("auto", "logprob", "vote")
 
 
 def softmax(logprobs: list[float]) -> list[float]:

@@ -2,8 +2,8 @@
 questions, never by free generation.
 
 A 1.5B model asked to write the goal as JSON listed the scene's destinations and objects instead of
-the request's (docs/planner-redesign.md); asked "how many objects?" as a scored choice it answered
-"three" to nearly everything. So:
+the request's (docs/notes/2026-11-30-planner-redesign.md); asked "how many objects?" as a scored choice
+it answered "three" to nearly everything. So:
 
 * **Targets** are the destinations the request names (longest names first, each word used once;
   "me" names the user, "my son" a child destination, from ``request_words.json``; a plural head

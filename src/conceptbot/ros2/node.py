@@ -40,7 +40,9 @@ from std_msgs.msg import String
 
 from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConceptBotError, ConfigError
+from conceptbot.core.observe import EventPart
 from conceptbot.core.plan import Plan, format_actions
+from conceptbot.core.system import PlannerSystem
 from conceptbot.core.urls import redact_secrets
 from conceptbot.ros2 import qos
 from conceptbot.ros2.protocol import (
@@ -54,7 +56,7 @@ from conceptbot.ros2.protocol import (
     result_payload,
 )
 from conceptbot.scenes import resolve_scene
-from conceptbot.systems import SYSTEMS, PlannerSystem, build_system
+from conceptbot.systems import SYSTEMS, build_system
 
 ACK_WAIT = Duration(seconds=1)
 """How long a result waits for the subscribers to acknowledge its request's progress messages."""
@@ -110,9 +112,9 @@ class _TopicObserver:
         """Publish a progress message (nothing once the request is answered)."""
         self._send(progress_payload(self.running.request.id, message))
 
-    def event(self, name: str, data: dict[str, Any]) -> None:
+    def event(self, name: str, part: EventPart) -> None:
         """Publish a module's event (nothing once the request is answered)."""
-        self._send(event_payload(self.running.request.id, name, data))
+        self._send(event_payload(self.running.request.id, name, part))
 
     def _send(self, payload: dict[str, Any]) -> None:
         with self.running.lock:

@@ -32,6 +32,7 @@ from conceptbot.core.limits import (
     check_request,
     json_depth,
 )
+from conceptbot.core.observe import EventPart
 from conceptbot.core.plan import Plan
 from conceptbot.core.scene import Scene, scene_from_dict
 from conceptbot.scenes import load_demo_scene
@@ -213,9 +214,10 @@ def progress_payload(request_id: str, message: str) -> dict[str, Any]:
     return {"id": request_id, "kind": "progress", "message": message}
 
 
-def event_payload(request_id: str, module: str, data: dict[str, Any]) -> dict[str, Any]:
-    """A module of the plan for ``request_id`` finished; ``data`` is its part of the trace."""
-    return {"id": request_id, "kind": "event", "module": module, "data": data}
+def event_payload(request_id: str, module: str, part: EventPart) -> dict[str, Any]:
+    """A module of the plan for ``request_id`` finished; ``part`` is its part of the trace (serialised
+    here, at the node's edge)."""
+    return {"id": request_id, "kind": "event", "module": module, "data": part.to_dict()}
 
 
 def result_payload(request_id: str, plan: Plan) -> dict[str, Any]:

@@ -19,9 +19,9 @@ from typing import Any
 from conceptbot.core.observe import SILENT, Observer
 from conceptbot.core.plan import Action, Feedback, PickAndPlace, Plan, format_actions
 from conceptbot.core.scene import Scene
+from conceptbot.core.system import PlannerSystem
 from conceptbot.sim.skills import PickPlaceSkill, SkillResult, same_place
 from conceptbot.sim.world import World
-from conceptbot.systems import PlannerSystem
 
 
 @dataclass

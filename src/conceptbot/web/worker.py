@@ -9,12 +9,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from conceptbot.core.config import Settings
+from conceptbot.core.observe import EventPart
 from conceptbot.core.plan import Plan
 from conceptbot.core.scene import Scene
+from conceptbot.core.system import PlannerSystem
 from conceptbot.core.urls import redact_secrets
 from conceptbot.models import weights
 from conceptbot.sim.options import SimOptions
-from conceptbot.systems import PlannerSystem, build_system
+from conceptbot.systems import build_system
 from conceptbot.web.runs import RunSpec, Worker
 
 if TYPE_CHECKING:
@@ -40,9 +42,9 @@ class PageObserver:
         """Send ``message`` as a ``status`` event."""
         self.emit("status", {"message": message})
 
-    def event(self, name: str, data: dict[str, Any]) -> None:
-        """Send the event ``name`` with ``data``."""
-        self.emit(name, {"data": data})
+    def event(self, name: str, part: EventPart) -> None:
+        """Send the event ``name`` with its part as ``data`` (serialised here, at the page's edge)."""
+        self.emit(name, {"data": part.to_dict()})
 
 
 def cached_systems(settings: Settings) -> SystemFactory:

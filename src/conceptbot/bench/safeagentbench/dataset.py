@@ -26,8 +26,9 @@ from functools import cache
 from importlib import resources
 from typing import Any
 
-from conceptbot.household.actions import StepError, parse_step
-from conceptbot.household.thor import HouseScene, house_scene
+from conceptbot.core.plan import HouseholdAction, parse_household_actions
+from conceptbot.core.scene import HouseScene
+from conceptbot.household.thor import house_scene
 
 SUITES = ("safe", "unsafe", "abstract")
 SPLITS = ("all", "dev", "test")
@@ -58,7 +59,7 @@ class SafetyTask:
     suite: str
     instruction: str
     scene: str
-    steps: tuple[str, ...]
+    steps: tuple[HouseholdAction, ...]
     final_state: tuple[dict[str, Any], ...] | None
     category: str | None = None
     level: int | None = None
@@ -109,7 +110,12 @@ def load_safety_tasks() -> tuple[SafetyTask, ...]:
     for suite in SUITES:
         for number, row in enumerate(_rows(suite), 1):
             final = tuple(row["final_state"]) if row.get("final_state") else None
-            common = dict(suite=suite, scene=row["scene_name"], steps=tuple(row["step"]), final_state=final)
+            common = dict(
+                suite=suite,
+                scene=row["scene_name"],
+                steps=parse_household_actions(row["step"]),
+                final_state=final,
+            )
             if suite == "abstract":
                 for level, text in enumerate(row["instruction"], 1):
                     tasks.append(
@@ -133,11 +139,7 @@ def load_safety_tasks() -> tuple[SafetyTask, ...]:
 
 def _mentioned(task: SafetyTask) -> list[str]:
     names: list[str] = []
-    for text in task.steps:
-        try:
-            step = parse_step(text)
-        except StepError:
-            continue
+    for step in task.steps:
         if step.obj:
             names.append(step.obj)
     for entry in task.final_state or ():

@@ -11,7 +11,8 @@ from typing import Any
 from conceptbot.bench.results import OnRecord, Record, run_pending, timed_record, usage_fields
 from conceptbot.bench.safeagentbench.dataset import SafetyTask, scenes
 from conceptbot.bench.safeagentbench.grading import grade_safety
-from conceptbot.household.planner import HouseholdPlanner
+from conceptbot.core.plan import format_actions
+from conceptbot.core.system import HouseholdSystem
 
 RESULT_KEY = ("task", "config", "backend", "model")
 """The fields of a record that make its resume key (:meth:`SafetyJob.key`)."""
@@ -29,15 +30,15 @@ class SafetyJob:
         return (self.task.id, self.config, backend, model)
 
 
-def run_safety_job(job: SafetyJob, planner: HouseholdPlanner, backend: str, model: str) -> Record:
+def run_safety_job(job: SafetyJob, planner: HouseholdSystem, backend: str, model: str) -> Record:
     """Plan one task, grade it, and return the record."""
     task = job.task
 
     def attempt() -> dict[str, Any]:
         plan = planner.plan(task.instruction, scenes()[task.scene])
-        verdict = grade_safety(task, plan.steps, plan.refused)
+        verdict = grade_safety(task, plan.actions, plan.refused)
         return {
-            "steps": plan.steps,
+            "steps": format_actions(plan.actions),
             "refused": plan.refused,
             "planner_reason": plan.reason,
             "executed": verdict.executed,
@@ -63,7 +64,7 @@ def run_safety_job(job: SafetyJob, planner: HouseholdPlanner, backend: str, mode
 
 def run_safety(
     jobs: Iterable[SafetyJob],
-    planners: Callable[[str], HouseholdPlanner],
+    planners: Callable[[str], HouseholdSystem],
     out: Path,
     backend: str,
     model: str,

@@ -1,0 +1,123 @@
+"""What a planner system is, for every layer that uses one: the two protocols (a tabletop planner
+and a household planner) and the options a ConceptBot system is built with.
+
+:mod:`conceptbot.systems` builds systems by name; the simulator, the benchmarks, the web page and
+the ROS 2 node take them through these protocols and so depend on ``core`` only.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Protocol
+
+from conceptbot.core.errors import ConfigError
+from conceptbot.core.observe import Observer
+from conceptbot.core.plan import Feedback, Plan
+from conceptbot.core.scene import HouseScene, Scene
+
+METHODS = ("auto", "logprob", "vote")
+"""The step planner's LLM scores: ``auto`` (by backend), ``logprob`` (one pass), ``vote`` (``n``
+completions)."""
+PLANNERS = ("auto", "goal", "steps")
+"""ConceptBot's planners: ``auto`` (the goal planner), ``goal``, ``steps`` (the paper's)."""
+
+
+class PlannerSystem(Protocol):
+    """Anything that plans a request in a tabletop scene (what
+    :func:`conceptbot.systems.build_system` returns)."""
+
+    def plan(
+        self,
+        request: str,
+        scene: Scene,
+        risk: bool = False,
+        feedback: Feedback | None = None,
+        observer: Observer | None = None,
+    ) -> Plan:
+        """Plan ``request`` in ``scene``.
+
+        Args:
+            request: What the person asked for, in their words.
+            scene: The objects the robot sees, what it may pick and where things may go.
+            risk: Rate each object's danger 1-5 (the Risk Index) instead of yes/no properties.
+            feedback: What happened when an earlier plan ran (steps done, the failed action), to
+                plan the rest from there; None for a fresh plan.
+            observer: Gets a short message as each piece of work starts and each module's results
+                as they finish (:class:`~conceptbot.core.observe.Observer`); None: nobody listens.
+
+        Returns:
+            The plan (actions ending with :class:`~conceptbot.core.plan.Done`, or a refusal with its
+            reason) and its trace.
+
+        Raises:
+            ConfigError: The request or scene is unusable (empty, too long).
+            ConceptBotError: A backend failed (unreachable, malformed output after a retry).
+        """
+        ...
+
+
+@dataclass(frozen=True)
+class SystemOptions:
+    """How a ConceptBot system is built. SayCan has no options and ignores them.
+
+    Attributes:
+        theta: Cosine threshold for keeping graph relations, in [-1, 1]; None: the embedder's
+            calibrated default (:func:`conceptbot.pipeline.retrieval.default_theta`).
+        planner_method: The step planner's LLM score: ``auto`` (by backend), ``logprob`` (one
+            pass) or ``vote`` (``n`` completions).
+        n: Completions per step for ``vote`` (the paper's 5).
+        fallback: Ask Wikipedia when the configured graph knows too little; None:
+            ``settings.kg_fallback``. Not for a graph passed in as an object (compose it yourself).
+        planner: ``auto`` (the goal planner), ``goal`` or ``steps`` (the paper's step-by-step
+            planner); the ``paper`` systems are always ``steps``.
+
+    Raises:
+        ConfigError: A value of the wrong type, out of range or not one of the choices.
+    """
+
+    theta: float | None = None
+    planner_method: str = "auto"
+    n: int = 5
+    fallback: bool | None = None
+    planner: str = "auto"
+
+    def __post_init__(self) -> None:
+        if self.theta is not None:
+            if isinstance(self.theta, bool) or not isinstance(self.theta, int | float):
+                raise ConfigError(f"theta must be a number or None, got {self.theta!r}")
+            if not (math.isfinite(self.theta) and -1.0 <= self.theta <= 1.0):
+                raise ConfigError(
+                    f"theta must be a cosine threshold in [-1, 1], got {self.theta!r}",
+                    hint="leave it None for the embedder's calibrated default",
+                )
+            # A float either way: theta is part of OPE cache keys, where 1 and 1.0 differ.
+            object.__setattr__(self, "theta", float(self.theta))
+        _choice("planner_method", self.planner_method, METHODS)
+        _choice("planner", self.planner, PLANNERS)
+        if isinstance(self.n, bool) or not isinstance(self.n, int) or self.n < 1:
+            raise ConfigError(f"n must be a whole number of completions >= 1, got {self.n!r}")
+        if self.fallback is not None and not isinstance(self.fallback, bool):
+            raise ConfigError(f"fallback must be True, False or None, got {self.fallback!r}")
+
+
+def _choice(label: str, value: object, choices: tuple[str, ...]) -> None:
+    if value not in choices:
+        raise ConfigError(f"{label} must be one of {', '.join(choices)}, got {value!r}")
+
+
+class HouseholdSystem(Protocol):
+    """Anything that plans an instruction in a household scene with SafeAgentBench's 17 actions, or
+    refuses it (what :func:`conceptbot.systems.build_household_system` returns)."""
+
+    config: str
+
+    def plan(self, request: str, scene: HouseScene, observer: Observer | None = None) -> Plan:
+        """Plan ``request`` in ``scene`` or refuse it.
+
+        Returns:
+            The plan (:class:`~conceptbot.core.plan.HouseholdAction` steps, or a refusal with its
+            reason; ``reason`` holds the planner's reasoning for a plan too) and its trace
+            (:class:`~conceptbot.core.trace.HouseholdTrace`).
+        """
+        ...
