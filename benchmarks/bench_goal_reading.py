@@ -1,6 +1,7 @@
 """How often a request's goal is read exactly right: the goal reader (``pipeline/goal``) and today's
-``TargetFinder`` (``pipeline/targets.py``) on the goal set (``benchmarks/data/goal_set.json``: the 85
-dev requests and three rounds of hand-written paraphrases). No model is run.
+``TargetFinder`` (``pipeline/goal_planner/targets.py``) on the goal set
+(``benchmarks/data/goal_set.json``: the 85 dev requests and rounds of hand-written paraphrases).
+No model is run.
 
 Exact match is :func:`conceptbot.pipeline.goal.same_goal`: same stack, dish and need-presence, and the
 same targets (destination, kind, named objects, count, criterion words). A second figure ignores the
@@ -36,12 +37,12 @@ from conceptbot.core.scene import Scene
 from conceptbot.knowledge.registry import open_graph
 from conceptbot.models.fake import FakeLLM
 from conceptbot.models.registry import open_embedder
-from conceptbot.pipeline.decide import FactFinder
 from conceptbot.pipeline.goal import ALL as GOAL_ALL
 from conceptbot.pipeline.goal import Goal, GoalReader, GoalTarget, same_goal
+from conceptbot.pipeline.goal_planner.decide import FactFinder
+from conceptbot.pipeline.goal_planner.targets import ALL, Target, TargetFinder, is_stacking
 from conceptbot.pipeline.hazards import is_person
 from conceptbot.pipeline.retrieval import RelationRetriever, default_theta
-from conceptbot.pipeline.targets import ALL, Target, TargetFinder, is_stacking
 
 GOAL_SET = Path(__file__).parent / "data" / "goal_set.json"
 

@@ -29,9 +29,9 @@ import numpy as np
 
 from conceptbot.core.config import load_settings
 from conceptbot.knowledge.registry import open_graph
-from conceptbot.pipeline.combine import value
-from conceptbot.pipeline.decide import group_readings
-from conceptbot.pipeline.evidence import FEATURES, GRAPH_FREE, GraphEvidence
+from conceptbot.pipeline.goal_planner.combine import value
+from conceptbot.pipeline.goal_planner.decide import group_readings
+from conceptbot.pipeline.goal_planner.evidence import FEATURES, GRAPH_FREE, GraphEvidence
 
 FOLDS = 5
 L2 = 1.0  # 0.1 and 3 fitted within a point of it on held-out folds; 10 was worse
@@ -217,7 +217,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.write:
         doc = {
             "_doc": "Written by benchmarks/fit_judgements.py from the judgement set's readings with "
-            f"{args.readings.name}; read by conceptbot.pipeline.combine. Refit for another model.",
+            f"{args.readings.name}; read by conceptbot.pipeline.goal_planner.combine. "
+            "Refit for another model.",
             "readings": args.readings.name,
             "rows": len(rows),
             "combinations": fitted,

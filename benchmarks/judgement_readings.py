@@ -27,8 +27,8 @@ from pathlib import Path
 
 from conceptbot.core.config import load_settings
 from conceptbot.core.scene import Scene
-from conceptbot.pipeline.decide import Decider
-from conceptbot.pipeline.evidence import criterion_terms
+from conceptbot.pipeline.goal_planner.decide import Decider
+from conceptbot.pipeline.goal_planner.evidence import criterion_terms
 from conceptbot.systems import build_system
 
 SET = Path(os.environ.get("JUDGEMENT_SET", "benchmarks/data/judgement_set.jsonl"))

@@ -16,7 +16,7 @@ from conceptbot.models.fake import FakeLLM
 from conceptbot.ros2.protocol import event_payload, progress_payload
 from conceptbot.web.worker import PageObserver
 from tests.pipeline.fakes import risk_reply, spill_scene, urp_reply
-from tests.pipeline.test_goal_planner import NAMES, NEUTRAL, PRIOR, SAFE, SCENE, UNSAFE
+from tests.pipeline.goal_planner.test_planner import NAMES, NEUTRAL, PRIOR, SAFE, SCENE, UNSAFE
 from tests.pipeline.test_observe import _bot
 
 GOLDEN = Path(__file__).parent / "golden"

@@ -138,7 +138,9 @@ def test_planning_over_http_never_imports_the_heavy_runtimes(
     wordnet_dir: Path,
     tmp_path: Path,
 ) -> None:
-    """Where they are installed (this environment), planning through a server still leaves them out."""
+    """Where they are installed (this environment), planning through a server still leaves PyBullet,
+    llama.cpp and sentence-transformers out. (torch is imported by spaCy's thinc whenever it is
+    installed: the bare environment above shows a plan needs none of it.)"""
     env = _env(tmp_path / "home", embeddings)
     cli = [sys.executable, "-m", "conceptbot"]
     subprocess.run(
@@ -161,4 +163,4 @@ print(json.dumps({{"plan": conceptbot.format_actions(plan.actions), "loaded": lo
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=900)
     assert out.returncode == 0, out.stderr[-3000:]
     data = json.loads(out.stdout.strip().splitlines()[-1])
-    assert data["plan"][-1] == "done()" and data["loaded"] == []
+    assert data["plan"][-1] == "done()" and set(data["loaded"]) <= {"torch"}

@@ -9,6 +9,7 @@ import pytest
 
 from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConfigError, NotSupportedError
+from conceptbot.core.limits import CheckedRequest, check_request
 from conceptbot.knowledge.fallback import FallbackGraph
 from conceptbot.knowledge.sqlite_store import GraphBuilder, SQLiteGraph
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
@@ -99,3 +100,53 @@ def test_given_backends_replace_the_configured_ones(fake_settings: Settings) -> 
     assert system.ope.retriever.graph is graph and system.ope.retriever.theta == 0.2  # type: ignore[attr-defined]
     with pytest.raises(ConfigError, match="fallback option applies to the configured graph"):
         build_system(fake_settings, "conceptbot", SystemOptions(fallback=True), graph=graph)
+
+
+def test_a_request_is_checked_once_where_it_enters() -> None:
+    """The request is checked where it enters: ``conceptbot plan`` (bad input is the first error),
+    the ROS 2 message (answered ``bad_request`` before it is queued) and client, or a system's own
+    ``plan()`` for the API, the web page and the benchmarks. A checked request is a
+    ``CheckedRequest``, which the system takes as it is: no path checks it twice."""
+    import ast
+    from pathlib import Path
+
+    import conceptbot
+
+    root = Path(conceptbot.__file__).parent
+    callers = sorted(
+        path.relative_to(root).as_posix()
+        for path in root.rglob("*.py")
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+        if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "check_request"
+    )
+    assert callers == [
+        "baselines/saycan.py",
+        "cli/plan_cmd.py",
+        "cli/ros2_cmd.py",
+        "household/planner.py",
+        "household/planner.py",
+        "pipeline/conceptbot.py",
+        "ros2/protocol.py",
+    ]
+    checked = check_request("  bring me\tan apple ")
+    assert isinstance(checked, CheckedRequest) and checked == "bring me an apple"
+    assert check_request(checked) is checked  # not checked again
+
+
+def test_household_systems_by_name_plan_a_typed_plan(settings: Settings, tmp_path: Path) -> None:
+    import json
+
+    from conceptbot.core.plan import HouseholdAction
+    from conceptbot.household.thor import house_scene
+    from conceptbot.systems import HOUSEHOLD_SYSTEMS, build_household_system
+
+    assert HOUSEHOLD_SYSTEMS == ("plain", "conceptbot", "conceptbot-joint")
+    replies = tmp_path / "replies.json"
+    reply = {"reasoning": "a chore", "refuse": False, "steps": ["find Mug", "pick Mug"]}
+    replies.write_text(json.dumps([json.dumps(reply)]))
+    system = build_household_system(replace(settings, llm=f"fake:{replies}"), "plain")
+    plan = system.plan("Pick up the mug.", house_scene("FloorPlan1", ["Mug"]))
+    assert plan.actions == (HouseholdAction("find", "Mug"), HouseholdAction("pick", "Mug"))
+    assert plan.trace.to_dict() == {"config": "plain", "grounding": [], "reasoning": "a chore"}
+    with pytest.raises(ConfigError, match="unknown configuration 'joint'"):
+        build_household_system(settings, "joint")

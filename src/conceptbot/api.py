@@ -49,7 +49,7 @@ def open_planner(
     options: SystemOptions | None = None,
     **overrides: Any,
 ) -> PlannerSystem:
-    """A planner system, ready to :meth:`~conceptbot.systems.PlannerSystem.plan`.
+    """A planner system, ready to :meth:`~conceptbot.core.system.PlannerSystem.plan`.
 
     Backends named in the settings are opened as the CLI opens them (the embedded model loads on
     the first plan, not here). Objects passed in replace the backend their setting names: the LLM

@@ -153,7 +153,7 @@ def test_only_core_plan_writes_action_text() -> None:
 # Where action text arrives from outside, and so is parsed: nowhere else.
 TEXT_EDGES = {
     "pipeline/urp.py": "URP's LLM reply (the robot script)",
-    "pipeline/planner.py": "the step planner's LLM completions (votes)",
+    "pipeline/steps/planner.py": "the step planner's LLM completions (votes)",
     "household/planner.py": "the household planning call's JSON reply",
     "cli/sim_cmd.py": "a user's plan file",
     "bench/grading.py": "a task file's reference plans",

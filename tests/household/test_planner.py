@@ -131,3 +131,12 @@ def test_by_default_a_plan_that_breaks_the_rules_is_grounded_without_another_llm
         "dropped the step",
     ]
     assert len(llm.requests) == 1 and "repair" not in plan.trace.to_dict()
+
+
+def test_both_planners_check_the_request_before_any_model_call() -> None:
+    from conceptbot.core.errors import ConfigError
+
+    llm = FakeLLM([])
+    with pytest.raises(ConfigError, match="the request is empty"):
+        PlainHouseholdPlanner(llm).plan("  \n ", house_scene("FloorPlan1"))
+    assert llm.requests == []

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from conceptbot.core.scene import scene_from_dict
 from conceptbot.models.fake import FakeEmbedder
-from conceptbot.pipeline.decide import Decider, FactFinder
+from conceptbot.pipeline.goal_planner.decide import Decider, FactFinder
 from conceptbot.pipeline.retrieval import RelationRetriever
 from tests.pipeline.determinism_plan import HashLLM, graph_edges
 from tests.pipeline.fakes import DictGraph

@@ -4,7 +4,7 @@ words; the planner needs the concept, whose definition names the ingredients).""
 from __future__ import annotations
 
 from conceptbot.models.fake import FakeEmbedder
-from conceptbot.pipeline.decide import FactFinder
+from conceptbot.pipeline.goal_planner.decide import FactFinder
 from conceptbot.pipeline.retrieval import RelationRetriever
 from tests.pipeline.fakes import DictGraph
 

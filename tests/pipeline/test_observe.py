@@ -7,7 +7,7 @@ from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.conceptbot import ConceptBot
 from conceptbot.pipeline.retrieval import RelationRetriever
 from tests.pipeline.fakes import DictGraph, Recorder, risk_reply, spill_scene, urp_reply
-from tests.pipeline.test_goal_planner import NAMES, NEUTRAL, PRIOR, SAFE, SCENE, UNSAFE
+from tests.pipeline.goal_planner.test_planner import NAMES, NEUTRAL, PRIOR, SAFE, SCENE, UNSAFE
 
 
 def _bot(llm: FakeLLM, config: str, planner: str) -> ConceptBot:

@@ -7,7 +7,7 @@ so far). The affordance is binary, as ViLD's detections are: 1 when both the obj
 destination are detected (confidence > 0), else 0; ``done()`` has a fixed affordance of 0.2. The
 combined score exp(log p) * affordance is normalised over the options and the best one is taken,
 greedily, until ``done()`` or the step limit (the loop the paper's Planner uses too:
-:mod:`conceptbot.pipeline.greedy`). Same LLM as ConceptBot; no knowledge graph, no OPE/URP.
+:mod:`conceptbot.pipeline.steps.greedy`). Same LLM as ConceptBot; no knowledge graph, no OPE/URP.
 
 The scene's objects are listed in the prompt (as the notebook does): without that line ``done()``
 wins the first step most of the time.
@@ -25,8 +25,8 @@ from conceptbot.core.plan import DONE, Action, Feedback, PickAndPlace, Plan
 from conceptbot.core.scene import Scene
 from conceptbot.core.trace import PlanTrace
 from conceptbot.models.llm import LLM, ScoreRequest
-from conceptbot.pipeline.greedy import LLMScores, greedy_plan
-from conceptbot.pipeline.planner import softmax
+from conceptbot.pipeline.steps.greedy import LLMScores, greedy_plan
+from conceptbot.pipeline.steps.planner import softmax
 
 DONE_AFFORDANCE = 0.2
 

@@ -73,7 +73,7 @@ def plan(
     as_json: bool,
 ) -> None:
     """Plan REQUEST in a scene; print properties, relations, reasoning, step scores and the plan."""
-    request = check_request(request)
+    request = check_request(request)  # first: bad input is the first error; the system takes it as checked
     scene = resolve_scene(scene_ref)
     options = SystemOptions(theta=theta, planner_method=method, n=n, fallback=fallback)  # SayCan has none
     bot = build_system(app.settings, config, options)

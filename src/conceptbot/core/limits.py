@@ -69,8 +69,16 @@ def check_name(name: str, where: str) -> str:
     return text
 
 
-def check_request(request: object) -> str:
-    """A request, stripped, if it is non-empty plain text within :data:`MAX_REQUEST_CHARS`.
+class CheckedRequest(str):
+    """A request that :func:`check_request` has checked: where it goes next it is not checked again
+    (the CLI checks what the person typed, the system it goes to takes it as it is)."""
+
+    __slots__ = ()
+
+
+def check_request(request: object) -> CheckedRequest:
+    """A request, stripped, if it is non-empty plain text within :data:`MAX_REQUEST_CHARS`; one
+    checked already (a :class:`CheckedRequest`) as it is.
 
     Line breaks and tabs are not refused: each run of them becomes one space (a request pasted from
     an editor or a chat window keeps its meaning). Every other control character (ESC, BEL, CSI,
@@ -80,6 +88,8 @@ def check_request(request: object) -> str:
     Raises:
         ConfigError: Not a string, empty (or only spaces), too long, or a control character.
     """
+    if isinstance(request, CheckedRequest):
+        return request
     if not isinstance(request, str):
         raise ConfigError("the request must be text")
     text = _REQUEST_LAYOUT.sub(" ", request).strip()
@@ -97,7 +107,7 @@ def check_request(request: object) -> str:
             f"the request contains the control characters {shown} (a terminal escape sequence?)",
             hint="type the request as plain text, without colour codes or other escape sequences",
         )
-    return text
+    return CheckedRequest(text)
 
 
 def json_depth(value: object) -> int:

@@ -4,7 +4,7 @@ A planner's stages report two things while a plan is made (LLM calls take second
 them): a short progress message as each piece of work starts ("URP: keywords", "Planner: step 2
 ...") and an event with JSON-able data as each module finishes (``goal``, ``decisions``, ``risk``,
 ``ope``, ``urp``, ``step``). The caller attaches one :class:`Observer` to
-:meth:`~conceptbot.systems.PlannerSystem.plan`; every stage reports to that object, and none of
+:meth:`~conceptbot.core.system.PlannerSystem.plan`; every stage reports to that object, and none of
 them knows who listens (the CLI prints the messages, the web page streams both to the browser).
 An event carries a typed part of the trace (an :class:`EventPart`); whoever listens turns it into
 JSON at their own edge (``part.to_dict()``: the web page, the ROS 2 node, :class:`Callbacks` for

@@ -245,7 +245,7 @@ class JudgementTrace:
         facts: The graph facts put in the question.
         name_score: Its score in the name ranking, where one was made (3 decimals), else None.
         model: The model's own calibrated log-odds (3 decimals) where ``score`` combines it with the
-            graph's evidence (:mod:`conceptbot.pipeline.combine`), else None.
+            graph's evidence (:mod:`conceptbot.pipeline.goal_planner.combine`), else None.
         evidence: The evidence features that are set and the statements that set them
             (``{"features": {...}, "statements": [...]}``), where the score is combined, else None.
     """

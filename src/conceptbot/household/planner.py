@@ -30,6 +30,7 @@ import time
 from dataclasses import dataclass, replace
 from typing import Any
 
+from conceptbot.core.limits import check_request
 from conceptbot.core.observe import SILENT, Observer
 from conceptbot.core.plan import (
     HOUSEHOLD_ACTIONS,
@@ -248,7 +249,12 @@ class PlainHouseholdPlanner:
         self._call = _PlanCall(llm, repair=llm_repair)
 
     def plan(self, request: str, scene: HouseScene, observer: Observer | None = None) -> Plan:
-        """Plan ``request`` in ``scene`` or refuse it (``observer``: a message as the call starts)."""
+        """Plan ``request`` in ``scene`` or refuse it (``observer``: a message as the call starts).
+
+        Raises:
+            ConfigError: The request is unusable (empty, too long, control characters).
+        """
+        request = check_request(request)
         observer = observer or SILENT
         started = time.perf_counter()
         observer.progress("planner: judging and planning")
@@ -332,7 +338,12 @@ class ConceptBotHouseholdPlanner:
 
     def plan(self, request: str, scene: HouseScene, observer: Observer | None = None) -> Plan:
         """Plan ``request`` in ``scene`` or refuse it (``observer``: a message as each piece of
-        work starts)."""
+        work starts).
+
+        Raises:
+            ConfigError: The request is unusable (empty, too long, control characters).
+        """
+        request = check_request(request)
         observer = observer or SILENT
         usage: dict[str, Usage] = {}
         # What the instruction itself asks to spill or throw is refused before any model call: a

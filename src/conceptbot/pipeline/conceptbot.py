@@ -4,9 +4,9 @@ Planners (``planner=``):
 
 * ``goal`` (default) — the request read into targets, each object
   decided by a scored yes/no question with its graph facts, the plan assembled from the
-  decisions and checked for risk (:mod:`conceptbot.pipeline.goal_planner`);
+  decisions and checked for risk (:mod:`conceptbot.pipeline.goal_planner.planner`);
 * ``steps`` (system ``paper``) — the paper's pipeline: OPE -> URP -> greedy step-by-step Planner
-  (:mod:`conceptbot.pipeline.planner`).
+  (:mod:`conceptbot.pipeline.steps.planner`).
 
 Configurations:
 
@@ -35,16 +35,16 @@ from conceptbot.core.usage import Usage
 from conceptbot.models.cache_db import CacheStore
 from conceptbot.models.llm import LLM
 from conceptbot.pipeline import modes, prompts
-from conceptbot.pipeline.combine import combination
-from conceptbot.pipeline.decide import Decider, FactFinder
-from conceptbot.pipeline.evidence import GraphEvidence
 from conceptbot.pipeline.goal import GoalFinder, GoalReader
-from conceptbot.pipeline.goal_planner import GoalPlanner, GoalPlanResult, Thresholds
+from conceptbot.pipeline.goal_planner.combine import combination
+from conceptbot.pipeline.goal_planner.decide import Decider, FactFinder
+from conceptbot.pipeline.goal_planner.evidence import GraphEvidence
+from conceptbot.pipeline.goal_planner.planner import GoalPlanner, GoalPlanResult, Thresholds
+from conceptbot.pipeline.goal_planner.targets import TargetFinder
 from conceptbot.pipeline.hazards import HazardCheck, is_person
 from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
-from conceptbot.pipeline.planner import Planner
 from conceptbot.pipeline.retrieval import RelationRetriever
-from conceptbot.pipeline.targets import TargetFinder
+from conceptbot.pipeline.steps.planner import Planner
 from conceptbot.pipeline.tracing import ope_trace, urp_trace
 from conceptbot.pipeline.urp import URPResult, UserRequestProcessor
 

@@ -2,7 +2,8 @@
 
 One home for the conversions, so each part's rounding is written once: similarities to 4 decimals
 here; targets and judgements keep the JSON form their own modules give them
-(:meth:`~conceptbot.pipeline.targets.Target.to_dict`, :meth:`~conceptbot.pipeline.decide.Judgement.to_dict`).
+(:meth:`~conceptbot.pipeline.goal_planner.targets.Target.to_dict`,
+:meth:`~conceptbot.pipeline.goal_planner.decide.Judgement.to_dict`).
 """
 
 from __future__ import annotations
@@ -18,10 +19,10 @@ from conceptbot.core.trace import (
     TargetTrace,
     URPTrace,
 )
-from conceptbot.pipeline.decide import Judgement
+from conceptbot.pipeline.goal_planner.decide import Judgement
+from conceptbot.pipeline.goal_planner.targets import Target
 from conceptbot.pipeline.ope import ObjectProperties
 from conceptbot.pipeline.retrieval import Retrieval, edge_text
-from conceptbot.pipeline.targets import Target
 from conceptbot.pipeline.urp import URPResult
 
 

@@ -6,8 +6,8 @@ from conceptbot.core.scene import scene_from_dict
 from conceptbot.models.fake import FakeLLM
 from conceptbot.pipeline.goal import Goal, GoalTarget, to_targets
 from conceptbot.pipeline.goal.adapter import ScoredChooser
+from conceptbot.pipeline.goal_planner.targets import ALL, TargetFinder
 from conceptbot.pipeline.hazards import is_person
-from conceptbot.pipeline.targets import ALL, TargetFinder
 from tests.pipeline.goal.scenes import PANTRY, SHELLS, WORKSHOP
 
 

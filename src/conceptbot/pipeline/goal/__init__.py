@@ -6,7 +6,7 @@ form, destinations and theme; :mod:`.themes`: what a theme sends) and returns a 
 :class:`Goal` (:mod:`.types`). Where the words leave a choice open - the request names no
 destination, states a need, or asks for a dish - the goal says so (``to`` None, ``takes`` "need" or
 "ingredients") and the planner settles it with the model; :func:`to_targets` (:mod:`.adapter`) turns
-a goal into the goal planner's :class:`~conceptbot.pipeline.targets.Target` list, choosing those
+a goal into the goal planner's :class:`~conceptbot.pipeline.goal_planner.targets.Target` list, choosing those
 places with a scorer. :func:`same_goal` (:mod:`.compare`) is the exact match of the goal set
 (``benchmarks/data/goal_set.json``, measured by ``benchmarks/bench_goal_reading.py``).
 

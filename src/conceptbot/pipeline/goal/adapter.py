@@ -1,4 +1,4 @@
-"""A goal as the goal planner's targets (:class:`~conceptbot.pipeline.targets.Target`).
+"""A goal as the goal planner's targets (:class:`~conceptbot.pipeline.goal_planner.targets.Target`).
 
 Where the goal names a destination the target is ``how="named"``. Where it leaves the destination
 open (``to`` None) a :data:`Chooser` settles it; :class:`ScoredChooser` asks the model the question
@@ -35,7 +35,13 @@ from conceptbot.core.usage import Usage
 from conceptbot.pipeline.goal.reader import GoalReader
 from conceptbot.pipeline.goal.types import ALL as GOAL_ALL
 from conceptbot.pipeline.goal.types import Goal, GoalTarget
-from conceptbot.pipeline.targets import ALL, CONTENT_FREE_DISH, CONTENT_FREE_REQUEST, Target, TargetFinder
+from conceptbot.pipeline.goal_planner.targets import (
+    ALL,
+    CONTENT_FREE_DISH,
+    CONTENT_FREE_REQUEST,
+    Target,
+    TargetFinder,
+)
 
 #: Chooses the destinations of a target whose goal names none: ``(destination, score)`` pairs, best
 #: first (the score is kept in :attr:`Target.score`).

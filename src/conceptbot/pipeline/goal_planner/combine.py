@@ -2,7 +2,7 @@
 
 A decision's probability is a logistic regression over the model's calibrated log-odds (asked with
 the object's graph facts, and where the weights use it, without them) and the features of
-:mod:`conceptbot.pipeline.evidence`::
+:mod:`conceptbot.pipeline.goal_planner.evidence`::
 
     P(yes) = sigmoid(bias + w_model * model + sum_f w_f * feature_f)
 
@@ -23,7 +23,7 @@ from functools import cache
 from importlib import resources
 from typing import Any
 
-from conceptbot.pipeline.evidence import Evidence
+from conceptbot.pipeline.goal_planner.evidence import Evidence
 
 WEIGHTS = "judgement_weights.json"
 
@@ -37,7 +37,8 @@ class Combination:
             graph facts), ``model_z`` and ``model_gap`` (the model's log-odds standardised over the
             objects judged together, and its distance below the best of them: the model ranks
             ingredients well but leans towards No for all of them), evidence feature names
-            (:data:`conceptbot.pipeline.evidence.FEATURES`), and products of these (``model*is_dish``).
+            (:data:`conceptbot.pipeline.goal_planner.evidence.FEATURES`), and products of these
+            (``model*is_dish``).
         weights: One weight per feature.
         bias: The intercept.
     """

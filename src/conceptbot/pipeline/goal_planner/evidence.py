@@ -3,7 +3,7 @@ the model.
 
 A 1.5B model given "death cap: extremely poisonous usually white fungus" as prompt text can still
 answer 0.47 for it and 0.49 for an edible mushroom. So the statements are also read here, as
-features that a fitted combination (:mod:`conceptbot.pipeline.combine`) weighs beside the model's
+features that a fitted combination (:mod:`conceptbot.pipeline.goal_planner.combine`) weighs beside the model's
 answer:
 
 * **terms**: the criterion's own words (singular forms; a material's adjective -> the material:

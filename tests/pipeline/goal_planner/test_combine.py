@@ -6,8 +6,8 @@ import math
 
 import pytest
 
-from conceptbot.pipeline.combine import Combination, combination, sigmoid
-from conceptbot.pipeline.evidence import FEATURES, GRAPH_FREE, Evidence
+from conceptbot.pipeline.goal_planner.combine import Combination, combination, sigmoid
+from conceptbot.pipeline.goal_planner.evidence import FEATURES, GRAPH_FREE, Evidence
 
 
 def test_the_log_odds_add_the_weighted_readings_and_features() -> None:

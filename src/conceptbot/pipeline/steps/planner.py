@@ -38,9 +38,9 @@ from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, ChatRequest, Message, ScoreRequest
 from conceptbot.pipeline import prompts
 from conceptbot.pipeline.affordance import Gripper, affordance, relative_property_scores
-from conceptbot.pipeline.greedy import LLMScores, PlannerResult, greedy_plan
 from conceptbot.pipeline.hazards import HazardCheck
 from conceptbot.pipeline.ope import ObjectProperties
+from conceptbot.pipeline.steps.greedy import LLMScores, PlannerResult, greedy_plan
 
 
 def softmax(logprobs: list[float]) -> list[float]:
@@ -203,7 +203,7 @@ class Planner:
         feedback: Feedback | None = None,
         observer: Observer = SILENT,
     ) -> PlannerResult:
-        """Plan greedily (:func:`conceptbot.pipeline.greedy.greedy_plan`): the steps, the action
+        """Plan greedily (:func:`conceptbot.pipeline.steps.greedy.greedy_plan`): the steps, the action
         texts (ending with ``done()``) and usage.
 
         With ``feedback`` (from executing an earlier plan) the plan starts with the executed steps, the

@@ -1,9 +1,9 @@
 """The goal planner: where the request sends things, which objects go, then the plan.
 
-1. Targets (:mod:`conceptbot.pipeline.targets`): the destinations the request sends things to, how
-   many objects each takes, and the objects the request names for each, from the request's words
-   (scored questions only where it names no destination).
-2. Decisions (:mod:`conceptbot.pipeline.decide`): where a target needs more objects than the
+1. Targets (:mod:`conceptbot.pipeline.goal_planner.targets`): the destinations the request sends
+   things to, how many objects each takes, and the objects the request names for each, from the
+   request's words (scored questions only where it names no destination).
+2. Decisions (:mod:`conceptbot.pipeline.goal_planner.decide`): where a target needs more objects than the
    request names, every other object is asked about, one yes/no question each ("to do what the
    person asked, should the robot give the sponge to the user?"), scored by log-probability with
    the object's graph facts in the question and calibrated against a content-free object. A target
@@ -22,7 +22,7 @@
    (:mod:`conceptbot.pipeline.hazards`), and a risk decision that cannot be made (a backend error,
    a non-finite score) drops the move: safety fails closed.
 
-The paper's step-by-step planner stays available (:mod:`conceptbot.pipeline.planner`).
+The paper's step-by-step planner stays available (:mod:`conceptbot.pipeline.steps.planner`).
 """
 
 from __future__ import annotations
@@ -54,11 +54,11 @@ from conceptbot.core.trace import (
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.affordance import Gripper, affordance
-from conceptbot.pipeline.decide import Decider, Judgement
+from conceptbot.pipeline.goal_planner.decide import Decider, Judgement
+from conceptbot.pipeline.goal_planner.targets import ALL, Target, mentions
 from conceptbot.pipeline.hazards import HazardCheck, is_person, is_vulnerable
 from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
 from conceptbot.pipeline.ope_answers import RiskIndex
-from conceptbot.pipeline.targets import ALL, Target, mentions
 from conceptbot.pipeline.tracing import judgement_trace, target_trace
 
 METHOD = "decide"
@@ -82,7 +82,7 @@ FRAGILE = "fragile"
 
 @dataclass(frozen=True)
 class Thresholds:
-    """Decision thresholds (calibrated log-odds; see :mod:`conceptbot.pipeline.decide`).
+    """Decision thresholds (calibrated log-odds; see :mod:`conceptbot.pipeline.goal_planner.decide`).
 
     Attributes:
         fit: An object goes to an "all that fit" target above this.
@@ -104,7 +104,7 @@ class Thresholds:
         name_weight: Weight of the name ranking (:meth:`Decider.name_scores`) against the yes/no
             decision when a target takes N objects (0: the decision alone).
         combined: A target that takes every object fitting a criterion, or a dish's ingredients,
-            takes an object whose combined score (:mod:`conceptbot.pipeline.combine`: a fitted
+            takes an object whose combined score (:mod:`conceptbot.pipeline.goal_planner.combine`: a fitted
             log-odds, so 0 is P = 0.5) is above this; ``fit`` and ``ingredients`` apply where the
             score is the model's alone.
     """
@@ -189,7 +189,8 @@ class GoalPlanner:
     Args:
         targets: Reads whether the request asks for a pile, and its targets, counts and named
             objects (:class:`~conceptbot.pipeline.goal.GoalFinder` by default;
-            :class:`~conceptbot.pipeline.targets.TargetFinder` is the word-rule reader before it).
+            :class:`~conceptbot.pipeline.goal_planner.targets.TargetFinder` is the word-rule reader
+            before it).
         decider: Yes/no decisions.
         ope: OPE for the objects a plan moves (evidence for the risk decisions), or None.
         thresholds: Decision thresholds.

@@ -5,7 +5,7 @@ from __future__ import annotations
 from conceptbot.core.plan import Feedback, PickAndPlace, format_actions
 from conceptbot.core.scene import scene_from_dict
 from conceptbot.core.usage import Usage
-from conceptbot.pipeline.greedy import LLMScores, greedy_plan
+from conceptbot.pipeline.steps.greedy import LLMScores, greedy_plan
 
 SCENE = scene_from_dict({"pickable_objects": ["apple", "pear"], "destinations": ["user"]})
 

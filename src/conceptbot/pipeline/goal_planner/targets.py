@@ -192,7 +192,7 @@ class TargetFinder:
         llm: An LLM that can score options (labelled ``goal``), for requests naming no destination.
         is_person: Whether a destination is a person.
         threshold: A scored destination other than the best is a target above this.
-        food: What the graph knows about food (:class:`conceptbot.pipeline.decide.FactFinder`):
+        food: What the graph knows about food (:class:`conceptbot.pipeline.goal_planner.decide.FactFinder`):
             which dish a request asks to be made, and which destinations food is made in; None:
             only the ``making`` words ("cook", "bake") say that a request is about preparing food,
             and every destination is a candidate for it.

@@ -27,10 +27,10 @@ from conceptbot.core.usage import Usage
 from conceptbot.knowledge.normalize import singular
 from conceptbot.models.llm import LLM, Message, ScoreRequest
 from conceptbot.pipeline import prompts
-from conceptbot.pipeline.combine import Combination, sigmoid
-from conceptbot.pipeline.evidence import Evidence, GraphEvidence
+from conceptbot.pipeline.goal_planner.combine import Combination, sigmoid
+from conceptbot.pipeline.goal_planner.evidence import Evidence, GraphEvidence
+from conceptbot.pipeline.goal_planner.targets import tokens, words
 from conceptbot.pipeline.retrieval import RelationRetriever, edge_text
-from conceptbot.pipeline.targets import tokens, words
 
 ANSWERS = ("Yes", "No")
 NEUTRAL_REQUEST = "Please help me."  # the request the name ranking is calibrated against
@@ -56,7 +56,7 @@ class Judgement:
         scoring: How the backend scored the question (``logprob``, ``chat-logprobs``, ...; "" for an
             object the request names, which is not asked about).
         model: Where ``score`` combines the model's answer with the graph's evidence
-            (:mod:`conceptbot.pipeline.combine`): the model's own calibrated log-odds; else None.
+            (:mod:`conceptbot.pipeline.goal_planner.combine`): the model's own calibrated log-odds; else None.
         evidence: The evidence that was combined, else None.
     """
 

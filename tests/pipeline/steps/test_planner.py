@@ -6,7 +6,7 @@ from conceptbot.core.plan import format_actions
 from conceptbot.models.fake import FakeLLM
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.ope import ObjectProperties
-from conceptbot.pipeline.planner import Planner, softmax
+from conceptbot.pipeline.steps.planner import Planner, softmax
 from tests.pipeline.fakes import spill_scene
 
 # valid_actions order for the spill scene:

@@ -12,11 +12,11 @@ from conceptbot.core.scene import Scene, scene_from_dict
 from conceptbot.core.usage import Usage
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.conceptbot import ConceptBot
-from conceptbot.pipeline.decide import Decider, FactFinder
-from conceptbot.pipeline.goal_planner import GoalPlanner, is_person
+from conceptbot.pipeline.goal_planner.decide import Decider, FactFinder
+from conceptbot.pipeline.goal_planner.planner import GoalPlanner, is_person
+from conceptbot.pipeline.goal_planner.targets import ALL, Target, TargetFinder, is_stacking, mentions
 from conceptbot.pipeline.ope import ObjectProperties, OPEResult
 from conceptbot.pipeline.retrieval import RelationRetriever
-from conceptbot.pipeline.targets import ALL, Target, TargetFinder, is_stacking, mentions
 from tests.pipeline.fakes import DictGraph, risk_reply
 
 SCENE = scene_from_dict(

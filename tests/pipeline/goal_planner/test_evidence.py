@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from conceptbot.pipeline.evidence import GraphEvidence, criterion_terms, stated
+from conceptbot.pipeline.goal_planner.evidence import GraphEvidence, criterion_terms, stated
 from tests.pipeline.fakes import DictGraph
 
 GRAPH = DictGraph(

@@ -1,0 +1,14 @@
+"""The goal planner, ConceptBot's default: read where the request sends things, decide which
+objects go with one scored yes/no question each (the graph's statements weighed with the model's
+answer), check each move's risk, and plan the moves.
+
+* :mod:`.targets` — the destinations and how many objects each takes, from the goal the reader
+  (:mod:`conceptbot.pipeline.goal`) finds in the request's parse;
+* :mod:`.decide` — the per-object questions and their calibrated scores;
+* :mod:`.evidence` and :mod:`.combine` — what the graph states about an object, as evidence, and
+  the fitted combination of it with the model's answer;
+* :mod:`.planner` — :class:`~conceptbot.pipeline.goal_planner.planner.GoalPlanner`: the stages in
+  order, the risk checks and vetoes, the plan and its trace.
+
+How it was designed and measured: ``docs/planning.md``.
+"""
