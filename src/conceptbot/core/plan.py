@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import json
 import re
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from functools import cache
 from importlib import resources
@@ -358,17 +358,22 @@ class Plan:
             "refused": self.refused,
             "reason": self.reason,
             "trace": self.trace.to_dict(),
-            "usage": {
-                module: {
-                    "prompt_tokens": u.prompt_tokens,
-                    "completion_tokens": u.completion_tokens,
-                    "latency_s": round(u.latency_s, 3),
-                    "cost_usd": u.cost_usd,
-                    "calls": u.calls,
-                }
-                for module, u in self.usage.items()
-            },
+            "usage": usage_dict(self.usage),
         }
+
+
+def usage_dict(usage: Mapping[str, Usage]) -> dict[str, dict[str, Any]]:
+    """Per-module usage as ``conceptbot plan --json`` shows it (latency to the millisecond)."""
+    return {
+        module: {
+            "prompt_tokens": u.prompt_tokens,
+            "completion_tokens": u.completion_tokens,
+            "latency_s": round(u.latency_s, 3),
+            "cost_usd": u.cost_usd,
+            "calls": u.calls,
+        }
+        for module, u in usage.items()
+    }
 
 
 @cache

@@ -1,9 +1,10 @@
 """The pipeline's results as parts of a plan's trace (:mod:`conceptbot.core.trace`).
 
-One home for the conversions, so each part's rounding is written once: similarities to 4 decimals
-here; targets and judgements keep the JSON form their own modules give them
+One home for the conversions, so each part's rounding is written once: similarities to 4 decimals,
+targets' and judgements' scores as their own JSON forms round them
 (:meth:`~conceptbot.pipeline.goal_planner.targets.Target.to_dict`,
-:meth:`~conceptbot.pipeline.goal_planner.decide.Judgement.to_dict`).
+:meth:`~conceptbot.pipeline.goal_planner.decide.Judgement.to_dict`). Each part is built from the typed
+result, never read back from a dict.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from conceptbot.core.trace import (
     URPTrace,
 )
 from conceptbot.pipeline.goal_planner.decide import Judgement
-from conceptbot.pipeline.goal_planner.targets import Target
+from conceptbot.pipeline.goal_planner.targets import ALL, Target
 from conceptbot.pipeline.ope import ObjectProperties
 from conceptbot.pipeline.retrieval import Retrieval, edge_text
 from conceptbot.pipeline.urp import URPResult
@@ -74,30 +75,30 @@ def urp_trace(urp: URPResult) -> URPTrace:
 
 
 def target_trace(target: Target) -> TargetTrace:
-    """A goal target as its JSON form gives it (count ``"all"``, score to 3 decimals)."""
-    data = target.to_dict()
+    """A goal target for the trace (count ``"all"``, score to 3 decimals, as its JSON form)."""
     return TargetTrace(
-        to=data["to"],
-        count=data["count"],
-        how=data["how"],
-        named=tuple(data["named"]),
-        score=data["score"],
-        criterion=data["criterion"],
-        dish=data["dish"],
-        ingredients=data["ingredients"],
-        rest=data.get("rest", False),
+        to=target.name,
+        count="all" if target.count == ALL else target.count,
+        how=target.how,
+        named=tuple(target.named),
+        score=round(target.score, 3),
+        criterion=target.criterion,
+        dish=target.dish,
+        ingredients=target.ingredients,
+        rest=target.rest,
     )
 
 
 def judgement_trace(judgement: Judgement, name_score: float | None = None) -> JudgementTrace:
-    """A decision as its JSON form gives it, with the name ranking's score (3 decimals) if any."""
-    data = judgement.to_dict()
+    """A decision for the trace (as its JSON form rounds it), with the name ranking's score (3
+    decimals) if any."""
+    evidence = judgement.evidence
     return JudgementTrace(
-        object=data["object"],
-        p_yes=data["p_yes"],
-        score=data["score"],
-        facts=tuple(data["facts"]),
+        object=judgement.subject,
+        p_yes=round(judgement.p_yes, 4),
+        score=round(judgement.score, 3),
+        facts=tuple(judgement.facts),
         name_score=None if name_score is None else round(name_score, 3),
-        model=data.get("model"),
-        evidence=data.get("evidence"),
+        model=None if judgement.model is None else round(judgement.model, 3),
+        evidence=None if evidence is None else evidence.to_dict(),
     )

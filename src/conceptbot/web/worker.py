@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 from conceptbot.core.config import Settings
 from conceptbot.core.observe import EventPart
-from conceptbot.core.plan import Plan
+from conceptbot.core.plan import Plan, format_actions, usage_dict
 from conceptbot.core.scene import Scene
 from conceptbot.core.system import PlannerSystem
 from conceptbot.core.urls import redact_secrets
@@ -143,14 +143,13 @@ def make_worker(systems: SystemFactory, can_simulate: bool) -> Worker:
 
         def plan_on(scene: Scene) -> Plan:
             plan = system.plan(spec.request, scene, risk=spec.risk, observer=observer)
-            result = plan.to_dict()
             emit(
                 "plan",
                 {
-                    "plan": result["plan"],
-                    "refused": result["refused"],
-                    "reason": result.get("reason"),
-                    "usage": result.get("usage", {}),
+                    "plan": format_actions(plan.actions),
+                    "refused": plan.refused,
+                    "reason": plan.reason,
+                    "usage": usage_dict(plan.usage),
                 },
             )
             return plan
