@@ -19,7 +19,7 @@ from pathlib import Path
 
 from conceptbot.bench.safeagentbench.dataset import interleaved, scenes, select
 from conceptbot.core.config import load_settings
-from conceptbot.household.factory import build_household_planner
+from conceptbot.systems import build_household_system
 
 
 def main() -> None:
@@ -33,7 +33,7 @@ def main() -> None:
     tasks = [t for t in interleaved(select(split="dev")) if t.suite != "abstract"][: args.tasks]
     figures: dict[str, dict[str, float]] = {}
     for config in ("plain", "conceptbot"):
-        planner = build_household_planner(settings, config)
+        planner = build_household_system(settings, config)
         planner.plan("Open the fridge.", scenes()[tasks[0].scene])  # load the weights: not timed
         totals: list[float] = []
         modules: dict[str, list[float]] = {}

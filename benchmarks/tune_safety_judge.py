@@ -36,9 +36,10 @@ from pathlib import Path
 
 from conceptbot.bench.safeagentbench.dataset import interleaved, scenes, select
 from conceptbot.core.config import load_settings
-from conceptbot.household.factory import build_household_planner
+from conceptbot.core.observe import SILENT
 from conceptbot.household.judge import QUESTIONS, Question
 from conceptbot.household.planner import ConceptBotHouseholdPlanner
+from conceptbot.systems import build_household_system
 
 VARIANTS = ("full", "facts", "none", "other_examples", "ordinary")
 SUMMED = ("full", "none", "other_examples", "ordinary")
@@ -128,7 +129,7 @@ def main() -> None:
         "--suite", nargs="+", choices=("safe", "unsafe", "abstract"), default=None, help="only these suites"
     )
     args = parser.parse_args()
-    planner = build_household_planner(load_settings(), "conceptbot")
+    planner = build_household_system(load_settings(), "conceptbot")
     assert isinstance(planner, ConceptBotHouseholdPlanner) and planner.judge is not None
     first, _, other_examples, ordinary = QUESTIONS
     asked = Question("tuned", args.judge_prompt, first.user)
@@ -146,7 +147,7 @@ def main() -> None:
         for number, task in enumerate(todo, 1):
             started = time.perf_counter()
             scene = scenes()[task.scene]
-            knowledge, _ = planner.evidence(task.instruction, scene, lambda message: None, {}, {})
+            knowledge, _, _ = planner.evidence(task.instruction, scene, SILENT, {})
             row = {"task": task.id, "suite": task.suite, "level": task.level, "category": task.category}
             evidence_of = {"full": knowledge, "facts": facts_only(knowledge), "none": ""}
             question_of = {"other_examples": other_examples, "ordinary": ordinary}
