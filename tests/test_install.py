@@ -85,6 +85,18 @@ def _env(home: Path, embeddings_url: str) -> dict[str, str]:
     return env
 
 
+def _install_graph(cli: list[str], env: dict[str, str], omcs_file: Path, wordnet_dir: Path) -> None:
+    """``conceptbot kg install`` from the small local OMCS and WordNet files, into ``env``'s home."""
+    graph = subprocess.run(
+        [*cli, "kg", "install", "--file", str(omcs_file), "--wordnet-dir", str(wordnet_dir)],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=600,
+    )
+    assert graph.returncode == 0, graph.stderr[-2000:]
+
+
 def test_a_plain_install_has_none_of_the_heavy_runtimes(bare_venv: Path) -> None:
     found = f"{{m: bool(u.find_spec(m)) for m in {HEAVY!r}}}"
     probe = f"import importlib.util as u, json; print(json.dumps({found}))"
@@ -103,14 +115,7 @@ def test_a_plain_install_builds_a_graph_and_plans_through_an_openai_compatible_s
 ) -> None:
     cli = str(bare_venv / "bin" / "conceptbot")
     env = _env(tmp_path / "home", embeddings)
-    graph = subprocess.run(
-        [cli, "kg", "install", "--file", str(omcs_file), "--wordnet-dir", str(wordnet_dir)],
-        capture_output=True,
-        text=True,
-        env=env,
-        timeout=600,
-    )
-    assert graph.returncode == 0, graph.stderr[-2000:]
+    _install_graph([cli], env, omcs_file, wordnet_dir)
     scene = tmp_path / "scene.json"
     scene.write_text(json.dumps(SCENE))
     llm = f"openai-compatible:{server_url}#smollm2"
@@ -142,14 +147,7 @@ def test_planning_over_http_never_imports_the_heavy_runtimes(
     llama.cpp and sentence-transformers out. (torch is imported by spaCy's thinc whenever it is
     installed: the bare environment above shows a plan needs none of it.)"""
     env = _env(tmp_path / "home", embeddings)
-    cli = [sys.executable, "-m", "conceptbot"]
-    subprocess.run(
-        [*cli, "kg", "install", "--file", str(omcs_file), "--wordnet-dir", str(wordnet_dir)],
-        check=True,
-        capture_output=True,
-        env=env,
-        timeout=600,
-    )
+    _install_graph([sys.executable, "-m", "conceptbot"], env, omcs_file, wordnet_dir)
     script = f"""
 import json, sys
 import conceptbot
