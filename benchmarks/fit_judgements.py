@@ -15,7 +15,13 @@ accuracy per kind of:
   criterion (measured, not shipped: a point above ``combined`` for one more question per object);
 * ``nokg``: the question without facts and the name features (the no-graph ablation's combination).
 
-    .venv/bin/python benchmarks/fit_judgements.py [--readings FILE] [--write]
+With ``--conformal`` it also calibrates split conformal prediction on the combination's held-out
+probabilities (:mod:`conceptbot.pipeline.goal_planner.conformal`): per coverage, the threshold
+fitted on four folds and measured on the fifth (empirical coverage, the share of decisions with one
+answer, and how often that one is right), and with ``--write`` the thresholds fitted on every row
+(``src/conceptbot/pipeline/conformal.json``).
+
+    .venv/bin/python benchmarks/fit_judgements.py [--readings FILE] [--write] [--conformal]
 """
 
 from __future__ import annotations
@@ -30,12 +36,14 @@ import numpy as np
 from conceptbot.core.config import load_settings
 from conceptbot.knowledge.registry import open_graph
 from conceptbot.pipeline.goal_planner.combine import value
+from conceptbot.pipeline.goal_planner.conformal import COVERAGES, conformal_threshold, decision_set
 from conceptbot.pipeline.goal_planner.decide import group_readings
 from conceptbot.pipeline.goal_planner.evidence import FEATURES, GRAPH_FREE, GraphEvidence
 
 FOLDS = 5
 L2 = 1.0  # 0.1 and 3 fitted within a point of it on held-out folds; 10 was worse
 WEIGHTS = Path("src/conceptbot/pipeline/judgement_weights.json")
+CONFORMAL = Path("src/conceptbot/pipeline/conformal.json")
 GROUP = (
     "model", "model_z", "model_gap", "is_dish", "model*is_dish", "model_gap*is_dish", "is_material",
     "is_several", "model*is_several",
@@ -152,6 +160,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--readings", type=Path, default=Path("results/judgements-qwen2.5-coder-1.5b.jsonl"))
     parser.add_argument("--write", action="store_true", help=f"write the fitted weights to {WEIGHTS}")
     parser.add_argument("--errors", action="store_true", help="print the combination's held-out errors")
+    parser.add_argument("--conformal", action="store_true", help="calibrate conformal prediction too")
     args = parser.parse_args(argv)
     rows = [json.loads(line) for line in args.readings.read_text(encoding="utf-8").splitlines() if line]
     graph = GraphEvidence(open_graph(load_settings(), fallback=False))
@@ -168,6 +177,7 @@ def main(argv: list[str] | None = None) -> int:
     y = np.array([r["y"] for r in rows])
     folds = np.array([fold(r["object"]) for r in rows])
     predicted: dict[str, np.ndarray] = {}
+    held_out_p = np.zeros(len(rows))  # the combination's P(yes), each row scored by a fit without it
     for variant, names in VARIANTS.items():
         if names is None:
             predicted[variant] = np.array([r["model"] > 0 for r in rows], dtype=float)
@@ -178,6 +188,8 @@ def main(argv: list[str] | None = None) -> int:
             train, test = folds != k, folds == k
             w, b = fit(x[train], y[train])
             out[test] = (x[test] @ w + b) > 0
+            if variant == "combined":
+                held_out_p[test] = 1.0 / (1.0 + np.exp(-(x[test] @ w + b)))
         predicted[variant] = out
     kinds = sorted({r["kind"] for r in rows})
     header = f"{'kind':16} {'n':>4} " + " ".join(f"{v:>15}" for v in VARIANTS)
@@ -214,6 +226,23 @@ def main(argv: list[str] | None = None) -> int:
             + ", ".join(f"{n} {v:+.2f}" for n, v in zip(names, w, strict=True))
             + f", bias {b:+.2f}"
         )
+    qhat = conformal(held_out_p, y, folds) if args.conformal else {}
+    if args.write and qhat:
+        CONFORMAL.write_text(
+            json.dumps(
+                {
+                    "_doc": "Written by benchmarks/fit_judgements.py --conformal: split conformal "
+                    "thresholds (qhat) on the combination's held-out P(yes) over the judgement set; "
+                    "read by conceptbot.pipeline.goal_planner.conformal. Refit for another model.",
+                    "fitted_on": f"{args.readings.name}, {len(rows)} rows",
+                    "qhat": {str(c): round(q, 4) for c, q in qhat.items()},
+                },
+                indent=2,
+            )
+            + "\n",
+            encoding="utf-8",
+        )
+        print(f"wrote {CONFORMAL}")
     if args.write:
         doc = {
             "_doc": "Written by benchmarks/fit_judgements.py from the judgement set's readings with "
@@ -226,6 +255,32 @@ def main(argv: list[str] | None = None) -> int:
         WEIGHTS.write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
         print(f"wrote {WEIGHTS}")
     return 0
+
+
+def conformal(p_yes: np.ndarray, y: np.ndarray, folds: np.ndarray) -> dict[float, float]:
+    """Print, per coverage, the conformal sets' held-out figures (threshold from four folds, measured
+    on the fifth); return the thresholds fitted on every row."""
+    scores = np.where(y == 1.0, 1.0 - p_yes, p_yes)  # 1 - P(the right answer)
+    print("\nconformal prediction on the combination (threshold from 4 folds, measured on the 5th):")
+    print(f"{'coverage':>8} {'empirical':>9} {'one answer':>10} {'right when one':>14} {'qhat':>6}")
+    fitted = {}
+    for coverage in COVERAGES:
+        covered = sure = right = 0
+        for k in range(FOLDS):
+            q = conformal_threshold(scores[folds != k].tolist(), coverage)
+            for p, label in zip(p_yes[folds == k], y[folds == k], strict=True):
+                found = decision_set(float(p), q)
+                answer = "yes" if label == 1.0 else "no"
+                covered += answer in found.answers
+                if found.sure:
+                    sure += 1
+                    right += found.answers[0] == answer
+        fitted[coverage] = conformal_threshold(scores.tolist(), coverage)
+        print(
+            f"{coverage:>8.2f} {covered / len(y):>9.1%} {sure / len(y):>10.1%} "
+            f"{(right / sure if sure else 0.0):>14.1%} {fitted[coverage]:>6.3f}"
+        )
+    return fitted
 
 
 if __name__ == "__main__":

@@ -1,0 +1,102 @@
+"""Split conformal prediction for the goal planner's yes/no decisions (as KnowNo does for a robot's
+options, Ren et al., CoRL 2023): for a chosen coverage (0.9: the set contains the right answer nine
+times in ten), a decision's prediction set holds every answer whose probability is at least
+``1 - qhat``. One answer in the set: the planner acts on it. Both: it does not know, and should ask.
+
+``qhat`` is fitted on labelled decisions the planner never tuned on the test items with
+(``benchmarks/fit_judgements.py --conformal``: held-out combined probabilities on the judgement set)
+and shipped as data (``conformal.json``); another model needs its own.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from functools import cache
+from importlib import resources
+from typing import Any
+
+COVERAGES = (0.8, 0.9, 0.95)
+"""The coverages shipped."""
+CALIBRATION = "conformal.json"
+
+
+def conformal_threshold(scores: Sequence[float], coverage: float) -> float:
+    """Split conformal's ``qhat``: the ``ceil((n + 1) * coverage) / n`` empirical quantile of the
+    calibration nonconformity ``scores`` (``1 - p(right answer)``); ``1.0`` (keep everything) where
+    too few scores reach the coverage.
+
+    Raises:
+        ValueError: A coverage outside (0, 1), no scores, or a score that is not a number in [0, 1].
+    """
+    if not 0.0 < coverage < 1.0:
+        raise ValueError(f"coverage must be in (0, 1), got {coverage!r}")
+    if not scores:
+        raise ValueError("conformal calibration needs at least one score")
+    if any(not (isinstance(s, int | float) and 0.0 <= s <= 1.0) for s in scores):  # NaN fails too
+        raise ValueError("nonconformity scores are numbers in [0, 1]")
+    ordered = sorted(scores)
+    rank = math.ceil((len(ordered) + 1) * coverage)
+    return 1.0 if rank > len(ordered) else float(ordered[rank - 1])
+
+
+@dataclass(frozen=True)
+class DecisionSet:
+    """A yes/no decision's prediction set.
+
+    Attributes:
+        p_yes: The decision's calibrated probability of yes.
+        answers: ``("yes",)``, ``("no",)``, ``("yes", "no")`` (unsure: ask) or ``()`` (neither is
+            likely enough; taken as unsure too).
+    """
+
+    p_yes: float
+    answers: tuple[str, ...]
+
+    @property
+    def sure(self) -> bool:
+        """One answer: the planner may act on it."""
+        return len(self.answers) == 1
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
+        return {"p_yes": round(self.p_yes, 4), "answers": list(self.answers)}
+
+
+def decision_set(p_yes: float, qhat: float) -> DecisionSet:
+    """The answers whose probability is at least ``1 - qhat``; a probability that is not a number
+    keeps both (the decision cannot be made: ask, never guess)."""
+    if not (isinstance(p_yes, int | float) and 0.0 <= p_yes <= 1.0):
+        return DecisionSet(float("nan"), ("yes", "no"))
+    floor = 1.0 - qhat
+    answers = tuple(a for a, p in (("yes", p_yes), ("no", 1.0 - p_yes)) if p >= floor)
+    return DecisionSet(float(p_yes), answers)
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """The shipped thresholds: ``qhat`` per coverage, and where they were fitted."""
+
+    qhat: dict[float, float]
+    fitted_on: str
+
+    def threshold(self, coverage: float) -> float:
+        """``qhat`` for ``coverage`` (one of :data:`COVERAGES`).
+
+        Raises:
+            ValueError: A coverage without a fitted threshold.
+        """
+        if coverage not in self.qhat:
+            shown = ", ".join(str(c) for c in sorted(self.qhat))
+            raise ValueError(f"no conformal threshold for coverage {coverage}; fitted: {shown}")
+        return self.qhat[coverage]
+
+
+@cache
+def shipped() -> Calibration:
+    """The calibration shipped with the package (``conformal.json``)."""
+    text = resources.files("conceptbot.pipeline").joinpath(CALIBRATION).read_text(encoding="utf-8")
+    data = json.loads(text)
+    return Calibration({float(k): float(v) for k, v in data["qhat"].items()}, str(data["fitted_on"]))

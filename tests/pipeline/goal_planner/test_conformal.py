@@ -1,0 +1,58 @@
+"""Split conformal prediction for the yes/no decisions: the threshold, the sets, the shipped data."""
+
+from __future__ import annotations
+
+import math
+import random
+
+import pytest
+
+from conceptbot.pipeline.goal_planner.conformal import (
+    COVERAGES,
+    conformal_threshold,
+    decision_set,
+    shipped,
+)
+
+
+def test_the_threshold_is_the_finite_sample_quantile() -> None:
+    scores = [i / 10 for i in range(10)]  # 0.0 .. 0.9
+    assert conformal_threshold(scores, 0.5) == pytest.approx(0.5)  # ceil(11 * 0.5) = 6th smallest
+    assert conformal_threshold(scores, 0.8) == pytest.approx(0.8)  # ceil(8.8) = 9th
+    assert conformal_threshold(scores, 0.95) == 1.0  # ceil(10.45) = 11 > 10: keep everything
+    for bad in ([], [0.2, math.nan], [1.5]):
+        with pytest.raises(ValueError):
+            conformal_threshold(bad, 0.9)
+    with pytest.raises(ValueError, match="coverage"):
+        conformal_threshold(scores, 1.0)
+
+
+def test_sets_from_exchangeable_scores_cover_as_promised() -> None:
+    rng = random.Random(7)
+    # A calibrated model: P(yes) drawn uniformly, the label drawn with that probability.
+    rows = [(p, rng.random() < p) for p in (rng.random() for _ in range(4000))]
+    calibration, test = rows[:2000], rows[2000:]
+    scores = [1.0 - p if label else p for p, label in calibration]
+    for coverage in COVERAGES:
+        q = conformal_threshold(scores, coverage)
+        covered = [("yes" if label else "no") in decision_set(p, q).answers for p, label in test]
+        assert abs(sum(covered) / len(covered) - coverage) < 0.03, coverage
+
+
+def test_a_decision_is_sure_only_when_one_answer_is_likely_enough() -> None:
+    assert decision_set(0.95, 0.3).answers == ("yes",) and decision_set(0.95, 0.3).sure
+    assert decision_set(0.05, 0.3).answers == ("no",)
+    unsure = decision_set(0.5, 0.6)
+    assert unsure.answers == ("yes", "no") and not unsure.sure
+    assert decision_set(0.5, 0.3).answers == () and not decision_set(0.5, 0.3).sure
+    broken = decision_set(math.nan, 0.3)  # a decision that cannot be made asks, never guesses
+    assert broken.answers == ("yes", "no") and not broken.sure
+
+
+def test_the_shipped_calibration_has_every_coverage_in_order() -> None:
+    calibration = shipped()
+    assert set(calibration.qhat) == set(COVERAGES) and "1028 rows" in calibration.fitted_on
+    thresholds = [calibration.threshold(c) for c in COVERAGES]
+    assert thresholds == sorted(thresholds) and all(0.5 <= q <= 1.0 for q in thresholds)
+    with pytest.raises(ValueError, match=r"no conformal threshold for coverage 0\.7"):
+        calibration.threshold(0.7)
