@@ -177,7 +177,8 @@ def main(argv: list[str] | None = None) -> int:
     y = np.array([r["y"] for r in rows])
     folds = np.array([fold(r["object"]) for r in rows])
     predicted: dict[str, np.ndarray] = {}
-    held_out_p = np.zeros(len(rows))  # the combination's P(yes), each row scored by a fit without it
+    # Each shipped combination's P(yes), each row scored by a fit without it (for --conformal).
+    held_out_p = {variant: np.zeros(len(rows)) for _, variant in SHIPPED}
     for variant, names in VARIANTS.items():
         if names is None:
             predicted[variant] = np.array([r["model"] > 0 for r in rows], dtype=float)
@@ -188,8 +189,8 @@ def main(argv: list[str] | None = None) -> int:
             train, test = folds != k, folds == k
             w, b = fit(x[train], y[train])
             out[test] = (x[test] @ w + b) > 0
-            if variant == "combined":
-                held_out_p[test] = 1.0 / (1.0 + np.exp(-(x[test] @ w + b)))
+            if variant in held_out_p:
+                held_out_p[variant][test] = 1.0 / (1.0 + np.exp(-(x[test] @ w + b)))
         predicted[variant] = out
     kinds = sorted({r["kind"] for r in rows})
     header = f"{'kind':16} {'n':>4} " + " ".join(f"{v:>15}" for v in VARIANTS)
@@ -226,7 +227,11 @@ def main(argv: list[str] | None = None) -> int:
             + ", ".join(f"{n} {v:+.2f}" for n, v in zip(names, w, strict=True))
             + f", bias {b:+.2f}"
         )
-    qhat = conformal(held_out_p, y, folds) if args.conformal else {}
+    qhat = (
+        {name: conformal(held_out_p[variant], y, folds, name) for name, variant in SHIPPED}
+        if args.conformal
+        else {}
+    )
     if args.write and qhat:
         CONFORMAL.write_text(
             json.dumps(
@@ -235,7 +240,10 @@ def main(argv: list[str] | None = None) -> int:
                     "thresholds (qhat) on the combination's held-out P(yes) over the judgement set; "
                     "read by conceptbot.pipeline.goal_planner.conformal. Refit for another model.",
                     "fitted_on": f"{args.readings.name}, {len(rows)} rows",
-                    "qhat": {str(c): round(q, 4) for c, q in qhat.items()},
+                    "qhat": {
+                        name: {str(c): round(q, 4) for c, q in fitted.items()}
+                        for name, fitted in qhat.items()
+                    },
                 },
                 indent=2,
             )
@@ -257,11 +265,11 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-def conformal(p_yes: np.ndarray, y: np.ndarray, folds: np.ndarray) -> dict[float, float]:
+def conformal(p_yes: np.ndarray, y: np.ndarray, folds: np.ndarray, name: str) -> dict[float, float]:
     """Print, per coverage, the conformal sets' held-out figures (threshold from four folds, measured
     on the fifth); return the thresholds fitted on every row."""
     scores = np.where(y == 1.0, 1.0 - p_yes, p_yes)  # 1 - P(the right answer)
-    print("\nconformal prediction on the combination (threshold from 4 folds, measured on the 5th):")
+    print(f"\nconformal prediction on the {name} combination (threshold from 4 folds, measured on the 5th):")
     print(f"{'coverage':>8} {'empirical':>9} {'one answer':>10} {'right when one':>14} {'qhat':>6}")
     fitted = {}
     for coverage in COVERAGES:

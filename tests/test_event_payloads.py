@@ -73,7 +73,7 @@ def test_event_payloads_are_byte_identical_to_the_recorded_ones(edge: str, plan:
     run = {"steps": _step_plan, "goal": _goal_plan}[plan]
     sent = {"web": _web, "ros2": _ros}[edge](run)
     path = GOLDEN / f"events-{edge}-{plan}.txt"
-    if os.environ.get("CONCEPTBOT_RECORD_GOLDEN"):
+    if os.environ.get("RECORD_GOLDEN"):
         path.write_text("\n".join(sent) + "\n", encoding="utf-8")
     assert "\n".join(sent) + "\n" == path.read_text(encoding="utf-8")
     assert len(sent) > 3
@@ -86,6 +86,6 @@ def test_plan_json_is_byte_identical_to_the_recorded_one(plan: str) -> None:
         usage["latency_s"] = 0.0  # wall time
     text = json.dumps(data, indent=2) + "\n"
     path = GOLDEN / f"plan-{plan}.json"
-    if os.environ.get("CONCEPTBOT_RECORD_GOLDEN"):
+    if os.environ.get("RECORD_GOLDEN"):
         path.write_text(text, encoding="utf-8")
     assert text == path.read_text(encoding="utf-8")

@@ -78,6 +78,8 @@ def test_a_plan_built_by_hand_has_an_empty_trace_and_the_schema_ships_with_the_p
         "reason": None,
         "trace": {},
         "usage": {},
+        "confidence": None,
+        "questions": [],
     }
     schema = plan_schema()
     assert schema["$schema"] == "https://json-schema.org/draft/2020-12/schema"

@@ -24,7 +24,7 @@ from importlib import resources
 from typing import Any
 
 from conceptbot.core.scene import Scene
-from conceptbot.core.trace import PlanTrace
+from conceptbot.core.trace import ClarifyingQuestion, PlanTrace
 from conceptbot.core.usage import Usage
 
 DONE = "done()"
@@ -331,6 +331,11 @@ class Plan:
         reason: Why it refused (or None); a household planner gives its reasoning for a plan too.
         trace: Everything retrieved and decided on the way (empty for a plan built by hand).
         usage: Per-module tokens, time and cost.
+        confidence: The probability that the plan's calibrated decisions are all right (their
+            product; an answered question counts as sure), where the planner calibrates them; None
+            elsewhere.
+        questions: What the planner asked, or would ask, where a decision's conformal prediction set
+            holds both answers (most uncertain first), with the answers given.
     """
 
     actions: tuple[AnyAction, ...]
@@ -339,9 +344,12 @@ class Plan:
     reason: str | None = None
     trace: PlanTrace = field(default_factory=PlanTrace)
     usage: dict[str, Usage] = field(default_factory=dict)
+    confidence: float | None = None
+    questions: tuple[ClarifyingQuestion, ...] = ()
 
     def __post_init__(self) -> None:
         self.actions = tuple(self.actions)
+        self.questions = tuple(self.questions)
         wrong = [a for a in self.actions if not isinstance(a, AnyAction)]
         if wrong:  # text is read into actions at the edge (read_action, parse_action), never here
             raise TypeError(
@@ -359,6 +367,8 @@ class Plan:
             "reason": self.reason,
             "trace": self.trace.to_dict(),
             "usage": usage_dict(self.usage),
+            "confidence": None if self.confidence is None else round(self.confidence, 4),
+            "questions": [q.to_dict() for q in self.questions],
         }
 
 

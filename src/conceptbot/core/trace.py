@@ -248,6 +248,8 @@ class JudgementTrace:
             graph's evidence (:mod:`conceptbot.pipeline.goal_planner.combine`), else None.
         evidence: The evidence features that are set and the statements that set them
             (``{"features": {...}, "statements": [...]}``), where the score is combined, else None.
+        answers: The decision's conformal prediction set (``["yes"]``, ``["no"]``, or both: unsure),
+            where the planner calibrated it, else None.
     """
 
     object: str
@@ -257,6 +259,7 @@ class JudgementTrace:
     name_score: float | None = None
     model: float | None = None
     evidence: Mapping[str, Any] | None = None
+    answers: tuple[str, ...] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (``name_score`` only where there is one)."""
@@ -275,7 +278,40 @@ class JudgementTrace:
                 "features": dict(self.evidence["features"]),
                 "statements": list(self.evidence["statements"]),
             }
+        if self.answers is not None:
+            data["answers"] = list(self.answers)
         return data
+
+
+@dataclass(frozen=True)
+class ClarifyingQuestion:
+    """A question the planner asks where a decision's conformal prediction set holds both answers.
+
+    Attributes:
+        text: The question in plain words ("Should the lemon go to the ceramic bowl?").
+        object: The object it is about.
+        target: Where the object would go.
+        p_yes: The decision's calibrated P(yes) (4 decimals).
+        answer: ``yes`` or ``no`` as the person answered; None where nobody was asked (the plan then
+            acts on the likelier answer).
+    """
+
+    text: str
+    object: str
+    target: str
+    p_yes: float
+    answer: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (``conceptbot plan --json``'s ``questions``)."""
+        return {
+            "text": self.text,
+            "object": self.object,
+            "target": self.target,
+            "p_yes": self.p_yes,
+            "options": ["yes", "no"],
+            "answer": self.answer,
+        }
 
 
 @dataclass(frozen=True)

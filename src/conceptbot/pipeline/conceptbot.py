@@ -36,6 +36,8 @@ from conceptbot.models.cache_db import CacheStore
 from conceptbot.models.llm import LLM
 from conceptbot.pipeline import modes, prompts
 from conceptbot.pipeline.goal import GoalFinder, GoalReader
+from conceptbot.pipeline.goal_planner import conformal
+from conceptbot.pipeline.goal_planner.asking import Ask
 from conceptbot.pipeline.goal_planner.combine import combination
 from conceptbot.pipeline.goal_planner.decide import Decider, FactFinder
 from conceptbot.pipeline.goal_planner.evidence import GraphEvidence
@@ -150,6 +152,8 @@ class ConceptBot:
             self.ope if self.switches.ope else None,
             thresholds,
             hazards=self.hazards,
+            # Its decisions' conformal thresholds, fitted on the same combination's probabilities.
+            calibration=conformal.shipped("graph" if graph is not None else "nograph"),
         )
 
     def plan(
@@ -159,6 +163,7 @@ class ConceptBot:
         risk: bool = False,
         feedback: Feedback | None = None,
         observer: Observer | None = None,
+        ask: Ask | None = None,
     ) -> Plan:
         """Plan ``request`` in ``scene``.
 
@@ -171,6 +176,9 @@ class ConceptBot:
             observer: Gets a short message as each piece of work starts (LLM calls take seconds) and
                 each module's trace part as it finishes: ``goal``, ``decisions``, ``risk`` and
                 ``step`` (goal planner), or ``ope``, ``urp`` and ``step`` (step planner); None: silent.
+            ask: Asks the person where a calibrated decision of the goal planner is unsure
+                (``yes``/``no``, or None for no answer); None: nobody is asked, the plan lists the
+                questions and acts on the likelier answers. The step planner never asks.
         """
         observer = observer if observer is not None else SILENT
         started = time.perf_counter()
@@ -179,7 +187,7 @@ class ConceptBot:
             config=self.config, planner_kind=self.planner_kind, request=request, scene=scene.name
         )
         if self.planner_kind == "goal":
-            result = self.goal_planner.plan(request, scene, risk, observer)
+            result = self.goal_planner.plan(request, scene, risk, observer, ask)
             return self._from_goal(result, trace, feedback, started)
         usage: dict[str, Usage] = {}
         properties: dict[str, ObjectProperties] = {}
@@ -240,7 +248,16 @@ class ConceptBot:
             actions = [*done, *rest, Done()]
         usage = dict(result.usage)
         usage["total"] = _total(usage, started)
-        return Plan(actions, result.steps, result.refused, result.reason, trace, usage)
+        return Plan(
+            actions,
+            result.steps,
+            result.refused,
+            result.reason,
+            trace,
+            usage,
+            confidence=result.confidence,
+            questions=result.questions,
+        )
 
 
 def _total(usage: dict[str, Usage], started: float) -> Usage:

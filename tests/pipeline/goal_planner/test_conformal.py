@@ -52,6 +52,9 @@ def test_a_decision_is_sure_only_when_one_answer_is_likely_enough() -> None:
 def test_the_shipped_calibration_has_every_coverage_in_order() -> None:
     calibration = shipped()
     assert set(calibration.qhat) == set(COVERAGES) and "1028 rows" in calibration.fitted_on
+    assert shipped("nograph").qhat != calibration.qhat
+    with pytest.raises(ValueError, match="no conformal calibration"):
+        shipped("other")
     thresholds = [calibration.threshold(c) for c in COVERAGES]
     assert thresholds == sorted(thresholds) and all(0.5 <= q <= 1.0 for q in thresholds)
     with pytest.raises(ValueError, match=r"no conformal threshold for coverage 0\.7"):

@@ -95,8 +95,16 @@ class Calibration:
 
 
 @cache
-def shipped() -> Calibration:
-    """The calibration shipped with the package (``conformal.json``)."""
+def shipped(combination: str = "graph") -> Calibration:
+    """The calibration shipped with the package (``conformal.json``) for a combination's
+    probabilities (``graph``: the default system's, ``nograph``: the ablation's).
+
+    Raises:
+        ValueError: A combination without a calibration.
+    """
     text = resources.files("conceptbot.pipeline").joinpath(CALIBRATION).read_text(encoding="utf-8")
     data = json.loads(text)
-    return Calibration({float(k): float(v) for k, v in data["qhat"].items()}, str(data["fitted_on"]))
+    if combination not in data["qhat"]:
+        raise ValueError(f"no conformal calibration for the {combination!r} combination")
+    fitted = data["qhat"][combination]
+    return Calibration({float(k): float(v) for k, v in fitted.items()}, str(data["fitted_on"]))

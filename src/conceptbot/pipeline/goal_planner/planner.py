@@ -42,6 +42,7 @@ from conceptbot.core.observe import SILENT, Observer
 from conceptbot.core.plan import Action, CandidateScore, Done, PickAndPlace, Step, format_action
 from conceptbot.core.scene import Scene
 from conceptbot.core.trace import (
+    ClarifyingQuestion,
     DecisionsEvent,
     DecisionTrace,
     GoalTrace,
@@ -54,6 +55,8 @@ from conceptbot.core.trace import (
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.affordance import Gripper, affordance
+from conceptbot.pipeline.goal_planner.asking import Ask, clarify, is_sort
+from conceptbot.pipeline.goal_planner.conformal import Calibration, shipped
 from conceptbot.pipeline.goal_planner.decide import Decider, Judgement
 from conceptbot.pipeline.goal_planner.targets import ALL, Target, mentions
 from conceptbot.pipeline.hazards import HazardCheck, is_person, is_vulnerable
@@ -136,6 +139,8 @@ class GoalPlanResult:
     trace: PlanTrace
     usage: dict[str, Usage]
     properties: dict[str, ObjectProperties] = field(default_factory=dict)
+    questions: tuple[ClarifyingQuestion, ...] = ()
+    confidence: float | None = None
 
 
 def move_text(obj: str, target: str) -> str:
@@ -197,6 +202,10 @@ class GoalPlanner:
         gripper: For the affordance.
         hazards: Vetoes moves whose evidence names a hazard for the recipient (default: OPE's
             ratings only, no graph).
+        calibration: The conformal thresholds of the calibrated decisions (default: the shipped
+            ones, :func:`~conceptbot.pipeline.goal_planner.conformal.shipped`).
+        coverage: How often a decision's prediction set must hold the right answer; a set with both
+            answers is a question (:mod:`~conceptbot.pipeline.goal_planner.asking`).
     """
 
     def __init__(
@@ -207,11 +216,15 @@ class GoalPlanner:
         thresholds: Thresholds | None = None,
         gripper: Gripper | None = None,
         hazards: HazardCheck | None = None,
+        calibration: Calibration | None = None,
+        coverage: float = 0.9,
     ) -> None:
         self.targets = targets
         self.decider = decider
         self.ope = ope
         self.thresholds = thresholds or Thresholds()
+        self.calibration = calibration or shipped()
+        self.coverage = coverage
         self.gripper = gripper or Gripper()
         self.hazards = hazards if hazards is not None else HazardCheck()
 
@@ -221,6 +234,7 @@ class GoalPlanner:
         scene: Scene,
         risk: bool = False,
         observer: Observer = SILENT,
+        ask: Ask | None = None,
     ) -> GoalPlanResult:
         """Plan ``request`` in ``scene``.
 
@@ -241,6 +255,10 @@ class GoalPlanner:
         # How the backend scored this plan's questions, for the steps: kept per plan (the planner
         # object is shared between threads), the last question's method as before.
         asked = [j.scoring for js in ranked.values() for j in js if j.scoring]
+        # Where a calibrated decision is unsure, a question (asked if someone answers): asking.py.
+        qhat = self.calibration.threshold(self.coverage)
+        clarified = clarify(targets, ranked, decisions, qhat, self.thresholds.combined, ask)
+        ranked, decisions = clarified.ranked, clarified.decisions
         observer.event("decisions", DecisionsEvent(tuple(decisions)))
         pile: StackTrace | None = None
         if stack:
@@ -296,7 +314,17 @@ class GoalPlanner:
         reason = "; ".join(_why(c) for c in risk if c.dropped) if refused else None
         actions: list[Action] = [*(PickAndPlace(o, t) for o, t in moves), Done()]
         trace = PlanTrace(goal=goal, decisions=decisions, stack=pile, risk=risk, vetoes=vetoes or None)
-        return GoalPlanResult(actions, steps, refused, reason, trace, usage, properties)
+        return GoalPlanResult(
+            actions,
+            steps,
+            refused,
+            reason,
+            trace,
+            usage,
+            properties,
+            clarified.questions,
+            clarified.confidence,
+        )
 
     def _decide(
         self, request: str, scene: Scene, targets: list[Target], stack: bool, observer: Observer
@@ -361,8 +389,7 @@ class GoalPlanner:
         wanted: dict[str, tuple[str, float]] = {}  # object -> (target, score)
         # A sort: two or more targets each taking all that fit (not counting a remainder, which takes
         # what they leave): each object goes to the target it fits best.
-        judged = [t for t in targets if not t.rest]
-        sorting = len(judged) >= 2 and all(t.count == ALL for t in judged)
+        sorting = is_sort(targets)
         fit = self.thresholds.partition if sorting else self.thresholds.fit
         for number, target in enumerate(targets):
             if target.rest:

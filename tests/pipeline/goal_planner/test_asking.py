@@ -1,0 +1,79 @@
+"""Where a calibrated decision is unsure, a question; an answer replaces the decision."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from conceptbot.core.trace import ClarifyingQuestion, DecisionTrace
+from conceptbot.pipeline.goal_planner.asking import ANSWERED, MAX_QUESTIONS, clarify
+from conceptbot.pipeline.goal_planner.decide import Judgement
+from conceptbot.pipeline.goal_planner.targets import ALL, Target
+from conceptbot.pipeline.tracing import judgement_trace, target_trace
+
+QHAT = 0.6956  # the shipped 0.9 threshold: an answer stays in the set at P >= 0.3044
+BOWL = Target("bowl", ALL, "named", criterion="an ingredient of hollandaise")
+
+
+def _combined(obj: str, p: float) -> Judgement:
+    score = math.log(p / (1 - p)) if 0 < p < 1 else 0.0
+    return Judgement(obj, BOWL.criterion, p, score, model=score - 0.5)
+
+
+def _case(*pairs: tuple[str, float]) -> tuple[dict[int, list[Judgement]], tuple[DecisionTrace, ...]]:
+    judgements = sorted((_combined(o, p) for o, p in pairs), key=lambda j: -j.score)
+    decision = DecisionTrace(target_trace(BOWL), True, tuple(judgement_trace(j) for j in judgements))
+    return {0: judgements}, (decision,)
+
+
+def test_an_unsure_decision_is_a_question_and_the_plan_acts_on_the_likelier_answer() -> None:
+    ranked, decisions = _case(("lemon", 0.55), ("butter", 0.95), ("cup", 0.1))
+    found = clarify([BOWL], ranked, decisions, QHAT, 0.0)
+    assert found.questions == (
+        ClarifyingQuestion("Is the lemon an ingredient of hollandaise?", "lemon", "bowl", 0.55),
+    )
+    assert found.ranked == ranked  # nobody asked: the decisions stand
+    assert found.confidence == pytest.approx(0.55 * 0.95 * 0.9)
+    answers = {o.object: o.answers for o in found.decisions[0].objects}
+    assert answers == {"butter": ("yes",), "lemon": ("yes", "no"), "cup": ("no",)}
+
+
+def test_an_answer_replaces_the_decision_and_counts_as_sure() -> None:
+    ranked, decisions = _case(("lemon", 0.55), ("butter", 0.95), ("cup", 0.4))
+    asked: list[str] = []
+
+    def person(question: ClarifyingQuestion) -> str:
+        asked.append(question.object)
+        return {"lemon": "No", "cup": "yes"}[question.object]
+
+    found = clarify([BOWL], ranked, decisions, QHAT, 0.0, ask=person)
+    assert asked == ["lemon", "cup"]  # the most uncertain first
+    assert [q.answer for q in found.questions] == ["no", "yes"]
+    order = [(j.subject, j.score) for j in found.ranked[0]]
+    assert order == [("cup", ANSWERED), ("butter", pytest.approx(math.log(19))), ("lemon", -ANSWERED)]
+    assert found.confidence == pytest.approx(0.95)
+    answers = {o.object: o.answers for o in found.decisions[0].objects}
+    assert answers["lemon"] == ("no",) and answers["cup"] == ("yes",)
+
+
+def test_at_most_a_few_questions_and_an_unusable_answer_leaves_the_question_open() -> None:
+    ranked, decisions = _case(*[(f"thing {i}", 0.5 + i / 100) for i in range(6)])
+    found = clarify([BOWL], ranked, decisions, QHAT, 0.0, ask=lambda q: "maybe")
+    assert len(found.questions) == MAX_QUESTIONS
+    assert [q.object for q in found.questions] == ["thing 0", "thing 1", "thing 2"]
+    assert all(q.answer is None for q in found.questions) and found.ranked == ranked
+
+
+def test_a_decision_that_cannot_be_read_is_asked_about_and_sorts_are_not_asked_yet() -> None:
+    ranked, decisions = _case(("lemon", 0.95))
+    ranked[0].append(Judgement("egg", BOWL.criterion, math.nan, math.nan, model=0.0))
+    found = clarify([BOWL], ranked, decisions, QHAT, 0.0)
+    assert [q.object for q in found.questions] == ["egg"]
+    assert found.confidence == 0.0  # and no confidence in a plan that rests on it
+    bins = [
+        Target("paper bin", ALL, "named", criterion="paper"),
+        Target("glass bin", ALL, "named", criterion="glass"),
+    ]
+    sort = clarify(bins, {0: ranked[0], 1: []}, decisions + decisions, QHAT, 0.0)
+    assert sort.questions == () and sort.confidence is None
