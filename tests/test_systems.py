@@ -150,3 +150,10 @@ def test_household_systems_by_name_plan_a_typed_plan(settings: Settings, tmp_pat
     assert plan.trace.to_dict() == {"config": "plain", "grounding": [], "reasoning": "a chore"}
     with pytest.raises(ConfigError, match="unknown configuration 'joint'"):
         build_household_system(settings, "joint")
+
+
+def test_the_coverage_is_one_the_calibration_ships() -> None:
+    assert SystemOptions(coverage=0.95).coverage == 0.95
+    for bad in (0.7, True, "0.9"):
+        with pytest.raises(ConfigError, match="coverage must be one of 0.8, 0.9, 0.95"):
+            SystemOptions(coverage=bad)  # type: ignore[arg-type]

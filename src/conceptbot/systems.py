@@ -152,7 +152,15 @@ def _conceptbot(config: str, settings: Settings, options: SystemOptions, parts: 
     # them too: without the store OPE neither reads nor writes its value cache.
     ope_store = store if settings.use_cache else None
     return ConceptBot(
-        llm, retriever, config, ope_store, version, options.planner_method, options.n, options.planner
+        llm,
+        retriever,
+        config,
+        ope_store,
+        version,
+        options.planner_method,
+        options.n,
+        options.planner,
+        coverage=options.coverage,
     )
 
 

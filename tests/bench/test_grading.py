@@ -609,3 +609,30 @@ def test_paper_results_cover_every_category() -> None:
     assert set(PAPER_RESULTS) == {"saycan", "conceptbot"}
     assert [PAPER_RESULTS["saycan"][c] for c in CATEGORIES] == [100, 84, 31, 15, 20, 36]
     assert [PAPER_RESULTS["conceptbot"][c] for c in CATEGORIES] == [100, 100, 87, 76, 70, 86]
+
+
+def test_the_simulated_person_answers_from_the_gold() -> None:
+    from conceptbot.bench.grading import Task, gold_answer
+
+    fruit = Task(
+        "t-1",
+        "ambiguous",
+        "a fruit",
+        "kitchen",
+        {"type": "any_of", "plans": [["pick_and_place(apple, user)"]]},
+        "",
+    )
+    assert gold_answer(fruit, "apple", "user") == "yes" and gold_answer(fruit, "apple", "bowl") == "no"
+    sort = {
+        "type": "assign",
+        "assign": {"jar": ["glass bin"]},
+        "optional": {"cork": ["compost"]},
+        "choose": [{"objects": {"lemon": ["user"]}, "min": 1, "max": 1}],
+    }
+    task = Task("t-2", "materials", "sort", "kitchen", sort, "")
+    answers = [
+        gold_answer(task, o, d)
+        for o, d in [("jar", "glass bin"), ("cork", "compost"), ("lemon", "user"), ("jar", "compost")]
+    ]
+    assert answers == ["yes", "yes", "yes", "no"]
+    assert gold_answer(Task("t-3", "risk", "x", "kitchen", {"type": "refuse"}, ""), "knife", "child") == "no"

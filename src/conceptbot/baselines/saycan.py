@@ -23,6 +23,7 @@ from conceptbot.core.limits import check_request
 from conceptbot.core.observe import SILENT, Observer
 from conceptbot.core.plan import DONE, Action, Feedback, PickAndPlace, Plan
 from conceptbot.core.scene import Scene
+from conceptbot.core.system import Ask
 from conceptbot.core.trace import PlanTrace
 from conceptbot.models.llm import LLM, ScoreRequest
 from conceptbot.pipeline.steps.greedy import LLMScores, greedy_plan
@@ -71,8 +72,10 @@ class SayCan:
         risk: bool = False,
         feedback: Feedback | None = None,
         observer: Observer | None = None,
+        ask: Ask | None = None,
     ) -> Plan:
-        """Plan greedily (``risk`` is ignored: SayCan has no risk assessment).
+        """Plan greedily (``risk`` and ``ask`` are ignored: SayCan has no risk assessment and no
+        calibrated decision to ask about).
 
         With ``feedback`` the plan continues from the executed steps and failed actions are
         infeasible (affordance 0), as SayCan's affordance would report after a failed attempt.

@@ -76,7 +76,15 @@ from importlib.resources.abc import Traversable
 from typing import Any
 
 from conceptbot.core.errors import ConfigError
-from conceptbot.core.plan import Action, Done, InvalidActionError, PickAndPlace, check_action, parse_action
+from conceptbot.core.plan import (
+    Action,
+    Done,
+    InvalidActionError,
+    PickAndPlace,
+    check_action,
+    format_action,
+    parse_action,
+)
 from conceptbot.core.scene import Scene, scene_from_dict
 from conceptbot.scenes import load_demo_scene
 
@@ -710,3 +718,20 @@ def load_tasks(categories: Iterable[str] | None = None, split: str = "test") -> 
             seen.add(task.id)
             tasks.append(task)
     return tasks
+
+
+def gold_answer(task: Task, obj: str, destination: str) -> str:
+    """How a person who wants the gold would answer "should ``obj`` go to ``destination``?":
+    ``yes`` where an accepted plan moves it there (``any_of``: any accepted plan; ``assign``: an
+    allowed, optional or chosen destination), else ``no`` (a ``refuse`` gold: always no). For the
+    simulated person of the asking benchmark (``benchmarks/bench_asking.py``)."""
+    gold = task.gold
+    if gold["type"] == "any_of":
+        move = format_action(PickAndPlace(obj, destination))
+        return "yes" if any(move in plan for plan in gold["plans"]) else "no"
+    if gold["type"] == "assign":
+        allowed = [*gold.get("assign", {}).get(obj, []), *gold.get("optional", {}).get(obj, [])]
+        for group in gold.get("choose", []):
+            allowed += group["objects"].get(obj, [])
+        return "yes" if destination in allowed else "no"
+    return "no"

@@ -8,6 +8,7 @@ the ROS 2 node take them through these protocols and so depend on ``core`` only.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -15,11 +16,18 @@ from conceptbot.core.errors import ConfigError
 from conceptbot.core.observe import Observer
 from conceptbot.core.plan import Feedback, Plan
 from conceptbot.core.scene import HouseScene, Scene
+from conceptbot.core.trace import ClarifyingQuestion
+
+Ask = Callable[[ClarifyingQuestion], str | None]
+"""Asks the person a question where the planner is unsure; returns ``yes``, ``no`` or None (no
+answer: the plan acts on the likelier answer and keeps the question open)."""
 
 METHODS = ("auto", "logprob", "vote")
 """The step planner's LLM scores: ``auto`` (by backend), ``logprob`` (one pass), ``vote`` (``n``
 completions)."""
 PLANNERS = ("auto", "goal", "steps")
+COVERAGES = (0.8, 0.9, 0.95)
+"""The coverages the conformal calibration ships thresholds for."""
 """ConceptBot's planners: ``auto`` (the goal planner), ``goal``, ``steps`` (the paper's)."""
 
 
@@ -34,6 +42,7 @@ class PlannerSystem(Protocol):
         risk: bool = False,
         feedback: Feedback | None = None,
         observer: Observer | None = None,
+        ask: Ask | None = None,
     ) -> Plan:
         """Plan ``request`` in ``scene``.
 
@@ -45,6 +54,9 @@ class PlannerSystem(Protocol):
                 plan the rest from there; None for a fresh plan.
             observer: Gets a short message as each piece of work starts and each module's results
                 as they finish (:class:`~conceptbot.core.observe.Observer`); None: nobody listens.
+            ask: Asks the person where a calibrated decision is unsure (:data:`Ask`); None: nobody
+                is asked, and the plan lists the questions it would ask. Planners without
+                calibrated decisions (SayCan, the step planner) never ask.
 
         Returns:
             The plan (actions ending with :class:`~conceptbot.core.plan.Done`, or a refusal with its
@@ -71,6 +83,8 @@ class SystemOptions:
             ``settings.kg_fallback``. Not for a graph passed in as an object (compose it yourself).
         planner: ``auto`` (the goal planner), ``goal`` or ``steps`` (the paper's step-by-step
             planner); the ``paper`` systems are always ``steps``.
+        coverage: How often the goal planner's prediction set must hold a decision's right answer
+            (one of :data:`COVERAGES`); higher asks more.
 
     Raises:
         ConfigError: A value of the wrong type, out of range or not one of the choices.
@@ -81,6 +95,7 @@ class SystemOptions:
     n: int = 5
     fallback: bool | None = None
     planner: str = "auto"
+    coverage: float = 0.9
 
     def __post_init__(self) -> None:
         if self.theta is not None:
@@ -95,15 +110,16 @@ class SystemOptions:
             object.__setattr__(self, "theta", float(self.theta))
         _choice("planner_method", self.planner_method, METHODS)
         _choice("planner", self.planner, PLANNERS)
+        _choice("coverage", self.coverage, COVERAGES)
         if isinstance(self.n, bool) or not isinstance(self.n, int) or self.n < 1:
             raise ConfigError(f"n must be a whole number of completions >= 1, got {self.n!r}")
         if self.fallback is not None and not isinstance(self.fallback, bool):
             raise ConfigError(f"fallback must be True, False or None, got {self.fallback!r}")
 
 
-def _choice(label: str, value: object, choices: tuple[str, ...]) -> None:
-    if value not in choices:
-        raise ConfigError(f"{label} must be one of {', '.join(choices)}, got {value!r}")
+def _choice(label: str, value: object, choices: tuple[object, ...]) -> None:
+    if isinstance(value, bool) or value not in choices:
+        raise ConfigError(f"{label} must be one of {', '.join(str(c) for c in choices)}, got {value!r}")
 
 
 class HouseholdSystem(Protocol):

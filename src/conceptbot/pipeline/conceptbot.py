@@ -29,7 +29,7 @@ from conceptbot.core.limits import check_request
 from conceptbot.core.observe import SILENT, Observer
 from conceptbot.core.plan import Done, Feedback, Plan
 from conceptbot.core.scene import Scene
-from conceptbot.core.system import PLANNERS
+from conceptbot.core.system import PLANNERS, Ask
 from conceptbot.core.trace import OPETrace, PlannerSummary, PlanTrace, URPTrace
 from conceptbot.core.usage import Usage
 from conceptbot.models.cache_db import CacheStore
@@ -37,7 +37,6 @@ from conceptbot.models.llm import LLM
 from conceptbot.pipeline import modes, prompts
 from conceptbot.pipeline.goal import GoalFinder, GoalReader
 from conceptbot.pipeline.goal_planner import conformal
-from conceptbot.pipeline.goal_planner.asking import Ask
 from conceptbot.pipeline.goal_planner.combine import combination
 from conceptbot.pipeline.goal_planner.decide import Decider, FactFinder
 from conceptbot.pipeline.goal_planner.evidence import GraphEvidence
@@ -105,6 +104,7 @@ class ConceptBot:
         n: int = 5,
         planner: str = "auto",
         thresholds: Thresholds | None = None,
+        coverage: float = 0.9,
     ) -> None:
         if config not in SWITCHES:
             raise ValueError(f"config must be one of {CONFIGS}")
@@ -154,6 +154,7 @@ class ConceptBot:
             hazards=self.hazards,
             # Its decisions' conformal thresholds, fitted on the same combination's probabilities.
             calibration=conformal.shipped("graph" if graph is not None else "nograph"),
+            coverage=coverage,
         )
 
     def plan(

@@ -9,17 +9,14 @@ given counts as sure).
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 
+from conceptbot.core.system import Ask
 from conceptbot.core.trace import ClarifyingQuestion, DecisionTrace, JudgementTrace
 from conceptbot.pipeline.goal_planner.conformal import DecisionSet, decision_set
 from conceptbot.pipeline.goal_planner.decide import Judgement
 from conceptbot.pipeline.goal_planner.targets import ALL, Target
 
-Ask = Callable[[ClarifyingQuestion], str | None]
-"""Asks the person a question; returns ``yes``, ``no`` or None (no answer: the plan acts on the
-likelier answer and keeps the question open)."""
 MAX_QUESTIONS = 3
 ANSWERED = 20.0  # the log-odds an answer sets: far beyond every threshold, either way
 

@@ -18,8 +18,10 @@ from functools import cache
 from importlib import resources
 from typing import Any
 
-COVERAGES = (0.8, 0.9, 0.95)
-"""The coverages shipped."""
+from conceptbot.core.system import COVERAGES
+
+__all__ = ["COVERAGES", "Calibration", "DecisionSet", "conformal_threshold", "decision_set", "shipped"]
+
 CALIBRATION = "conformal.json"
 
 

@@ -41,6 +41,7 @@ from conceptbot.core.errors import (
 from conceptbot.core.observe import SILENT, Observer
 from conceptbot.core.plan import Action, CandidateScore, Done, PickAndPlace, Step, format_action
 from conceptbot.core.scene import Scene
+from conceptbot.core.system import Ask
 from conceptbot.core.trace import (
     ClarifyingQuestion,
     DecisionsEvent,
@@ -55,7 +56,7 @@ from conceptbot.core.trace import (
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.affordance import Gripper, affordance
-from conceptbot.pipeline.goal_planner.asking import Ask, clarify, is_sort
+from conceptbot.pipeline.goal_planner.asking import clarify, is_sort
 from conceptbot.pipeline.goal_planner.conformal import Calibration, shipped
 from conceptbot.pipeline.goal_planner.decide import Decider, Judgement
 from conceptbot.pipeline.goal_planner.targets import ALL, Target, mentions
