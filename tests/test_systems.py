@@ -155,5 +155,5 @@ def test_household_systems_by_name_plan_a_typed_plan(settings: Settings, tmp_pat
 def test_the_coverage_is_one_the_calibration_ships() -> None:
     assert SystemOptions(coverage=0.95).coverage == 0.95
     for bad in (0.7, True, "0.9"):
-        with pytest.raises(ConfigError, match="coverage must be one of 0.8, 0.9, 0.95"):
+        with pytest.raises(ConfigError, match=r"coverage must be one of 0\.8, 0\.9, 0\.95"):
             SystemOptions(coverage=bad)  # type: ignore[arg-type]
