@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Mapping
 
 import click
@@ -15,8 +16,8 @@ from conceptbot.cli.richtext import line, plain
 from conceptbot.core.limits import check_request
 from conceptbot.core.plan import Plan
 from conceptbot.core.system import METHODS, SystemOptions
-from conceptbot.core.text import safe_json_dumps
-from conceptbot.core.trace import PlanTrace, RetrievalTrace
+from conceptbot.core.text import safe_json_dumps, terminal_safe
+from conceptbot.core.trace import ClarifyingQuestion, PlanTrace, RetrievalTrace
 from conceptbot.scenes import resolve_scene
 from conceptbot.systems import SYSTEMS, build_system
 
@@ -59,6 +60,20 @@ from conceptbot.systems import SYSTEMS, build_system
 @click.option("--theta", type=FiniteFloatRange(-1.0, 1.0), help="Cosine threshold (default: per embedder).")
 @click.option("--fallback/--no-fallback", default=None, help="Wikipedia fallback (default: settings).")
 @click.option("--json", "as_json", is_flag=True, help="Print the plan as one JSON object.")
+@click.option(
+    "--ask/--no-ask",
+    default=None,
+    help="Ask (yes/no, on the terminal) where a calibrated decision is unsure, and finish the plan "
+    "with the answers. Default: on a terminal, off with --json or when not interactive (the "
+    "questions are then listed, and the plan acts on the likelier answers).",
+)
+@click.option(
+    "--coverage",
+    type=click.Choice(["0.8", "0.9", "0.95"]),
+    default="0.9",
+    show_default=True,
+    help="How often a decision's prediction set must hold the right answer (higher asks more).",
+)
 @pass_app
 def plan(
     app: AppContext,
@@ -71,18 +86,30 @@ def plan(
     theta: float | None,
     fallback: bool | None,
     as_json: bool,
+    ask: bool | None,
+    coverage: str,
 ) -> None:
     """Plan REQUEST in a scene; print properties, relations, reasoning, step scores and the plan."""
     request = check_request(request)  # first: bad input is the first error; the system takes it as checked
     scene = resolve_scene(scene_ref)
-    options = SystemOptions(theta=theta, planner_method=method, n=n, fallback=fallback)  # SayCan has none
+    options = SystemOptions(
+        theta=theta, planner_method=method, n=n, fallback=fallback, coverage=float(coverage)
+    )  # SayCan has none
     bot = build_system(app.settings, config, options)
-    result = bot.plan(request, scene, risk=risk, observer=ON_STDERR)
+    interactive = sys.stdin.isatty() and sys.stderr.isatty() and not as_json
+    asking = ask if ask is not None else interactive
+    result = bot.plan(request, scene, risk=risk, observer=ON_STDERR, ask=_ask_on_terminal if asking else None)
     if as_json:
         # Valid JSON whose strings carry no raw control character (a model's words are in it).
         click.echo(safe_json_dumps(result.to_dict(), indent=2))
         return
     show(result, Console())
+
+
+def _ask_on_terminal(question: ClarifyingQuestion) -> str:
+    """The question on stderr (stdout stays the plan's), answered yes or no."""
+    text = terminal_safe(question.text)  # scene names and criteria come from files and requests
+    return click.prompt(f"Question: {text}", type=click.Choice(["yes", "no"]), err=True)
 
 
 def show(result: Plan, console: Console) -> None:
@@ -134,6 +161,17 @@ def show(result: Plan, console: Console) -> None:
     console.print(line("\n", ("Plan:", "bold")))
     for i, action in enumerate(result.actions, 1):
         console.print(line(f"  {i}. {action}"))
+    if result.confidence is not None:
+        console.print(
+            line(("Confidence:", "bold"), f" {result.confidence:.2f} (its calibrated decisions all right)")
+        )
+    for question in result.questions:
+        answer = (
+            f"answered {question.answer}" if question.answer else "not asked: acted on the likelier answer"
+        )
+        console.print(
+            line(("Question:", "bold"), f" {question.text} (P(yes) {question.p_yes:.2f}; {answer})")
+        )
     table = Table("module", "time (s)", "tokens in", "tokens out", "LLM calls", "cost (USD)", title="Usage")
     for module, usage in result.usage.items():
         table.add_row(

@@ -31,7 +31,9 @@ def test_an_unsure_decision_is_a_question_and_the_plan_acts_on_the_likelier_answ
     ranked, decisions = _case(("lemon", 0.55), ("butter", 0.95), ("cup", 0.1))
     found = clarify([BOWL], ranked, decisions, QHAT, 0.0)
     assert found.questions == (
-        ClarifyingQuestion("Is the lemon an ingredient of hollandaise?", "lemon", "bowl", 0.55),
+        ClarifyingQuestion(
+            "Should I put the lemon in or on the bowl (an ingredient of hollandaise)?", "lemon", "bowl", 0.55
+        ),
     )
     assert found.ranked == ranked  # nobody asked: the decisions stand
     assert found.confidence == pytest.approx(0.55 * 0.95 * 0.9)

@@ -1,8 +1,9 @@
 """Where the goal planner is unsure, a question (issue 35; KnowNo's recipe): each calibrated yes/no
 decision of a target that takes every object fitting it gets its conformal prediction set
-(:mod:`.conformal`); a set with both answers is a question ("Is the lemon an ingredient of
-hollandaise?"), the most uncertain first, at most :data:`MAX_QUESTIONS`. Asked (``ask`` given), the
-answer replaces the decision; not asked, the plan acts on the likelier answer and lists the question.
+(:mod:`.conformal`); a set with both answers is a question ("Should I put the lemon in or on the
+bowl (an ingredient of hollandaise)?"), the most uncertain first, at most :data:`MAX_QUESTIONS`.
+Asked (``ask`` given), the answer replaces the decision; not asked, the plan acts on the likelier
+answer and lists the question.
 The plan's confidence is the product of the probabilities of the answers it acts on (an answer
 given counts as sure).
 """
@@ -16,6 +17,7 @@ from conceptbot.core.trace import ClarifyingQuestion, DecisionTrace, JudgementTr
 from conceptbot.pipeline.goal_planner.conformal import DecisionSet, decision_set
 from conceptbot.pipeline.goal_planner.decide import Judgement
 from conceptbot.pipeline.goal_planner.targets import ALL, Target
+from conceptbot.pipeline.hazards import is_person
 
 MAX_QUESTIONS = 3
 ANSWERED = 20.0  # the log-odds an answer sets: far beyond every threshold, either way
@@ -38,10 +40,13 @@ def is_sort(targets: list[Target]) -> bool:
 
 
 def question_text(obj: str, target: Target) -> str:
-    """The question in plain words."""
-    if target.criterion:
-        return f"Is the {obj} {target.criterion}?"
-    return f"Should the {obj} go to the {target.name}?"
+    """The question in plain words, with the request's criterion: "Should I put the lemon in or on
+    the bowl (an ingredient of hollandaise)?"."""
+    if is_person(target.name):
+        move = f"give the {obj} to the {target.name}"
+    else:
+        move = f"put the {obj} in or on the {target.name}"
+    return f"Should I {move}{f' ({target.criterion})' if target.criterion else ''}?"
 
 
 def clarify(
