@@ -23,6 +23,7 @@ from conceptbot.core.trace import ClarifyingQuestion
 from conceptbot.systems import build_system
 
 OUT = Path("results/asking.json")
+FIGURE = Path("results/asking.png")
 
 
 def measure(split: str, system_name: str, coverage: float) -> dict[str, Any]:
@@ -83,6 +84,35 @@ def main() -> None:
         kept = [r for r in kept if (r["split"], r["system"], r["coverage"]) not in done] + rows
         OUT.write_text(json.dumps({"asking": kept}, indent=2) + "\n", encoding="utf-8")
         print(f"wrote {OUT}")
+        plot(kept)
+        print(f"wrote {FIGURE}")
+
+
+def plot(rows: list[dict[str, Any]]) -> None:
+    """Success against help rate, one line per split and system through its coverages (KnowNo's
+    figure), with the success without questions as the line's start."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for split, system in sorted({(r["split"], r["system"]) for r in rows}):
+        line = sorted(
+            (r for r in rows if (r["split"], r["system"]) == (split, system)), key=lambda r: r["coverage"]
+        )
+        xs = [0.0] + [r["help_rate"] for r in line]
+        ys = [line[0]["success_without_questions"]] + [r["success"] for r in line]
+        ax.plot(xs, ys, marker="o", label=f"{split}: {system}")
+        for r in line:
+            ax.annotate(str(r["coverage"]), (r["help_rate"], r["success"]), fontsize=7)
+    ax.set_xlabel("tasks with a question (%)")
+    ax.set_ylabel("success with the answers (%)")
+    ax.set_title("Asking instead of guessing (embedded 1.5B; labels: coverage)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(FIGURE, dpi=120)
 
 
 if __name__ == "__main__":

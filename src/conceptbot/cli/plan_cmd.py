@@ -163,7 +163,10 @@ def show(result: Plan, console: Console) -> None:
         console.print(line(f"  {i}. {action}"))
     if result.confidence is not None:
         console.print(
-            line(("Confidence:", "bold"), f" {result.confidence:.2f} (its calibrated decisions all right)")
+            line(
+                ("Confidence:", "bold"),
+                f" {result.confidence:.2f} (that its calibrated decisions are all right)",
+            )
         )
     for question in result.questions:
         answer = (
