@@ -24,6 +24,8 @@ from conceptbot.systems import build_system
 
 OUT = Path("results/asking.json")
 FIGURE = Path("results/asking.png")
+RELIABILITY = Path("results/asking-reliability.png")
+BINS = 10
 
 
 def measure(split: str, system_name: str, coverage: float) -> dict[str, Any]:
@@ -63,12 +65,107 @@ def measure(split: str, system_name: str, coverage: float) -> dict[str, Any]:
     }
 
 
+def _in_bin(pairs: list[tuple[float, float]], k: int, bins: int = BINS) -> list[tuple[float, float]]:
+    """The pairs whose prediction falls in bin ``k`` of ``bins`` (1.0 in the last)."""
+    return [(p, y) for p, y in pairs if k / bins <= p < (k + 1) / bins or (k == bins - 1 and p == 1.0)]
+
+
+def expected_calibration_error(pairs: list[tuple[float, float]], bins: int = BINS) -> float:
+    """ECE of ``(predicted probability, outcome 0/1)`` pairs over equal-width bins: the mean gap
+    between a bin's predicted and observed rates, weighted by its share of the pairs."""
+    total = 0.0
+    for k in range(bins):
+        inside = _in_bin(pairs, k, bins)
+        if inside:
+            gap = abs(sum(p for p, _ in inside) / len(inside) - sum(y for _, y in inside) / len(inside))
+            total += gap * len(inside) / len(pairs)
+    return total
+
+
+def reliability(split: str, system_name: str) -> dict[str, Any]:
+    """How honest the probabilities are without questions: each calibrated decision's P(yes) against
+    the gold answer, and each plan's confidence against its grade."""
+    system = build_system(load_settings(), system_name, SystemOptions())
+    decisions: list[tuple[float, float]] = []
+    plans: list[tuple[float, float]] = []
+    for task in load_tasks(split=split):
+        plan = system.plan(task.request, task_scene(task))
+        for decision in plan.trace.decisions or ():
+            for judgement in decision.objects:
+                if judgement.answers is not None and judgement.p_yes == judgement.p_yes:
+                    yes = gold_answer(task, judgement.object, decision.target.to) == "yes"
+                    decisions.append((judgement.p_yes, 1.0 if yes else 0.0))
+        if plan.confidence is not None:
+            plans.append((plan.confidence, 1.0 if grade(task, plan.actions, plan.refused).ok else 0.0))
+    return {
+        "split": split,
+        "system": system_name,
+        "decisions": len(decisions),
+        "decision_ece": round(expected_calibration_error(decisions), 4),
+        "plans": len(plans),
+        "plan_ece": round(expected_calibration_error(plans), 4) if plans else None,
+        "plan_mean_confidence": round(sum(p for p, _ in plans) / len(plans), 4) if plans else None,
+        "plan_success": round(sum(y for _, y in plans) / len(plans), 4) if plans else None,
+        "_pairs": {"decisions": decisions, "plans": plans},
+    }
+
+
+def plot_reliability(found: dict[str, Any]) -> None:
+    """The reliability diagram of the decisions and the plans (observed rate per bin of predicted)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5, 5))
+    ax.plot([0, 1], [0, 1], color="grey", linestyle="--", linewidth=1)
+    for key, label in (("decisions", "decisions: P(yes)"), ("plans", "plans: confidence")):
+        pairs = found["_pairs"][key]
+        xs, ys = [], []
+        for k in range(BINS):
+            inside = [
+                (p, y) for p, y in pairs if k / BINS <= p < (k + 1) / BINS or (k == BINS - 1 and p == 1.0)
+            ]
+            if inside:
+                xs.append(sum(p for p, _ in inside) / len(inside))
+                ys.append(sum(y for _, y in inside) / len(inside))
+        ece = found["decision_ece" if key == "decisions" else "plan_ece"]
+        ax.plot(xs, ys, marker="o", label=f"{label} (n={len(pairs)}, ECE {ece})")
+    ax.set_xlabel("predicted")
+    ax.set_ylabel("observed")
+    ax.set_title(f"Reliability, {found['split']} split, {found['system']}")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(RELIABILITY, dpi=120)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--split", choices=("dev", "test"), default="dev")
     parser.add_argument("--systems", default="conceptbot,nokg")
     parser.add_argument("--write", action="store_true", help=f"add the rows to {OUT}")
+    parser.add_argument(
+        "--reliability", action="store_true", help="only the reliability of the probabilities (no questions)"
+    )
     args = parser.parse_args()
+    if args.reliability:
+        found = reliability(args.split, args.systems.split(",")[0])
+        shown = {k: v for k, v in found.items() if not k.startswith("_")}
+        print(json.dumps(shown, indent=2))
+        if args.write:
+            kept = json.loads(OUT.read_text()) if OUT.exists() else {"asking": []}
+            kept["reliability"] = [
+                *(
+                    r
+                    for r in kept.get("reliability", [])
+                    if (r["split"], r["system"]) != (found["split"], found["system"])
+                ),
+                shown,
+            ]
+            OUT.write_text(json.dumps(kept, indent=2) + "\n", encoding="utf-8")
+            plot_reliability(found)
+            print(f"wrote {OUT} and {RELIABILITY}")
+        return
     rows = [measure(args.split, s, c) for s in args.systems.split(",") for c in COVERAGES]
     columns = ("cover", "alone", "asked", "help", "q/task", "emp.cov", "n dec")
     print(f"{'system':10} " + " ".join(f"{c:>7}" for c in columns))
@@ -79,10 +176,10 @@ def main() -> None:
             f"{r['calibrated_decisions']:>7}"
         )
     if args.write:
-        kept = json.loads(OUT.read_text())["asking"] if OUT.exists() else []
+        document = json.loads(OUT.read_text()) if OUT.exists() else {"asking": []}
         done = {(r["split"], r["system"], r["coverage"]) for r in rows}
-        kept = [r for r in kept if (r["split"], r["system"], r["coverage"]) not in done] + rows
-        OUT.write_text(json.dumps({"asking": kept}, indent=2) + "\n", encoding="utf-8")
+        kept = [r for r in document["asking"] if (r["split"], r["system"], r["coverage"]) not in done] + rows
+        OUT.write_text(json.dumps({**document, "asking": kept}, indent=2) + "\n", encoding="utf-8")
         print(f"wrote {OUT}")
         plot(kept)
         print(f"wrote {FIGURE}")

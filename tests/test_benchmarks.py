@@ -18,3 +18,17 @@ def test_a_benchmark_script_imports(script: Path) -> None:
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)  # scripts run only under __main__
     assert callable(getattr(module, "main", None)), f"{script.name} has no main()"
+
+
+def test_the_asking_benchmark_measures_calibration_error() -> None:
+    spec = importlib.util.spec_from_file_location(
+        "benchmark_asking", BENCHMARKS[0].parent / "bench_asking.py"
+    )
+    assert spec is not None and spec.loader is not None
+    asking = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(asking)
+    honest = [(0.25, 0.0), (0.25, 0.0), (0.25, 0.0), (0.25, 1.0)]  # 25% said, 25% happened
+    assert asking.expected_calibration_error(honest) == pytest.approx(0.0)
+    sure_and_wrong = [(0.95, 0.0)] * 3 + [(0.05, 1.0)]
+    assert asking.expected_calibration_error(sure_and_wrong) == pytest.approx(0.95)
+    assert asking.expected_calibration_error([(1.0, 1.0)]) == 0.0  # 1.0 falls in the last bin
