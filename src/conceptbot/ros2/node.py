@@ -42,7 +42,8 @@ from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConceptBotError, ConfigError
 from conceptbot.core.observe import EventPart
 from conceptbot.core.plan import Plan, format_actions
-from conceptbot.core.system import PlannerSystem
+from conceptbot.core.system import Ask, PlannerSystem
+from conceptbot.core.trace import ClarifyingQuestion
 from conceptbot.core.urls import redact_secrets
 from conceptbot.ros2 import qos
 from conceptbot.ros2.protocol import (
@@ -51,8 +52,10 @@ from conceptbot.ros2.protocol import (
     encode,
     error_payload,
     event_payload,
+    parse_answer,
     parse_request,
     progress_payload,
+    question_payload,
     result_payload,
 )
 from conceptbot.scenes import resolve_scene
@@ -72,6 +75,10 @@ class NodeConfig:
         scene: The scene of a request that sends none: a demo scene name or a scene file.
         queue_size: Requests that may wait while one is planned; one more is answered ``busy``.
         plan_timeout_s: Seconds a plan may take before its request is answered ``timeout``; 0: no limit.
+        answer_timeout_s: Where the planner is unsure it asks on ``~/question`` and waits this long
+            for the answer on ``~/answer``; no answer ends the request ``no_answer`` (a refusal,
+            never a guess). 0: the node does not ask (the plan acts on the likelier answers and
+            lists its questions).
     """
 
     system: str = "conceptbot"
@@ -79,6 +86,7 @@ class NodeConfig:
     scene: str = "kitchen"
     queue_size: int = 4
     plan_timeout_s: float = 0.0
+    answer_timeout_s: float = 0.0
 
 
 _DESCRIPTIONS = {
@@ -87,7 +95,12 @@ _DESCRIPTIONS = {
     "scene": "scene of a request that sends none: a demo scene name or a scene file",
     "queue_size": "requests that may wait while one is planned (one more is answered busy)",
     "plan_timeout_s": "seconds a plan may take before it is answered timeout (0: no limit)",
+    "answer_timeout_s": "seconds to wait for an answer on ~/answer before refusing no_answer (0: never ask)",
 }
+
+
+class NoAnswerError(ConceptBotError):
+    """Nobody answered the planner's question in time: the request ends without a plan."""
 
 
 @dataclass
@@ -169,7 +182,11 @@ class ConceptBotNode(Node):
         self._current: _Running | None = None
         self.progress_pub = self.create_publisher(String, "~/progress", qos.REPLIES)
         self.result_pub = self.create_publisher(String, "~/result", qos.REPLIES)
+        self.question_pub = self.create_publisher(String, "~/question", qos.REPLIES)
         self.request_sub = self.create_subscription(String, "~/request", self._on_request, qos.REQUESTS)
+        self.answer_sub = self.create_subscription(String, "~/answer", self._on_answer, qos.REQUESTS)
+        # The answer the request being planned waits for: (its id, the event, the answer).
+        self._awaited: tuple[str, threading.Event, list[str]] | None = None
         self._worker = threading.Thread(target=self._work, name=f"{name}-planner", daemon=True)
         self._worker.start()
         self.get_logger().info(
@@ -200,7 +217,13 @@ class ConceptBotNode(Node):
                 f"the ROS parameter 'plan_timeout_s' must be a number of seconds >= 0, got {timeout!r}",
                 hint="0 means no limit",
             )
-        return NodeConfig(system, llm or settings.llm, scene, queue_size, float(timeout))
+        wait = values["answer_timeout_s"]
+        if isinstance(wait, bool) or not isinstance(wait, int | float) or not wait >= 0:
+            raise ConfigError(
+                f"the ROS parameter 'answer_timeout_s' must be a number of seconds >= 0, got {wait!r}",
+                hint="0 means the node does not ask",
+            )
+        return NodeConfig(system, llm or settings.llm, scene, queue_size, float(timeout), float(wait))
 
     def publish(self, publisher: Any, payload: dict[str, Any]) -> None:
         """Publish one payload as a String message; a failure (the node shutting down) is logged.
@@ -241,6 +264,45 @@ class ConceptBotNode(Node):
             "wait for a result before sending the next request, or raise the queue_size parameter",
         )
 
+    def _on_answer(self, msg: String) -> None:
+        """An answer to the question of the request being planned; others are logged and dropped."""
+        try:
+            request_id, answer = parse_answer(msg.data)
+        except ProtocolError as exc:
+            self.get_logger().warning(f"answer dropped: {exc.message}")
+            return
+        with self._lock:
+            awaited = self._awaited
+        if awaited is None or awaited[0] != request_id:
+            self.get_logger().warning(f"answer for {request_id!r} dropped: no question of it is open")
+            return
+        awaited[2].append(answer)
+        awaited[1].set()
+
+    def _asker(self, running: _Running) -> Ask | None:
+        """The planner's ``ask``: publish the question, wait for its answer (None: do not ask)."""
+        if self.config.answer_timeout_s <= 0:
+            return None
+
+        def ask(question: ClarifyingQuestion) -> str:
+            event, answers = threading.Event(), []
+            with self._lock:
+                self._awaited = (running.request.id, event, answers)
+            try:
+                self.publish(self.question_pub, question_payload(running.request.id, question))
+                if not event.wait(self.config.answer_timeout_s):
+                    how = f'{{"id": "{running.request.id}", "answer": "yes" or "no"}}'
+                    raise NoAnswerError(
+                        f"no answer to {question.text!r} within {self.config.answer_timeout_s:g} s",
+                        hint=f"answer on ~/answer: {how}",
+                    )
+                return answers[0]
+            finally:
+                with self._lock:
+                    self._awaited = None
+
+        return ask
+
     def _answer_error(self, request_id: str, code: str, message: str, hint: str | None = None) -> None:
         self.get_logger().warning(f"{request_id}: {code}: {message}")
         self.publish(self.result_pub, error_payload(request_id, code, message, hint))
@@ -266,8 +328,16 @@ class ConceptBotNode(Node):
             timer.daemon = True
             timer.start()
         try:
-            plan = self.planner.plan(request.request, request.scene, observer=_TopicObserver(self, running))
+            observer = _TopicObserver(self, running)
+            asker = self._asker(running)
+            if asker is None:
+                plan = self.planner.plan(request.request, request.scene, observer=observer)
+            else:
+                plan = self.planner.plan(request.request, request.scene, observer=observer, ask=asker)
             payload, summary = result_payload(request.id, plan), _summary(plan)
+        except NoAnswerError as exc:  # never a guess: the request ends without a plan
+            payload = error_payload(request.id, "no_answer", exc.message, exc.hint)
+            summary = f"no_answer: {exc.message}"
         except ConceptBotError as exc:
             # Redacted: a backend's message may quote its URL, and anyone on the domain reads this.
             message, hint = redact_secrets(exc.message), exc.hint and redact_secrets(exc.hint)

@@ -35,9 +35,10 @@ from conceptbot.core.limits import (
 from conceptbot.core.observe import EventPart
 from conceptbot.core.plan import Plan
 from conceptbot.core.scene import Scene, scene_from_dict
+from conceptbot.core.trace import ClarifyingQuestion
 from conceptbot.scenes import load_demo_scene
 
-ERROR_CODES = ("bad_request", "unknown_object", "busy", "planner_error", "timeout")
+ERROR_CODES = ("bad_request", "unknown_object", "busy", "planner_error", "timeout", "no_answer")
 """What a failed result's ``error.code`` can be."""
 
 MAX_PAYLOAD_BYTES = MAX_SCENE_FILE_BYTES + 4096
@@ -218,6 +219,30 @@ def event_payload(request_id: str, module: str, part: EventPart) -> dict[str, An
     """A module of the plan for ``request_id`` finished; ``part`` is its part of the trace (serialised
     here, at the node's edge)."""
     return {"id": request_id, "kind": "event", "module": module, "data": part.to_dict()}
+
+
+def question_payload(request_id: str, question: ClarifyingQuestion) -> dict[str, Any]:
+    """A question of the plan for ``request_id``, where the planner is unsure; answer it on
+    ``~/answer`` with :func:`parse_answer`'s form."""
+    return {"id": request_id, "kind": "question", "question": question.to_dict()}
+
+
+def parse_answer(payload: str) -> tuple[str, str]:
+    """``(request id, "yes" or "no")`` from an ``~/answer`` message ``{"id": ..., "answer": ...}``.
+
+    Raises:
+        ProtocolError: Not JSON, no id, or an answer other than yes or no (``bad_request``).
+    """
+    try:
+        data = json.loads(payload)
+    except (json.JSONDecodeError, RecursionError):
+        raise ProtocolError("bad_request", "an answer must be a JSON object", "?") from None
+    if not isinstance(data, dict) or not isinstance(data.get("id"), str) or not data["id"]:
+        raise ProtocolError("bad_request", 'an answer is {"id": <request id>, "answer": "yes" | "no"}', "?")
+    answer = data.get("answer")
+    if not isinstance(answer, str) or answer.strip().lower() not in ("yes", "no"):
+        raise ProtocolError("bad_request", f"an answer is yes or no, got {answer!r}", data["id"])
+    return data["id"], answer.strip().lower()
 
 
 def result_payload(request_id: str, plan: Plan) -> dict[str, Any]:
