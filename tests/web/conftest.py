@@ -27,7 +27,7 @@ REQUEST = "Give my son scissors to cut paper"
 def held_worker(release: threading.Event) -> Callable[..., None]:
     """A worker whose run says it is thinking and then holds until ``release`` is set (at most 10 s)."""
 
-    def worker(spec: Any, emit: Callable[..., None], out_dir: Path) -> None:
+    def worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: Any = None) -> None:
         emit("status", {"message": "thinking"})
         release.wait(10)
 

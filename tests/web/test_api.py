@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import threading
+import time
 from pathlib import Path
 
 import pytest
@@ -69,7 +70,7 @@ def test_a_run_streams_each_module_then_the_plan(make_client) -> None:
 def test_edited_objects_make_the_scene(make_client) -> None:
     seen = {}
 
-    def worker(spec, emit, out_dir):
+    def worker(spec, emit, out_dir, ask=None):
         seen["scene"] = spec.scene
 
     client = make_client(worker=worker)
@@ -132,7 +133,7 @@ def test_one_run_at_a_time_per_page_and_runs_are_private(make_client) -> None:
 
 
 def test_errors_reach_the_page_with_their_hint(make_client) -> None:
-    def worker(spec, emit, out_dir):
+    def worker(spec, emit, out_dir, ask=None):
         raise BackendUnavailableError("the model server is down", hint="start it")
 
     client = make_client(worker=worker)
@@ -141,7 +142,7 @@ def test_errors_reach_the_page_with_their_hint(make_client) -> None:
 
 
 def test_run_pictures_by_fixed_names_only(make_client) -> None:
-    def worker(spec, emit, out_dir):
+    def worker(spec, emit, out_dir, ask=None):
         (out_dir / "before.png").write_bytes(b"\x89PNG fake")
         (out_dir / "notes.txt").write_text("private")
 
@@ -174,7 +175,7 @@ class _FixedPlan:
     def __init__(self, actions: list[str], refused: bool = False, reason: str | None = None) -> None:
         self.result = Plan(read_actions(actions), [], refused, reason)
 
-    def plan(self, request, scene, risk=False, feedback=None, observer=None) -> Plan:
+    def plan(self, request, scene, risk=False, feedback=None, observer=None, ask=None) -> Plan:
         return self.result
 
 
@@ -193,7 +194,7 @@ def test_a_simulated_run_plans_on_what_the_detector_sees(make_client) -> None:
     planned_on = []
 
     class Recording(_FixedPlan):
-        def plan(self, request, scene, risk=False, feedback=None, observer=None) -> Plan:
+        def plan(self, request, scene, risk=False, feedback=None, observer=None, ask=None) -> Plan:
             planned_on.append(scene)
             return self.result
 
@@ -258,3 +259,24 @@ def test_a_goal_planner_run_streams_its_targets_decisions_and_risk_checks(make_c
     assert check["dropped"] and check["ope"] == "scissors: danger 4/5"
     plan = next(e for e in events if e["type"] == "plan")
     assert plan["plan"] == ["done()"] and plan["refused"]
+
+
+def test_a_question_waits_for_the_pages_answer(make_client) -> None:
+    from tests.web.conftest import events_of
+    from tests.web.test_browser import QUESTION, asking_worker
+
+    client = make_client(worker=asking_worker)
+    started = client.post("/api/runs", json={"request": "Bring me something sour", "scene": "kitchen"})
+    run_id = started.json()["id"]
+    assert client.post(f"/api/runs/{run_id}/answer", json={"answer": "maybe"}).status_code == 422
+    for _ in range(200):  # the worker thread puts the question, then waits
+        answered = client.post(f"/api/runs/{run_id}/answer", json={"answer": "yes"})
+        if answered.status_code != 409:
+            break
+        time.sleep(0.02)
+    assert answered.status_code == 200, answered.text
+    events = events_of(client, run_id)
+    assert [e["type"] for e in events] == ["question", "plan", "done"]
+    assert events[0]["question"] == QUESTION.to_dict()
+    assert events[1]["plan"] == ["pick_and_place(apple, user)", "done()"]
+    assert client.post(f"/api/runs/{run_id}/answer", json={"answer": "no"}).status_code == 409  # none open

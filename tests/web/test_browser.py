@@ -9,12 +9,14 @@ import shutil
 import socket
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 import uvicorn
 
+from conceptbot.core.trace import ClarifyingQuestion
 from conceptbot.web.app import create_app, local_hosts
 from conceptbot.web.runs import RunManager
 from conceptbot.web.worker import make_worker
@@ -29,9 +31,20 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
+QUESTION = ClarifyingQuestion("Should I give the apple to the user (something sour)?", "apple", "user", 0.5)
+
+
+def asking_worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: Any = None) -> None:
+    """A run whose planner is unsure about one object: it asks, and plans by the answer."""
+    answer = ask(QUESTION) if ask is not None else None
+    plan = ["pick_and_place(apple, user)", "done()"] if answer == "yes" else ["done()"]
+    emit("plan", {"plan": plan, "refused": False, "reason": None, "usage": {}})
+
+
 @pytest.fixture
-def server(tmp_path: Path) -> Iterator[str]:
-    manager = RunManager(make_worker(lambda config, backend: scripted_bot(), can_simulate=False))
+def server(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str]:
+    worker = getattr(request, "param", None) or make_worker(lambda config, backend: scripted_bot(), False)
+    manager = RunManager(worker)
     port = _free_port()
     app = create_app(
         manager,
@@ -109,3 +122,24 @@ def test_ask_and_watch_the_plan_in_chromium(server: str, browser) -> None:
     browser.get(server + "/results")
     wait.until(when.text_to_be_present_in_element((By.ID, "reports"), "No reports yet"))
     assert (SHOTS / "web-2-plan.png").stat().st_size > 10_000
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("server", [asking_worker], indirect=True)
+def test_the_page_asks_and_the_answer_finishes_the_plan(server: str, browser) -> None:
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support import expected_conditions as when
+    from selenium.webdriver.support.ui import Select, WebDriverWait
+
+    wait = WebDriverWait(browser, 30)
+    browser.get(server + "/")
+    wait.until(lambda b: len(Select(b.find_element(By.ID, "scene")).options) > 5)
+    browser.find_element(By.ID, "request").send_keys("Bring me something sour")
+    browser.find_element(By.ID, "run").click()
+    wait.until(when.visibility_of_element_located((By.ID, "question-box")))
+    assert browser.find_element(By.ID, "question-text").text == QUESTION.text
+    browser.save_screenshot(str(SHOTS / "web-3-question.png"))
+    browser.find_element(By.ID, "answer-no").click()
+    wait.until(when.text_to_be_present_in_element((By.ID, "status"), "Done."))
+    assert [li.text for li in browser.find_elements(By.CSS_SELECTOR, "#plan li")] == ["done()"]
+    assert not browser.find_element(By.ID, "question-box").is_displayed()

@@ -36,7 +36,7 @@ def _local_client(make_client: MakeClient, worker: Any = None, base_url: str = L
 def _recording_worker() -> tuple[list[str], Any]:
     started: list[str] = []
 
-    def worker(spec, emit, out_dir):
+    def worker(spec, emit, out_dir, ask=None):
         started.append(spec.request)
 
     return started, worker
@@ -176,7 +176,7 @@ MANY = [[f"thing {i}" for i in range(n)] for n in (61, 500)]  # over the old pag
 def test_edited_objects_obey_the_scene_rules(make_client: MakeClient, objects: list[str]) -> None:
     """The web path answers exactly what scene_from_dict says about the same objects: a 400 with its
     message when it refuses them, a run when it accepts them (no cap of the web page's own)."""
-    client = make_client(worker=lambda spec, emit, out_dir: None)
+    client = make_client(worker=lambda spec, emit, out_dir, ask=None: None)
     lists = {"objects": objects, "pickable_objects": objects[:1], "destinations": ["table"]}
     reply = client.post("/api/runs", json={"request": "tidy up", "objects": lists})
     try:

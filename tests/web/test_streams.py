@@ -33,7 +33,9 @@ def held_worker(release: threading.Event) -> runs.Worker:
     """A worker whose run says it is thinking and then holds until ``release`` is set (at most
     60 s: longer than any time-out here, so a run never ends by itself during a test)."""
 
-    def worker(spec: runs.RunSpec, emit: Callable[[str, dict[str, Any]], None], out_dir: Path) -> None:
+    def worker(
+        spec: runs.RunSpec, emit: Callable[[str, dict[str, Any]], None], out_dir: Path, ask=None
+    ) -> None:
         emit("status", {"message": "thinking"})
         release.wait(60)
 

@@ -96,6 +96,13 @@ class RunIn(BaseModel):
     backend: str | None = Field(default=None, max_length=200)
     risk: bool = False
     simulate: bool = False
+    ask: bool = True
+
+
+class AnswerIn(BaseModel):
+    """The page's answer to the run's open question."""
+
+    answer: str = Field(pattern="^(yes|no)$")
 
 
 class _LimitBody(BaseHTTPMiddleware):
@@ -292,6 +299,7 @@ def _add_runs(app: FastAPI, manager: RunManager, shown_backends: dict[str, str],
             backend,
             body.risk,
             body.simulate and can_simulate,
+            body.ask,
         )
         try:
             run = manager.start(session, spec)
@@ -322,6 +330,13 @@ def _add_runs(app: FastAPI, manager: RunManager, shown_backends: dict[str, str],
                 yield ": keep-alive\n\n" if event is None else f"data: {json.dumps(event)}\n\n"
 
         return _EventStream(body(), on_end=run.close_stream)
+
+    @app.post("/api/runs/{run_id}/answer")
+    def answer(run_id: str, body: AnswerIn, request: Request) -> dict[str, Any]:
+        run = run_of(run_id, request)
+        if not run.answer(body.answer):
+            raise HTTPException(409, "this run has no open question")
+        return {"ok": True}
 
     @app.get("/api/runs/{run_id}/files/{name}")
     def run_file(run_id: str, name: str, request: Request) -> FileResponse:

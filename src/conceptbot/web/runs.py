@@ -28,15 +28,19 @@ from typing import Any
 
 from conceptbot.core.errors import ConceptBotError
 from conceptbot.core.scene import Scene
+from conceptbot.core.system import Ask
+from conceptbot.core.trace import ClarifyingQuestion
 
-# (what to run, emit(event type, data), folder for pictures) -> None; raises ConceptBotError for
-# errors a user can fix (shown on the page with their hint).
-Worker = Callable[["RunSpec", Callable[[str, dict[str, Any]], None], Path], None]
+# (what to run, emit(event type, data), folder for pictures, ask: the page asks, or None) -> None;
+# raises ConceptBotError for errors a user can fix (shown on the page with their hint).
+Worker = Callable[["RunSpec", Callable[[str, dict[str, Any]], None], Path, "Ask | None"], None]
 
 MAX_STREAMS = 8
 """Event streams one run serves at once. The page opens one (and one more for a moment while it
 reconnects); the cap bounds what a client holding the run's cookie can make the server keep open."""
 
+ANSWER_WAIT_S = 300.0
+"""Seconds a run waits for the page's answer to a question before it ends without a plan."""
 KEEP_ALIVE_S = 15.0
 """Seconds of silence after which a stream sends a keep-alive (proxies close idle connections)."""
 
@@ -55,6 +59,7 @@ class RunSpec:
     backend: str
     risk: bool = False
     simulate: bool = False
+    ask: bool = True
 
 
 @dataclass
@@ -75,6 +80,39 @@ class Run:
     streams: int = 0
     closing: bool = False
     _wakers: set[Callable[[], None]] = field(default_factory=set)
+    # The open question's answer slot (set by the page through answer(); None: no question open).
+    _question: tuple[threading.Event, list[str]] | None = None
+
+    def ask(self, question: ClarifyingQuestion, wait_s: float = ANSWER_WAIT_S) -> str:
+        """Show ``question`` on the page (a ``question`` event) and wait for its answer.
+
+        Raises:
+            ConceptBotError: No answer within ``wait_s``: the run ends without a plan, never a guess.
+        """
+        slot: tuple[threading.Event, list[str]] = (threading.Event(), [])
+        with self.lock:
+            self._question = slot
+        try:
+            self.emit("question", {"question": question.to_dict()})
+            if not slot[0].wait(wait_s):
+                raise ConceptBotError(
+                    f"no answer to {question.text!r} within {wait_s:g} s",
+                    hint="answer the question on the page, or plan again",
+                )
+            return slot[1][0]
+        finally:
+            with self.lock:
+                self._question = None
+
+    def answer(self, value: str) -> bool:
+        """The page's answer to the open question; False when no question is open."""
+        with self.lock:
+            slot = self._question
+        if slot is None or slot[0].is_set():
+            return False
+        slot[1].append(value)
+        slot[0].set()
+        return True
 
     def emit(self, kind: str, data: dict[str, Any]) -> None:
         """Record an event and wake the streams."""
@@ -206,7 +244,7 @@ class RunManager:
         # one's thread lets go of the model: the lock makes the new run wait out that moment.
         self._model.acquire()
         try:
-            self.worker(run.spec, run.emit, run.out_dir)
+            self.worker(run.spec, run.emit, run.out_dir, run.ask if run.spec.ask else None)
             run.emit("done", {})
         except ConceptBotError as exc:
             run.emit("error", {"message": exc.message, "hint": exc.hint or ""})

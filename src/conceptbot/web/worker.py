@@ -12,7 +12,7 @@ from conceptbot.core.config import Settings
 from conceptbot.core.observe import EventPart
 from conceptbot.core.plan import Plan, format_actions, usage_dict
 from conceptbot.core.scene import Scene
-from conceptbot.core.system import PlannerSystem
+from conceptbot.core.system import Ask, PlannerSystem
 from conceptbot.core.urls import redact_secrets
 from conceptbot.models import weights
 from conceptbot.sim.options import SimOptions
@@ -136,13 +136,16 @@ def simulate(
 def make_worker(systems: SystemFactory, can_simulate: bool) -> Worker:
     """The run worker over a system factory."""
 
-    def work(spec: RunSpec, emit: Emit, out_dir: Path) -> None:
+    def work(spec: RunSpec, emit: Emit, out_dir: Path, ask: Ask | None = None) -> None:
         observer = PageObserver(emit)
         observer.progress(f"loading {spec.config} on {redact_secrets(spec.backend)}")  # URL may hold a key
         system = systems(spec.config, spec.backend)
 
         def plan_on(scene: Scene) -> Plan:
-            plan = system.plan(spec.request, scene, risk=spec.risk, observer=observer)
+            if ask is None:
+                plan = system.plan(spec.request, scene, risk=spec.risk, observer=observer)
+            else:
+                plan = system.plan(spec.request, scene, risk=spec.risk, observer=observer, ask=ask)
             emit(
                 "plan",
                 {

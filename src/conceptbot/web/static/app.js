@@ -53,7 +53,7 @@ async function init() {
 }
 
 function clear() {
-  for (const id of ["refusal", "plan-box", "sim-box", "ope-box", "urp-box", "goal-box", "steps-box"]) $(id).hidden = true;
+  for (const id of ["question-box", "refusal", "plan-box", "sim-box", "ope-box", "urp-box", "goal-box", "steps-box"]) $(id).hidden = true;
   for (const id of ["plan", "properties", "relations", "keyword-relations", "targets", "decisions", "risk-checks", "steps", "sim-pictures"]) $(id).replaceChildren();
 }
 
@@ -104,6 +104,7 @@ function handle(id, e) {
     case "decisions": showDecisions(e.data.decisions); break;
     case "risk": showRisk(e.data.checks); break;
     case "plan": showPlan(e); break;
+    case "question": showQuestion(id, e.question); break;
     case "sim": showSim(id, e); break;
     case "error":
       setStatus(`Error: ${e.message}${e.hint ? " — " + e.hint : ""}`, "error");
@@ -207,6 +208,21 @@ function showRisk(checks) {
     // p_unsafe is null for a vetoed move (no score was needed, or none could be had): say why instead.
     `${c.move}: ${c.p_unsafe === null ? "no score" : "P(unsafe) " + c.p_unsafe.toFixed(2)}` +
     `${c.dropped ? " — dropped: " + (c.veto ? "vetoed, " + c.veto : c.why) : " — ok"}`)));
+}
+
+function showQuestion(id, question) {
+  // The planner is unsure: it waits for this answer (text only: the question quotes scene names).
+  $("question-box").hidden = false;
+  $("question-text").textContent = question.text;
+  const send = (answer) => async () => {
+    $("question-box").hidden = true;
+    // Said first: the plan (and "Done.") may arrive on the event stream before this reply does.
+    setStatus(`Answered ${answer}.`, "busy");
+    const r = await fetch(`/api/runs/${id}/answer`, { method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify({ answer }) });
+    if (!r.ok) setStatus("The question was no longer open.", "error");
+  };
+  $("answer-yes").onclick = send("yes");
+  $("answer-no").onclick = send("no");
 }
 
 function showRefusal(reason) {
