@@ -38,6 +38,7 @@ from rclpy.signals import SignalHandlerOptions
 from rclpy.validate_node_name import validate_node_name
 from std_msgs.msg import String
 
+from conceptbot.core.answers import AnswerSlot
 from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConceptBotError, ConfigError
 from conceptbot.core.observe import EventPart
@@ -186,7 +187,7 @@ class ConceptBotNode(Node):
         self.request_sub = self.create_subscription(String, "~/request", self._on_request, qos.REQUESTS)
         self.answer_sub = self.create_subscription(String, "~/answer", self._on_answer, qos.REQUESTS)
         # The answer the request being planned waits for: (its id, the event, the answer).
-        self._awaited: tuple[str, threading.Event, list[str]] | None = None
+        self._awaited: tuple[str, AnswerSlot] | None = None
         self._worker = threading.Thread(target=self._work, name=f"{name}-planner", daemon=True)
         self._worker.start()
         self.get_logger().info(
@@ -276,8 +277,8 @@ class ConceptBotNode(Node):
         if awaited is None or awaited[0] != request_id:
             self.get_logger().warning(f"answer for {request_id!r} dropped: no question of it is open")
             return
-        awaited[2].append(answer)
-        awaited[1].set()
+        if not awaited[1].give(answer):
+            self.get_logger().warning(f"answer for {request_id!r} dropped: its question is answered")
 
     def _asker(self, running: _Running) -> Ask | None:
         """The planner's ``ask``: publish the question, wait for its answer (None: do not ask)."""
@@ -285,18 +286,19 @@ class ConceptBotNode(Node):
             return None
 
         def ask(question: ClarifyingQuestion) -> str:
-            event, answers = threading.Event(), []
+            slot = AnswerSlot()
             with self._lock:
-                self._awaited = (running.request.id, event, answers)
+                self._awaited = (running.request.id, slot)
             try:
                 self.publish(self.question_pub, question_payload(running.request.id, question))
-                if not event.wait(self.config.answer_timeout_s):
+                answer = slot.wait(self.config.answer_timeout_s)
+                if answer is None:
                     how = f'{{"id": "{running.request.id}", "answer": "yes" or "no"}}'
                     raise NoAnswerError(
                         f"no answer to {question.text!r} within {self.config.answer_timeout_s:g} s",
                         hint=f"answer on ~/answer: {how}",
                     )
-                return answers[0]
+                return answer
             finally:
                 with self._lock:
                     self._awaited = None

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from conceptbot.core.answers import AnswerSlot
 from conceptbot.core.errors import ConceptBotError
 from conceptbot.core.scene import Scene
 from conceptbot.core.system import Ask
@@ -81,7 +82,7 @@ class Run:
     closing: bool = False
     _wakers: set[Callable[[], None]] = field(default_factory=set)
     # The open question's answer slot (set by the page through answer(); None: no question open).
-    _question: tuple[threading.Event, list[str]] | None = None
+    _question: AnswerSlot | None = None
 
     def ask(self, question: ClarifyingQuestion, wait_s: float = ANSWER_WAIT_S) -> str:
         """Show ``question`` on the page (a ``question`` event) and wait for its answer.
@@ -89,17 +90,18 @@ class Run:
         Raises:
             ConceptBotError: No answer within ``wait_s``: the run ends without a plan, never a guess.
         """
-        slot: tuple[threading.Event, list[str]] = (threading.Event(), [])
+        slot = AnswerSlot()
         with self.lock:
             self._question = slot
         try:
             self.emit("question", {"question": question.to_dict()})
-            if not slot[0].wait(wait_s):
+            answer = slot.wait(wait_s)
+            if answer is None:
                 raise ConceptBotError(
                     f"no answer to {question.text!r} within {wait_s:g} s",
                     hint="answer the question on the page, or plan again",
                 )
-            return slot[1][0]
+            return answer
         finally:
             with self.lock:
                 self._question = None
@@ -108,11 +110,7 @@ class Run:
         """The page's answer to the open question; False when no question is open."""
         with self.lock:
             slot = self._question
-        if slot is None or slot[0].is_set():
-            return False
-        slot[1].append(value)
-        slot[0].set()
-        return True
+        return slot is not None and slot.give(value)
 
     def emit(self, kind: str, data: dict[str, Any]) -> None:
         """Record an event and wake the streams."""
