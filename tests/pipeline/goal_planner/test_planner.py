@@ -468,3 +468,15 @@ def test_two_targets_for_one_place_each_take_their_own_objects() -> None:
     ]
     assert [c.action for c in result.steps[0].candidates][:1] == ["pick_and_place(chips, user)"]
     assert "pick_and_place(chips, user)" not in [c.action for c in result.steps[1].candidates]
+
+
+@pytest.mark.parametrize("bad", [float("nan"), float("inf")])
+def test_a_decision_with_a_non_finite_score_moves_nothing(bad: float) -> None:
+    """NaN <= limit is False: without the check a NaN score would count as a fit and move the object."""
+    from conceptbot.pipeline.goal_planner.decide import Judgement
+
+    planner = _planner([])
+    target = Target("table", ALL, "scored")
+    ranked = {0: [Judgement("glue", "glue", 0.5, bad), Judgement("chips", "chips", 0.9, 3.0)]}
+    moves = planner._choose([target], ranked, set(), ["glue", "chips"])
+    assert moves == [("chips", "table")]

@@ -410,6 +410,8 @@ class GoalPlanner:
                 elif target.ingredients and target.count == ALL:
                     best = ranked[number][0].score if ranked[number] else 0.0
                     limit = best - self.thresholds.ingredients
+                if not math.isfinite(judgement.score):
+                    continue  # a decision that could not be made moves nothing (NaN <= limit is False)
                 if judgement.score <= limit or (target.count != ALL and taken >= target.count):
                     break
                 if obj in wanted and wanted[obj][1] >= judgement.score:
