@@ -16,7 +16,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from conceptbot.bench.grading import gold_answer, grade, load_tasks, task_scene
+from conceptbot.bench.grading import gold_answer, gold_reply, grade, load_tasks, task_scene
 from conceptbot.core.config import load_settings
 from conceptbot.core.system import COVERAGES, SystemOptions
 from conceptbot.core.trace import ClarifyingQuestion
@@ -44,7 +44,7 @@ def measure(split: str, system_name: str, coverage: float) -> dict[str, Any]:
                     covered += gold_answer(task, judgement.object, decision.target.to) in judgement.answers
 
         def person(question: ClarifyingQuestion, task=task) -> str:
-            return gold_answer(task, question.object, question.target)
+            return gold_reply(task, question)
 
         answered = system.plan(task.request, scene, ask=person) if alone.questions else alone
         helped += grade(task, answered.actions, answered.refused).ok

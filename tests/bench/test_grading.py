@@ -636,3 +636,21 @@ def test_the_simulated_person_answers_from_the_gold() -> None:
     ]
     assert answers == ["yes", "yes", "yes", "no"]
     assert gold_answer(Task("t-3", "risk", "x", "kitchen", {"type": "refuse"}, ""), "knife", "child") == "no"
+
+
+def test_the_simulated_person_replies_to_both_kinds_of_question() -> None:
+    from conceptbot.bench.grading import Task, gold_reply
+    from conceptbot.core.trace import ClarifyingQuestion
+
+    gold = {"type": "assign", "assign": {"jar": ["glass bin"], "vase": ["glass bin"]}}
+    task = Task("t-4", "materials", "glass", "kitchen", gold, "")
+    choose = ClarifyingQuestion(
+        "Which ...?", "glass bin", ("cork", "jar", "vase"), (0.5, 0.5, 0.5), multiple=True
+    )
+    assert gold_reply(task, choose) == "jar, vase"
+    assert (
+        gold_reply(task, ClarifyingQuestion("Which ...?", "glass bin", ("cork", "tin"), (0.5, 0.5), True))
+        == "none"
+    )
+    assert gold_reply(task, ClarifyingQuestion("Should ...?", "glass bin", ("jar",), (0.5,))) == "yes"
+    assert gold_reply(task, ClarifyingQuestion("Should ...?", "glass bin", ("cork",), (0.5,))) == "no"

@@ -4,6 +4,7 @@ stderr and the answer read from the person; with ``--json`` the questions come b
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -15,20 +16,30 @@ from conceptbot.cli import plan_cmd
 from conceptbot.core.plan import Done, PickAndPlace, Plan
 from conceptbot.core.trace import ClarifyingQuestion, PlanTrace
 
-QUESTION = ClarifyingQuestion("Should I put the lemon in or on the bowl (sour)?", "lemon", "bowl", 0.5)
+QUESTION = ClarifyingQuestion("Should I put the lemon in or on the bowl (sour)?", "bowl", ("lemon",), (0.5,))
+CHOOSE = ClarifyingQuestion(
+    "Which of these should I put in or on the bowl (sour): the lemon, the lime or the cup? Any, all or none.",
+    "bowl",
+    ("lemon", "lime", "cup"),
+    (0.5, 0.6, 0.4),
+    multiple=True,
+)
 
 
 class Unsure:
     """A system with one unsure decision: asks if it can, else acts on the likelier answer."""
 
-    def __init__(self) -> None:
+    def __init__(self, question: ClarifyingQuestion = QUESTION) -> None:
         self.asked: list[Any] = []
+        self.question = question
+        self.answers: list[str | None] = []
 
     def plan(self, request, scene, risk=False, feedback=None, observer=None, ask=None) -> Plan:
         self.asked.append(ask)
-        answer = ask(QUESTION) if ask is not None else None
+        answer = ask(self.question) if ask is not None else None
+        self.answers.append(answer)
         actions = [Done()] if answer == "no" else [PickAndPlace("apple", "user"), Done()]
-        question = ClarifyingQuestion(QUESTION.text, "lemon", "bowl", 0.5, answer)
+        question = replace(self.question, answer=answer)
         return Plan(
             actions,
             trace=PlanTrace(config="conceptbot"),
@@ -76,3 +87,25 @@ def test_an_answer_that_is_neither_yes_nor_no_is_asked_again(unsure: Unsure, tmp
     out = _plan(tmp_path, "--ask", answer="maybe\nyes\n")
     assert out.exit_code == 0, out.output
     assert "answered yes" in out.output and out.output.count("Question: Should I") >= 2
+
+
+def test_a_choose_question_lists_the_objects_and_takes_numbers_or_names(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    system = Unsure(CHOOSE)
+    monkeypatch.setattr(plan_cmd, "build_system", lambda settings, config, options: system)
+    out = _plan(tmp_path, "--ask", answer="3, lime\n")
+    assert out.exit_code == 0, out.output
+    assert "  1. lemon\n  2. lime\n  3. cup\n" in out.output
+    assert system.answers == ["lime, cup"] and "answered lime, cup" in out.output
+
+
+@pytest.mark.parametrize("first", ["4", "spoon", "lemon, lemon", "yes"])
+def test_a_reply_to_a_choose_question_that_is_not_an_answer_is_asked_again(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, first: str
+) -> None:
+    system = Unsure(CHOOSE)
+    monkeypatch.setattr(plan_cmd, "build_system", lambda settings, config, options: system)
+    out = _plan(tmp_path, "--ask", answer=f"{first}\nnone\n")
+    assert out.exit_code == 0, out.output
+    assert system.answers == ["none"] and "Give numbers from the list" in out.output

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 from std_msgs.msg import String
@@ -19,25 +20,34 @@ from conceptbot.ros2.protocol import parse_answer
 from tests.ros2.harness import TINY_SCENE, Running, wait_for
 
 QUESTION = ClarifyingQuestion(
-    "Should I give the sponge to the user (to wipe a spill)?", "sponge", "user", 0.5
+    "Should I give the sponge to the user (to wipe a spill)?", "user", ("sponge",), (0.5,)
+)
+CHOOSE = ClarifyingQuestion(
+    "Which of these should I give to the user (to wipe a spill): the sponge or the towel? Any, all or none.",
+    "user",
+    ("sponge", "towel"),
+    (0.5, 0.4),
+    multiple=True,
 )
 
 
 class AskingPlanner:
-    """Asks one question; moves the sponge only on a yes."""
+    """Asks one question; moves the objects the answer sends (the sponge on a yes)."""
+
+    def __init__(self, question: ClarifyingQuestion = QUESTION) -> None:
+        self.question = question
 
     def plan(self, request: str, scene: Scene, risk=False, feedback=None, observer=None, ask=None) -> Plan:
-        answer = ask(QUESTION) if ask is not None else None
-        moves = [PickAndPlace("apple", "user")] + (
-            [PickAndPlace("sponge", "user")] if answer == "yes" else []
-        )
-        return Plan(
-            [*moves, Done()], questions=(ClarifyingQuestion(QUESTION.text, "sponge", "user", 0.5, answer),)
-        )
+        answer = ask(self.question) if ask is not None else None
+        chosen = self.question.read(answer) if answer is not None else ()
+        moves = [PickAndPlace("apple", "user")] + [PickAndPlace(o, "user") for o in chosen or ()]
+        return Plan([*moves, Done()], questions=(replace(self.question, answer=answer),))
 
 
-def _asking(start_node: Callable[..., Running], wait: float) -> tuple[Running, list[dict[str, Any]], Any]:
-    running = start_node(NodeConfig(answer_timeout_s=wait), planner=AskingPlanner())
+def _asking(
+    start_node: Callable[..., Running], wait: float, question: ClarifyingQuestion = QUESTION
+) -> tuple[Running, list[dict[str, Any]], Any]:
+    running = start_node(NodeConfig(answer_timeout_s=wait), planner=AskingPlanner(question))
     questions: list[dict[str, Any]] = []
     running.client.create_subscription(
         String, "/conceptbot/question", lambda m: questions.append(json.loads(m.data)), qos.REPLIES
@@ -79,12 +89,36 @@ def test_without_a_wait_the_node_does_not_ask(start_node) -> None:
     assert result["plan"]["questions"][0]["answer"] is None
 
 
-def test_an_answer_is_yes_or_no_with_an_id() -> None:
-    assert parse_answer('{"id": "r1", "answer": " NO "}') == ("r1", "no")
-    for bad in ("{", "[]", '{"answer": "yes"}', '{"id": "r1", "answer": "maybe"}', '{"id": "r1"}'):
+def test_an_answer_is_text_with_an_id() -> None:
+    assert parse_answer('{"id": "r1", "answer": " NO "}') == ("r1", "NO")
+    too_long = json.dumps({"id": "r1", "answer": "x" * 5000})
+    for bad in ("{", "[]", '{"answer": "yes"}', '{"id": "r1", "answer": " "}', '{"id": "r1"}', too_long):
         try:
             parse_answer(bad)
         except Exception as exc:
             assert getattr(exc, "code", None) == "bad_request"
         else:
             raise AssertionError(f"{bad!r} was accepted")
+
+
+def test_a_choose_question_takes_the_objects_and_drops_what_does_not_answer_it(start_node) -> None:
+    running, questions, answers = _asking(start_node, 20.0, CHOOSE)
+    running.send(
+        {"id": "r4", "request": "Bring me the apple and something to wipe a spill", "scene": TINY_SCENE}
+    )
+    assert wait_for(lambda: questions, 10.0), "no question came"
+    assert questions[0]["question"]["kind"] == "choose" and questions[0]["question"]["options"] == [
+        "sponge",
+        "towel",
+    ]
+    answers.publish(String(data=json.dumps({"id": "r4", "answer": "yes"})))  # not an answer to "which"
+    answers.publish(String(data=json.dumps({"id": "r4", "answer": "Towel, sponge"})))
+    [result] = running.wait_results(1)
+    assert result["plan"]["plan"] == [
+        "pick_and_place(apple, user)",
+        "pick_and_place(sponge, user)",
+        "pick_and_place(towel, user)",
+        "done()",
+    ]
+    assert result["plan"]["questions"][0]["answer"] == "sponge, towel"
+    assert result["plan"]["questions"][0]["chosen"] == ["sponge", "towel"]

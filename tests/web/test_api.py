@@ -268,15 +268,37 @@ def test_a_question_waits_for_the_pages_answer(make_client) -> None:
     client = make_client(worker=asking_worker)
     started = client.post("/api/runs", json={"request": "Bring me something sour", "scene": "kitchen"})
     run_id = started.json()["id"]
-    assert client.post(f"/api/runs/{run_id}/answer", json={"answer": "maybe"}).status_code == 422
+    assert client.post(f"/api/runs/{run_id}/answer", json={"answer": ""}).status_code == 422
     for _ in range(200):  # the worker thread puts the question, then waits
-        answered = client.post(f"/api/runs/{run_id}/answer", json={"answer": "yes"})
+        answered = client.post(f"/api/runs/{run_id}/answer", json={"answer": "maybe"})
         if answered.status_code != 409:
             break
         time.sleep(0.02)
+    assert answered.status_code == 422, answered.text  # open, but "maybe" does not answer it
+    answered = client.post(f"/api/runs/{run_id}/answer", json={"answer": " YES "})
     assert answered.status_code == 200, answered.text
     events = events_of(client, run_id)
     assert [e["type"] for e in events] == ["question", "plan", "done"]
     assert events[0]["question"] == QUESTION.to_dict()
     assert events[1]["plan"] == ["pick_and_place(apple, user)", "done()"]
     assert client.post(f"/api/runs/{run_id}/answer", json={"answer": "no"}).status_code == 409  # none open
+
+
+def test_a_choose_question_takes_the_objects_that_go(make_client) -> None:
+    from tests.web.conftest import events_of
+    from tests.web.test_browser import CHOOSE, choosing_worker
+
+    client = make_client(worker=choosing_worker)
+    run_id = client.post("/api/runs", json={"request": "Bring me something sour", "scene": "kitchen"}).json()[
+        "id"
+    ]
+    for _ in range(200):
+        answered = client.post(f"/api/runs/{run_id}/answer", json={"answer": "lime, pear"})
+        if answered.status_code != 409:
+            break
+        time.sleep(0.02)
+    assert answered.status_code == 422  # pear is not one of the options
+    assert client.post(f"/api/runs/{run_id}/answer", json={"answer": "lime,apple"}).status_code == 200
+    events = events_of(client, run_id)
+    assert events[0]["question"] == CHOOSE.to_dict() and events[0]["question"]["kind"] == "choose"
+    assert events[1]["plan"] == ["pick_and_place(apple, user)", "pick_and_place(lime, user)", "done()"]

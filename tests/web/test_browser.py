@@ -31,13 +31,30 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-QUESTION = ClarifyingQuestion("Should I give the apple to the user (something sour)?", "apple", "user", 0.5)
+QUESTION = ClarifyingQuestion(
+    "Should I give the apple to the user (something sour)?", "user", ("apple",), (0.5,)
+)
+CHOOSE = ClarifyingQuestion(
+    "Which of these should I give to the user (something sour): the apple, the lemon or the lime? "
+    "Any, all or none.",
+    "user",
+    ("apple", "lemon", "lime"),
+    (0.5, 0.6, 0.45),
+    multiple=True,
+)
 
 
 def asking_worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: Any = None) -> None:
     """A run whose planner is unsure about one object: it asks, and plans by the answer."""
     answer = ask(QUESTION) if ask is not None else None
     plan = ["pick_and_place(apple, user)", "done()"] if answer == "yes" else ["done()"]
+    emit("plan", {"plan": plan, "refused": False, "reason": None, "usage": {}})
+
+
+def choosing_worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: Any = None) -> None:
+    """A run whose planner is unsure about three objects for one target: one question, which go."""
+    chosen = CHOOSE.read(ask(CHOOSE)) if ask is not None else ()
+    plan = [f"pick_and_place({o}, user)" for o in chosen or ()] + ["done()"]
     emit("plan", {"plan": plan, "refused": False, "reason": None, "usage": {}})
 
 
@@ -143,3 +160,29 @@ def test_the_page_asks_and_the_answer_finishes_the_plan(server: str, browser) ->
     wait.until(when.text_to_be_present_in_element((By.ID, "status"), "Done."))
     assert [li.text for li in browser.find_elements(By.CSS_SELECTOR, "#plan li")] == ["done()"]
     assert not browser.find_element(By.ID, "question-box").is_displayed()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("server", [choosing_worker], indirect=True)
+def test_the_page_asks_which_objects_go_and_the_ticked_ones_do(server: str, browser) -> None:
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support import expected_conditions as when
+    from selenium.webdriver.support.ui import Select, WebDriverWait
+
+    wait = WebDriverWait(browser, 30)
+    browser.get(server + "/")
+    wait.until(lambda b: len(Select(b.find_element(By.ID, "scene")).options) > 5)
+    browser.find_element(By.ID, "request").send_keys("Bring me something sour")
+    browser.find_element(By.ID, "run").click()
+    wait.until(when.visibility_of_element_located((By.ID, "choose-box")))
+    assert browser.find_element(By.ID, "question-text").text == CHOOSE.text
+    assert not browser.find_element(By.ID, "answer-yes").is_displayed()
+    labels = [li.text.strip() for li in browser.find_elements(By.CSS_SELECTOR, "#choose-options li")]
+    assert labels == ["apple", "lemon", "lime"]
+    browser.find_element(By.ID, "choose-1").click()
+    browser.find_element(By.ID, "choose-2").click()
+    browser.save_screenshot(str(SHOTS / "web-4-choose.png"))
+    browser.find_element(By.ID, "answer-chosen").click()
+    wait.until(when.text_to_be_present_in_element((By.ID, "status"), "Done."))
+    plan = [li.text for li in browser.find_elements(By.CSS_SELECTOR, "#plan li")]
+    assert plan == ["pick_and_place(lemon, user)", "pick_and_place(lime, user)", "done()"]

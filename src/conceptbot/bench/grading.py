@@ -86,6 +86,7 @@ from conceptbot.core.plan import (
     parse_action,
 )
 from conceptbot.core.scene import Scene, scene_from_dict
+from conceptbot.core.trace import ClarifyingQuestion
 from conceptbot.scenes import load_demo_scene
 
 __all__ = [
@@ -735,3 +736,10 @@ def gold_answer(task: Task, obj: str, destination: str) -> str:
             allowed += group["objects"].get(obj, [])
         return "yes" if destination in allowed else "no"
     return "no"
+
+
+def gold_reply(task: Task, question: ClarifyingQuestion) -> str:
+    """The reply of a person who wants the gold (:func:`gold_answer` for each object): ``yes`` or
+    ``no`` to a ``confirm`` question, the objects that go (or ``none``) to a ``choose`` one."""
+    chosen = tuple(o for o in question.objects if gold_answer(task, o, question.target) == "yes")
+    return question.normalised(chosen)

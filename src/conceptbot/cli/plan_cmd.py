@@ -107,9 +107,28 @@ def plan(
 
 
 def _ask_on_terminal(question: ClarifyingQuestion) -> str:
-    """The question on stderr (stdout stays the plan's), answered yes or no."""
+    """The question on stderr (stdout stays the plan's): yes or no, or (a ``choose`` question) the
+    numbers or names of the objects that go, comma-separated, or ``none``; asked again until it is
+    an answer."""
     text = terminal_safe(question.text)  # scene names and criteria come from files and requests
-    return click.prompt(f"Question: {text}", type=click.Choice(["yes", "no"]), err=True)
+    if not question.multiple:
+        return click.prompt(f"Question: {text}", type=click.Choice(["yes", "no"]), err=True)
+    click.echo(f"Question: {text}", err=True)
+    for number, obj in enumerate(question.objects, 1):
+        click.echo(f"  {number}. {terminal_safe(obj)}", err=True)
+    while True:
+        reply = click.prompt("Which go (numbers or names, comma-separated; or none)", err=True)
+        chosen = question.read(_by_number(reply, question.objects))
+        if chosen is not None:
+            return question.normalised(chosen)
+        click.echo("Give numbers from the list or names, separated by commas, or: none", err=True)
+
+
+def _by_number(reply: str, objects: tuple[str, ...]) -> str:
+    """``2, 3`` as the 2nd and 3rd objects' names (a part that is not a number in range stays)."""
+    parts = [p.strip() for p in reply.split(",")]
+    named = [objects[int(p) - 1] if p.isdigit() and 1 <= int(p) <= len(objects) else p for p in parts]
+    return ", ".join(named)
 
 
 def show(result: Plan, console: Console) -> None:
@@ -170,11 +189,10 @@ def show(result: Plan, console: Console) -> None:
         )
     for question in result.questions:
         answer = (
-            f"answered {question.answer}" if question.answer else "not asked: acted on the likelier answer"
+            f"answered {question.answer}" if question.answer else "not asked: acted on the likelier answers"
         )
-        console.print(
-            line(("Question:", "bold"), f" {question.text} (P(yes) {question.p_yes:.2f}; {answer})")
-        )
+        odds = ", ".join(f"{p:.2f}" for p in question.p_yes)
+        console.print(line(("Question:", "bold"), f" {question.text} (P(yes) {odds}; {answer})"))
     table = Table("module", "time (s)", "tokens in", "tokens out", "LLM calls", "cost (USD)", title="Usage")
     for module, usage in result.usage.items():
         table.add_row(

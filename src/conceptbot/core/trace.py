@@ -283,34 +283,84 @@ class JudgementTrace:
         return data
 
 
+NONE = "none"  # the answer to a ``choose`` question that sends none of its objects
+
+
 @dataclass(frozen=True)
 class ClarifyingQuestion:
-    """A question the planner asks where a decision's conformal prediction set holds both answers.
+    """A question the planner asks where calibrated decisions' conformal prediction sets hold both
+    answers: about one object (``confirm``: yes or no) or, where one target is unsure of several, about
+    all of them at once (``choose``: which of these go there; any, all or none).
 
     Attributes:
-        text: The question in plain words ("Should the lemon go to the ceramic bowl?").
-        object: The object it is about.
-        target: Where the object would go.
-        p_yes: The decision's calibrated P(yes) (4 decimals).
-        answer: ``yes`` or ``no`` as the person answered; None where nobody was asked (the plan then
-            acts on the likelier answer).
+        text: The question in plain words ("Should I put the lemon in or on the bowl?", "Which of
+            these should I put in or on the salad bowl: the kiwi, the olive oil or the sugar?").
+        target: Where the objects would go.
+        objects: The objects it is about, most uncertain first.
+        p_yes: Each object's calibrated P(yes) (4 decimals), in the order of ``objects``.
+        multiple: A ``choose`` question (the options are the objects); else ``confirm`` (yes, no).
+        answer: The person's answer as read (``yes``/``no``; for ``choose`` the chosen objects joined
+            by ", ", or ``none``); None where nobody was asked (the plan then acts on the likelier
+            answer of each decision).
     """
 
     text: str
-    object: str
     target: str
-    p_yes: float
+    objects: tuple[str, ...]
+    p_yes: tuple[float, ...]
+    multiple: bool = False
     answer: str | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "objects", tuple(self.objects))
+        object.__setattr__(self, "p_yes", tuple(self.p_yes))
+
+    @property
+    def kind(self) -> str:
+        """``confirm`` or ``choose``."""
+        return "choose" if self.multiple else "confirm"
+
+    @property
+    def options(self) -> tuple[str, ...]:
+        """What may be answered: yes or no, or (``choose``) any of the objects."""
+        return self.objects if self.multiple else ("yes", "no")
+
+    def read(self, reply: object) -> tuple[str, ...] | None:
+        """The objects a reply sends to the target (empty: none), or None for a reply that is not an
+        answer. ``confirm``: yes or no. ``choose``: ``none``, or options separated by commas (in any
+        case, each at most once)."""
+        if not isinstance(reply, str):
+            return None
+        said = " ".join(reply.strip().lower().split())
+        if not self.multiple:
+            return {"yes": self.objects, "no": ()}.get(said)
+        if said == NONE:
+            return ()
+        names = {o.lower(): o for o in self.objects}
+        parts = [" ".join(p.split()) for p in said.split(",")]
+        chosen = [names.get(p) for p in parts]
+        if not parts or None in chosen or len(set(chosen)) != len(chosen):
+            return None
+        return tuple(o for o in self.objects if o in chosen)
+
+    def normalised(self, chosen: tuple[str, ...]) -> str:
+        """The answer text for ``chosen`` (what :attr:`answer` records)."""
+        if not self.multiple:
+            return "yes" if chosen else "no"
+        return ", ".join(chosen) if chosen else NONE
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (``conceptbot plan --json``'s ``questions``)."""
+        chosen = self.read(self.answer) if self.answer is not None else None
         return {
             "text": self.text,
-            "object": self.object,
+            "kind": self.kind,
             "target": self.target,
-            "p_yes": self.p_yes,
-            "options": ["yes", "no"],
+            "objects": list(self.objects),
+            "p_yes": list(self.p_yes),
+            "options": list(self.options),
             "answer": self.answer,
+            "chosen": list(chosen) if chosen is not None else None,
         }
 
 

@@ -187,7 +187,7 @@ class ConceptBotNode(Node):
         self.request_sub = self.create_subscription(String, "~/request", self._on_request, qos.REQUESTS)
         self.answer_sub = self.create_subscription(String, "~/answer", self._on_answer, qos.REQUESTS)
         # The answer the request being planned waits for: (its id, the event, the answer).
-        self._awaited: tuple[str, AnswerSlot] | None = None
+        self._awaited: tuple[str, ClarifyingQuestion, AnswerSlot] | None = None
         self._worker = threading.Thread(target=self._work, name=f"{name}-planner", daemon=True)
         self._worker.start()
         self.get_logger().info(
@@ -277,7 +277,14 @@ class ConceptBotNode(Node):
         if awaited is None or awaited[0] != request_id:
             self.get_logger().warning(f"answer for {request_id!r} dropped: no question of it is open")
             return
-        if not awaited[1].give(answer):
+        _, question, slot = awaited
+        chosen = question.read(answer)
+        if chosen is None:
+            # Dropped, not fatal: the question stays open for an answer that fits it.
+            how = "yes or no" if not question.multiple else f"some of {', '.join(question.options)}, or none"
+            self.get_logger().warning(f"answer for {request_id!r} dropped: {answer!r:.80} is not {how}")
+            return
+        if not slot.give(question.normalised(chosen)):
             self.get_logger().warning(f"answer for {request_id!r} dropped: its question is answered")
 
     def _asker(self, running: _Running) -> Ask | None:
@@ -288,12 +295,13 @@ class ConceptBotNode(Node):
         def ask(question: ClarifyingQuestion) -> str:
             slot = AnswerSlot()
             with self._lock:
-                self._awaited = (running.request.id, slot)
+                self._awaited = (running.request.id, question, slot)
             try:
                 self.publish(self.question_pub, question_payload(running.request.id, question))
                 answer = slot.wait(self.config.answer_timeout_s)
                 if answer is None:
-                    how = f'{{"id": "{running.request.id}", "answer": "yes" or "no"}}'
+                    said = '"yes" or "no"' if not question.multiple else '"<objects that go>" or "none"'
+                    how = f'{{"id": "{running.request.id}", "answer": {said}}}'
                     raise NoAnswerError(
                         f"no answer to {question.text!r} within {self.config.answer_timeout_s:g} s",
                         hint=f"answer on ~/answer: {how}",

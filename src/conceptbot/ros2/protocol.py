@@ -227,22 +227,32 @@ def question_payload(request_id: str, question: ClarifyingQuestion) -> dict[str,
     return {"id": request_id, "kind": "question", "question": question.to_dict()}
 
 
+MAX_ANSWER = 4000  # characters: the longest answer names every option of a choose question
+
+
 def parse_answer(payload: str) -> tuple[str, str]:
-    """``(request id, "yes" or "no")`` from an ``~/answer`` message ``{"id": ..., "answer": ...}``.
+    """``(request id, answer)`` from an ``~/answer`` message ``{"id": ..., "answer": ...}``; the node
+    checks the answer against the open question (:meth:`ClarifyingQuestion.read`: ``yes`` or ``no``,
+    or for a ``choose`` question the objects that go joined by ", ", or ``none``).
 
     Raises:
-        ProtocolError: Not JSON, no id, or an answer other than yes or no (``bad_request``).
+        ProtocolError: Not JSON, no id, or an answer that is not a non-empty string of at most
+            :data:`MAX_ANSWER` characters (``bad_request``).
     """
     try:
         data = json.loads(payload)
     except (json.JSONDecodeError, RecursionError):
         raise ProtocolError("bad_request", "an answer must be a JSON object", "?") from None
     if not isinstance(data, dict) or not isinstance(data.get("id"), str) or not data["id"]:
-        raise ProtocolError("bad_request", 'an answer is {"id": <request id>, "answer": "yes" | "no"}', "?")
+        raise ProtocolError("bad_request", 'an answer is {"id": <request id>, "answer": <text>}', "?")
     answer = data.get("answer")
-    if not isinstance(answer, str) or answer.strip().lower() not in ("yes", "no"):
-        raise ProtocolError("bad_request", f"an answer is yes or no, got {answer!r}", data["id"])
-    return data["id"], answer.strip().lower()
+    if not isinstance(answer, str) or not answer.strip() or len(answer) > MAX_ANSWER:
+        raise ProtocolError(
+            "bad_request",
+            f"an answer is yes, no, or the objects that go, or none; got {answer!r:.80}",
+            data["id"],
+        )
+    return data["id"], answer.strip()
 
 
 def result_payload(request_id: str, plan: Plan) -> dict[str, Any]:

@@ -102,7 +102,9 @@ class RunIn(BaseModel):
 class AnswerIn(BaseModel):
     """The page's answer to the run's open question."""
 
-    answer: str = Field(pattern="^(yes|no)$")
+    # yes or no, or (a choose question) the chosen objects joined by ", ", or none: checked against
+    # the open question by Run.answer.
+    answer: str = Field(min_length=1, max_length=4000)
 
 
 class _LimitBody(BaseHTTPMiddleware):
@@ -334,8 +336,13 @@ def _add_runs(app: FastAPI, manager: RunManager, shown_backends: dict[str, str],
     @app.post("/api/runs/{run_id}/answer")
     def answer(run_id: str, body: AnswerIn, request: Request) -> dict[str, Any]:
         run = run_of(run_id, request)
-        if not run.answer(body.answer):
+        given = run.answer(body.answer)
+        if given == "closed":
             raise HTTPException(409, "this run has no open question")
+        if given == "invalid":
+            raise HTTPException(
+                422, "not an answer to the question: yes or no, or the objects that go, or none"
+            )
         return {"ok": True}
 
     @app.get("/api/runs/{run_id}/files/{name}")

@@ -81,8 +81,8 @@ class Run:
     streams: int = 0
     closing: bool = False
     _wakers: set[Callable[[], None]] = field(default_factory=set)
-    # The open question's answer slot (set by the page through answer(); None: no question open).
-    _question: AnswerSlot | None = None
+    # The open question and its answer slot (filled by the page through answer(); None: none open).
+    _question: tuple[ClarifyingQuestion, AnswerSlot] | None = None
 
     def ask(self, question: ClarifyingQuestion, wait_s: float = ANSWER_WAIT_S) -> str:
         """Show ``question`` on the page (a ``question`` event) and wait for its answer.
@@ -92,7 +92,7 @@ class Run:
         """
         slot = AnswerSlot()
         with self.lock:
-            self._question = slot
+            self._question = (question, slot)
         try:
             self.emit("question", {"question": question.to_dict()})
             answer = slot.wait(wait_s)
@@ -106,11 +106,19 @@ class Run:
             with self.lock:
                 self._question = None
 
-    def answer(self, value: str) -> bool:
-        """The page's answer to the open question; False when no question is open."""
+    def answer(self, value: str) -> str:
+        """The page's answer to the open question: ``given``; ``closed`` when no question is open (or
+        it has its answer); ``invalid`` when ``value`` does not answer it
+        (:meth:`ClarifyingQuestion.read`)."""
         with self.lock:
-            slot = self._question
-        return slot is not None and slot.give(value)
+            open_question = self._question
+        if open_question is None:
+            return "closed"
+        question, slot = open_question
+        chosen = question.read(value)
+        if chosen is None:
+            return "invalid"
+        return "given" if slot.give(question.normalised(chosen)) else "closed"
 
     def emit(self, kind: str, data: dict[str, Any]) -> None:
         """Record an event and wake the streams."""

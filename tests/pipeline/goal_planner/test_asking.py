@@ -7,7 +7,7 @@ import math
 import pytest
 
 from conceptbot.core.trace import ClarifyingQuestion, DecisionTrace
-from conceptbot.pipeline.goal_planner.asking import ANSWERED, MAX_QUESTIONS, clarify
+from conceptbot.pipeline.goal_planner.asking import ANSWERED, MAX_OPTIONS, clarify
 from conceptbot.pipeline.goal_planner.decide import Judgement
 from conceptbot.pipeline.goal_planner.targets import ALL, Target
 from conceptbot.pipeline.tracing import judgement_trace, target_trace
@@ -32,38 +32,80 @@ def test_an_unsure_decision_is_a_question_and_the_plan_acts_on_the_likelier_answ
     found = clarify([BOWL], ranked, decisions, QHAT, 0.0)
     assert found.questions == (
         ClarifyingQuestion(
-            "Should I put the lemon in or on the bowl (an ingredient of hollandaise)?", "lemon", "bowl", 0.55
+            "Should I put the lemon in or on the bowl (an ingredient of hollandaise)?",
+            "bowl",
+            ("lemon",),
+            (0.55,),
         ),
     )
+    assert found.questions[0].options == ("yes", "no")
     assert found.ranked == ranked  # nobody asked: the decisions stand
     assert found.confidence == pytest.approx(0.55 * 0.95 * 0.9)
     answers = {o.object: o.answers for o in found.decisions[0].objects}
     assert answers == {"butter": ("yes",), "lemon": ("yes", "no"), "cup": ("no",)}
 
 
-def test_an_answer_replaces_the_decision_and_counts_as_sure() -> None:
+def test_a_confirm_answer_replaces_the_decision_and_counts_as_sure() -> None:
+    ranked, decisions = _case(("lemon", 0.55), ("butter", 0.95), ("cup", 0.1))
+    found = clarify([BOWL], ranked, decisions, QHAT, 0.0, ask=lambda q: " No ")
+    assert [q.answer for q in found.questions] == ["no"]
+    assert found.ranked[0][-1].subject == "lemon" and found.ranked[0][-1].score == -ANSWERED
+    assert found.confidence == pytest.approx(0.95 * 0.9)
+
+
+def test_several_unsure_decisions_of_a_target_are_one_question_and_its_answer_settles_them() -> None:
     ranked, decisions = _case(("lemon", 0.55), ("butter", 0.95), ("cup", 0.4))
-    asked: list[str] = []
+    asked: list[ClarifyingQuestion] = []
 
     def person(question: ClarifyingQuestion) -> str:
-        asked.append(question.object)
-        return {"lemon": "No", "cup": "yes"}[question.object]
+        asked.append(question)
+        return "Cup"
 
     found = clarify([BOWL], ranked, decisions, QHAT, 0.0, ask=person)
-    assert asked == ["lemon", "cup"]  # the most uncertain first
-    assert [q.answer for q in found.questions] == ["no", "yes"]
+    assert (
+        len(asked) == 1 and asked[0].multiple and asked[0].objects == ("lemon", "cup")
+    )  # most uncertain first
+    assert asked[0].text == (
+        "Which of these should I put in or on the bowl (an ingredient of hollandaise): "
+        "the lemon or the cup? Any, all or none."
+    )
+    assert [q.answer for q in found.questions] == ["cup"]
     order = [(j.subject, j.score) for j in found.ranked[0]]
     assert order == [("cup", ANSWERED), ("butter", pytest.approx(math.log(19))), ("lemon", -ANSWERED)]
     assert found.confidence == pytest.approx(0.95)
     answers = {o.object: o.answers for o in found.decisions[0].objects}
     assert answers["lemon"] == ("no",) and answers["cup"] == ("yes",)
+    none = clarify([BOWL], ranked, decisions, QHAT, 0.0, ask=lambda q: "none")
+    assert none.questions[0].answer == "none" and all(
+        j.score < 0 for j in none.ranked[0] if j.subject != "butter"
+    )
 
 
-def test_at_most_a_few_questions_and_an_unusable_answer_leaves_the_question_open() -> None:
-    ranked, decisions = _case(*[(f"thing {i}", 0.5 + i / 100) for i in range(6)])
+@pytest.mark.parametrize(
+    ("reply", "chosen"),
+    [
+        ("lemon, cup", ("lemon", "cup")),
+        ("cup,lemon", ("lemon", "cup")),
+        ("  LEMON ", ("lemon",)),
+        ("none", ()),
+        ("lemon, lemon", None),
+        ("lemon, spoon", None),
+        ("", None),
+        ("yes", None),
+        (None, None),
+        (3, None),
+    ],
+)
+def test_a_choose_question_reads_the_objects_named_and_nothing_else(reply: object, chosen: object) -> None:
+    question = ClarifyingQuestion("Which ...?", "bowl", ("lemon", "cup"), (0.5, 0.4), multiple=True)
+    assert question.read(reply) == chosen
+
+
+def test_one_question_per_target_at_most_a_few_options_and_an_unusable_answer_leaves_it_open() -> None:
+    ranked, decisions = _case(*[(f"thing {i}", 0.5 + i / 100) for i in range(8)])
     found = clarify([BOWL], ranked, decisions, QHAT, 0.0, ask=lambda q: "maybe")
-    assert len(found.questions) == MAX_QUESTIONS
-    assert [q.object for q in found.questions] == ["thing 0", "thing 1", "thing 2"]
+    assert len(found.questions) == 1
+    assert found.questions[0].objects == tuple(f"thing {i}" for i in range(MAX_OPTIONS))
     assert all(q.answer is None for q in found.questions) and found.ranked == ranked
 
 
@@ -71,7 +113,8 @@ def test_a_decision_that_cannot_be_read_is_asked_about_and_sorts_are_not_asked_y
     ranked, decisions = _case(("lemon", 0.95))
     ranked[0].append(Judgement("egg", BOWL.criterion, math.nan, math.nan, model=0.0))
     found = clarify([BOWL], ranked, decisions, QHAT, 0.0)
-    assert [q.object for q in found.questions] == ["egg"]
+    assert [q.objects for q in found.questions] == [("egg",)]
+    assert found.questions[0].p_yes == (0.5,)  # shown as a coin toss: JSON has no NaN
     assert found.confidence == 0.0  # and no confidence in a plan that rests on it
     bins = [
         Target("paper bin", ALL, "named", criterion="paper"),

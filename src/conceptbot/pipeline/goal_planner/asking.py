@@ -1,8 +1,11 @@
 """Where the goal planner is unsure, a question (issue 35; KnowNo's recipe): each calibrated yes/no
 decision of a target that takes every object fitting it gets its conformal prediction set
-(:mod:`.conformal`); a set with both answers is a question ("Should I put the lemon in or on the
-bowl (an ingredient of hollandaise)?"), the most uncertain first, at most :data:`MAX_QUESTIONS`.
-Asked (``ask`` given), the answer replaces the decision; not asked, the plan acts on the likelier
+(:mod:`.conformal`); a set with both answers is unsure. A target's unsure decisions make one
+question: about one object, yes or no ("Should I put the lemon in or on the bowl (an ingredient of
+hollandaise)?"); about several, which of them go ("Which of these should I put in or on the salad
+bowl (...): the kiwi, the olive oil or the sugar? Any, all or none."). The target with the most
+uncertain decision is asked first, at most :data:`MAX_QUESTIONS` per plan.
+Asked (``ask`` given), the answer replaces the decisions; not asked, the plan acts on each likelier
 answer and lists the question.
 The plan's confidence is the product of the probabilities of the answers it acts on (an answer
 given counts as sure).
@@ -19,7 +22,8 @@ from conceptbot.pipeline.goal_planner.decide import Judgement
 from conceptbot.pipeline.goal_planner.targets import ALL, Target
 from conceptbot.pipeline.hazards import is_person
 
-MAX_QUESTIONS = 3
+MAX_QUESTIONS = 3  # per plan, one per target (only one target is asked about until sorts are)
+MAX_OPTIONS = 6  # objects in one question: a longer list is not one question a person reads
 ANSWERED = 20.0  # the log-odds an answer sets: far beyond every threshold, either way
 
 
@@ -39,14 +43,42 @@ def is_sort(targets: list[Target]) -> bool:
     return len(judged) >= 2 and all(t.count == ALL for t in judged)
 
 
-def question_text(obj: str, target: Target) -> str:
-    """The question in plain words, with the request's criterion: "Should I put the lemon in or on
-    the bowl (an ingredient of hollandaise)?"."""
+def _move(target: Target, obj: str = "") -> str:
+    """ "give the X to the user" / "put the X in or on the bowl" (without an object: "give to ...")."""
+    what = f" the {obj}" if obj else ""
     if is_person(target.name):
-        move = f"give the {obj} to the {target.name}"
-    else:
-        move = f"put the {obj} in or on the {target.name}"
-    return f"Should I {move}{f' ({target.criterion})' if target.criterion else ''}?"
+        return f"give{what} to the {target.name}"
+    return f"put{what} in or on the {target.name}"
+
+
+def _listed(objects: list[str]) -> str:
+    named = [f"the {o}" for o in objects]
+    return named[0] if len(named) == 1 else f"{', '.join(named[:-1])} or {named[-1]}"
+
+
+def question_text(objects: list[str], target: Target) -> str:
+    """The question in plain words, with the request's criterion: "Should I put the lemon in or on
+    the bowl (an ingredient of hollandaise)?" for one object; "Which of these should I put in or on
+    the salad bowl (...): the kiwi, the olive oil or the sugar? Any, all or none." for several."""
+    why = f" ({target.criterion})" if target.criterion else ""
+    if len(objects) == 1:
+        return f"Should I {_move(target, objects[0])}{why}?"
+    return f"Which of these should I {_move(target)}{why}: {_listed(objects)}? Any, all or none."
+
+
+def question_for(number: int, target: Target, unsure: list[Judgement]) -> ClarifyingQuestion:
+    """One question settling a target's unsure decisions (most uncertain first; at most
+    :data:`MAX_OPTIONS` of them): ``confirm`` for one, ``choose`` for several."""
+    kept = unsure[:MAX_OPTIONS]
+    names = [j.subject for j in kept]
+    return ClarifyingQuestion(
+        question_text(names, target),
+        target.name,
+        tuple(names),
+        # A probability that is not a number (the decision could not be made) is shown as a coin toss.
+        tuple(round(j.p_yes, 4) if j.p_yes == j.p_yes else 0.5 for j in kept),
+        multiple=len(kept) > 1,
+    )
 
 
 def clarify(
@@ -66,10 +98,11 @@ def clarify(
         qhat: The conformal threshold at the planner's coverage.
         limit: The combined score above which the planner takes an object (its ``combined``
             threshold), to tell the answer it acts on.
-        ask: Asks the person; None: nobody is asked.
+        ask: Asks the person; None: nobody is asked. A reply that is not an answer to the question
+            (:meth:`ClarifyingQuestion.read`) counts as no answer.
     """
     sets: dict[tuple[int, str], DecisionSet] = {}
-    unsure: list[tuple[float, int, Judgement]] = []
+    unsure: dict[int, list[Judgement]] = {}
     if not is_sort(targets):
         for number, target in enumerate(targets):
             if target.count != ALL or target.rest:
@@ -80,24 +113,21 @@ def clarify(
                 found = decision_set(judgement.p_yes, qhat)
                 sets[(number, judgement.subject)] = found
                 if not found.sure:
-                    unsure.append((abs(judgement.p_yes - 0.5), number, judgement))
-    unsure.sort(key=lambda item: item[0])
+                    unsure.setdefault(number, []).append(judgement)
+    doubt = {number: sorted(js, key=_uncertainty) for number, js in unsure.items()}
+    # One question per target, the target whose most uncertain decision is most uncertain first.
+    order = sorted(doubt, key=lambda number: _uncertainty(doubt[number][0]))
     questions = []
     answered: dict[tuple[int, str], str] = {}
-    for _, number, judgement in unsure[:MAX_QUESTIONS]:
-        target = targets[number]
-        question = ClarifyingQuestion(
-            question_text(judgement.subject, target),
-            judgement.subject,
-            target.name,
-            round(judgement.p_yes, 4),
-        )
-        reply = ask(question) if ask is not None else None
-        answer = reply.strip().lower() if isinstance(reply, str) else None
-        answer = answer if answer in ("yes", "no") else None
-        questions.append(replace(question, answer=answer))
-        if answer is not None:
-            answered[(number, judgement.subject)] = answer
+    for number in order[:MAX_QUESTIONS]:
+        question = question_for(number, targets[number], doubt[number])
+        chosen = question.read(ask(question)) if ask is not None else None
+        if chosen is None:
+            questions.append(question)
+            continue
+        questions.append(replace(question, answer=question.normalised(chosen)))
+        for obj in question.objects:
+            answered[(number, obj)] = "yes" if obj in chosen else "no"
     if answered:
         ranked = dict(ranked)
         for number in {n for n, _ in answered}:
@@ -125,6 +155,12 @@ def clarify(
             confidence *= acted if acted == acted else 0.0  # unreadable (NaN): no confidence in it
     traced = tuple(_with_sets(decision, number, sets, answered) for number, decision in enumerate(decisions))
     return Clarified(ranked, traced, tuple(questions), confidence)
+
+
+def _uncertainty(judgement: Judgement) -> float:
+    """How far from a coin toss (smaller: more uncertain; a NaN probability first)."""
+    gap = abs(judgement.p_yes - 0.5)
+    return gap if gap == gap else -1.0
 
 
 def _with_sets(

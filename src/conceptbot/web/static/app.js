@@ -221,8 +221,21 @@ function showQuestion(id, question) {
     const r = await fetch(`/api/runs/${id}/answer`, { method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify({ answer }) });
     if (!r.ok) setStatus("The question was no longer open.", "error");
   };
-  $("answer-yes").onclick = send("yes");
-  $("answer-no").onclick = send("no");
+  const choose = question.kind === "choose";
+  $("confirm-buttons").hidden = choose;
+  $("choose-box").hidden = !choose;
+  if (choose) {
+    // One checkbox per object: the ticked ones go to the target, none ticked is "none".
+    $("choose-options").replaceChildren(...question.options.map((name, i) => el("li", {},
+      el("input", { type: "checkbox", id: `choose-${i}`, value: name }), el("label", { for: `choose-${i}` }, ` ${name}`))));
+    $("answer-chosen").onclick = () => {
+      const ticked = [...$("choose-options").querySelectorAll("input:checked")].map((b) => b.value);
+      send(ticked.length ? ticked.join(", ") : "none")();
+    };
+  } else {
+    $("answer-yes").onclick = send("yes");
+    $("answer-no").onclick = send("no");
+  }
 }
 
 function showRefusal(reason) {
