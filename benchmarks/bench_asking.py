@@ -16,9 +16,10 @@ import json
 from pathlib import Path
 from typing import Any
 
-from conceptbot.bench.grading import gold_answer, gold_reply, grade, load_tasks, task_scene
+from conceptbot.bench.grading import Task, gold_answer, gold_reply, grade, load_tasks, task_scene
 from conceptbot.core.config import load_settings
-from conceptbot.core.system import COVERAGES, SystemOptions
+from conceptbot.core.plan import Plan
+from conceptbot.core.system import COVERAGES, LEVELS, SystemOptions
 from conceptbot.core.trace import ClarifyingQuestion
 from conceptbot.systems import build_system
 
@@ -28,20 +29,22 @@ RELIABILITY = Path("results/asking-reliability.png")
 BINS = 10
 
 
-def measure(split: str, system_name: str, coverage: float) -> dict[str, Any]:
+def measure(split: str, system_name: str, coverage: float, level: str = "plan") -> dict[str, Any]:
     """One row: the split's tasks planned with and without the gold answers."""
-    system = build_system(load_settings(), system_name, SystemOptions(coverage=coverage))
+    system = build_system(load_settings(), system_name, SystemOptions(coverage=coverage, level=level))
     tasks = load_tasks(split=split)
-    solo = helped = asked_tasks = questions = covered = calibrated = 0
+    solo = helped = asked_tasks = questions = options = covered = calibrated = 0
+    plans_calibrated = plans_covered = 0
     for task in tasks:
         scene = task_scene(task)
         alone = system.plan(task.request, scene)
         solo += grade(task, alone.actions, alone.refused).ok
-        for decision in alone.trace.decisions or ():
-            for judgement in decision.objects:
-                if judgement.answers is not None:
-                    calibrated += 1
-                    covered += gold_answer(task, judgement.object, decision.target.to) in judgement.answers
+        found = covered_decisions(task, alone)
+        calibrated += len(found)
+        covered += sum(found)
+        if found:
+            plans_calibrated += 1
+            plans_covered += all(found)
 
         def person(question: ClarifyingQuestion, task=task) -> str:
             return gold_reply(task, question)
@@ -49,20 +52,45 @@ def measure(split: str, system_name: str, coverage: float) -> dict[str, Any]:
         answered = system.plan(task.request, scene, ask=person) if alone.questions else alone
         helped += grade(task, answered.actions, answered.refused).ok
         questions += len(answered.questions)
+        options += sum(len(q.objects) for q in answered.questions)
         asked_tasks += bool(answered.questions)
     n = len(tasks)
     return {
         "split": split,
         "system": system_name,
+        "level": level,
         "coverage": coverage,
         "tasks": n,
         "success_without_questions": round(100 * solo / n, 1),
         "success": round(100 * helped / n, 1),
         "help_rate": round(100 * asked_tasks / n, 1),
         "questions_per_task": round(questions / n, 3),
+        "objects_per_question": round(options / questions, 2) if questions else None,
+        # At the calibrated level: plan (every calibrated decision of a task covered) or decision.
+        "empirical_coverage": (
+            round(plans_covered / plans_calibrated, 4)
+            if level == "plan" and plans_calibrated
+            else (round(covered / calibrated, 4) if calibrated else None)
+        ),
+        "tasks_with_calibrated_decisions": plans_calibrated,
         "calibrated_decisions": calibrated,
-        "empirical_coverage": round(covered / calibrated, 4) if calibrated else None,
+        "decision_coverage": round(covered / calibrated, 4) if calibrated else None,
     }
+
+
+def covered_decisions(task: Task, plan: Plan) -> list[bool]:
+    """Whether each calibrated decision's set holds the gold: a yes/no decision's answers the gold
+    answer, a which-one decision's candidates an object the gold accepts there (one where the gold
+    accepts none of the target's objects is left out, as in the calibration)."""
+    found = []
+    for d in plan.trace.decisions or ():
+        found += [
+            gold_answer(task, j.object, d.target.to) in j.answers for j in d.objects if j.answers is not None
+        ]
+        accepted = {j.object for j in d.objects if gold_answer(task, j.object, d.target.to) == "yes"}
+        if d.candidates is not None and accepted:
+            found.append(bool(accepted & set(d.candidates)))
+    return found
 
 
 def _in_bin(pairs: list[tuple[float, float]], k: int, bins: int = BINS) -> list[tuple[float, float]]:
@@ -143,6 +171,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--split", choices=("dev", "test"), default="dev")
     parser.add_argument("--systems", default="conceptbot,nokg")
+    parser.add_argument("--level", choices=LEVELS, default="plan", help="what the coverage holds for")
     parser.add_argument("--write", action="store_true", help=f"add the rows to {OUT}")
     parser.add_argument(
         "--reliability", action="store_true", help="only the reliability of the probabilities (no questions)"
@@ -166,19 +195,24 @@ def main() -> None:
             plot_reliability(found)
             print(f"wrote {OUT} and {RELIABILITY}")
         return
-    rows = [measure(args.split, s, c) for s in args.systems.split(",") for c in COVERAGES]
-    columns = ("cover", "alone", "asked", "help", "q/task", "emp.cov", "n dec")
-    print(f"{'system':10} " + " ".join(f"{c:>7}" for c in columns))
+    rows = [measure(args.split, s, c, args.level) for s in args.systems.split(",") for c in COVERAGES]
+    columns = ("cover", "alone", "asked", "help", "q/task", "obj/q", "emp.cov", "dec.cov", "n task")
+    print(f"{'system':10} {'level':8} " + " ".join(f"{c:>7}" for c in columns))
     for r in rows:
         print(
-            f"{r['system']:10} {r['coverage']:>7} {r['success_without_questions']:>6}% {r['success']:>6}% "
-            f"{r['help_rate']:>6}% {r['questions_per_task']:>7} {r['empirical_coverage']!s:>7} "
-            f"{r['calibrated_decisions']:>7}"
+            f"{r['system']:10} {r['level']:8} {r['coverage']:>7} {r['success_without_questions']:>6}% "
+            f"{r['success']:>6}% {r['help_rate']:>6}% {r['questions_per_task']:>7} "
+            f"{r['objects_per_question']!s:>7} {r['empirical_coverage']!s:>7} {r['decision_coverage']!s:>7} "
+            f"{r['tasks_with_calibrated_decisions']:>7}"
         )
     if args.write:
         document = json.loads(OUT.read_text()) if OUT.exists() else {"asking": []}
-        done = {(r["split"], r["system"], r["coverage"]) for r in rows}
-        kept = [r for r in document["asking"] if (r["split"], r["system"], r["coverage"]) not in done] + rows
+
+        def key(r: dict[str, Any]) -> tuple[Any, ...]:
+            return r["split"], r["system"], r.get("level", "decision"), r["coverage"]
+
+        done = {key(r) for r in rows}
+        kept = [r for r in document["asking"] if key(r) not in done] + rows
         OUT.write_text(json.dumps({**document, "asking": kept}, indent=2) + "\n", encoding="utf-8")
         print(f"wrote {OUT}")
         plot(kept)
@@ -194,13 +228,18 @@ def plot(rows: list[dict[str, Any]]) -> None:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6, 4))
-    for split, system in sorted({(r["split"], r["system"]) for r in rows}):
+    for split, system, level in sorted({(r["split"], r["system"], r.get("level", "decision")) for r in rows}):
         line = sorted(
-            (r for r in rows if (r["split"], r["system"]) == (split, system)), key=lambda r: r["coverage"]
+            (
+                r
+                for r in rows
+                if (r["split"], r["system"], r.get("level", "decision")) == (split, system, level)
+            ),
+            key=lambda r: r["coverage"],
         )
         xs = [0.0] + [r["help_rate"] for r in line]
         ys = [line[0]["success_without_questions"]] + [r["success"] for r in line]
-        ax.plot(xs, ys, marker="o", label=f"{split}: {system}")
+        ax.plot(xs, ys, marker="o", label=f"{split}: {system}, {level} level")
         for r in line:
             ax.annotate(str(r["coverage"]), (r["help_rate"], r["success"]), fontsize=7)
     ax.set_xlabel("tasks with a question (%)")

@@ -36,7 +36,12 @@ import numpy as np
 from conceptbot.core.config import load_settings
 from conceptbot.knowledge.registry import open_graph
 from conceptbot.pipeline.goal_planner.combine import value
-from conceptbot.pipeline.goal_planner.conformal import COVERAGES, conformal_threshold, decision_set
+from conceptbot.pipeline.goal_planner.conformal import (
+    CALIBRATION_DOC,
+    COVERAGES,
+    conformal_threshold,
+    decision_set,
+)
 from conceptbot.pipeline.goal_planner.decide import group_readings
 from conceptbot.pipeline.goal_planner.evidence import FEATURES, GRAPH_FREE, GraphEvidence
 
@@ -233,23 +238,18 @@ def main(argv: list[str] | None = None) -> int:
         else {}
     )
     if args.write and qhat:
-        CONFORMAL.write_text(
-            json.dumps(
-                {
-                    "_doc": "Written by benchmarks/fit_judgements.py --conformal: split conformal "
-                    "thresholds (qhat) on the combination's held-out P(yes) over the judgement set; "
-                    "read by conceptbot.pipeline.goal_planner.conformal. Refit for another model.",
-                    "fitted_on": f"{args.readings.name}, {len(rows)} rows",
-                    "qhat": {
-                        name: {str(c): round(q, 4) for c, q in fitted.items()}
-                        for name, fitted in qhat.items()
-                    },
+        # Only the decision-level entries: the plan-level ones are fit_conformal_plans.py's.
+        data = json.loads(CONFORMAL.read_text(encoding="utf-8")) if CONFORMAL.exists() else {}
+        data.update(
+            {
+                "_doc": CALIBRATION_DOC,
+                "fitted_on": f"{args.readings.name}, {len(rows)} rows",
+                "qhat": {
+                    name: {str(c): round(q, 4) for c, q in fitted.items()} for name, fitted in qhat.items()
                 },
-                indent=2,
-            )
-            + "\n",
-            encoding="utf-8",
+            }
         )
+        CONFORMAL.write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
         print(f"wrote {CONFORMAL}")
     if args.write:
         doc = {

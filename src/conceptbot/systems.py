@@ -161,6 +161,7 @@ def _conceptbot(config: str, settings: Settings, options: SystemOptions, parts: 
         options.n,
         options.planner,
         coverage=options.coverage,
+        level=options.level,
     )
 
 

@@ -645,12 +645,14 @@ def test_the_simulated_person_replies_to_both_kinds_of_question() -> None:
     gold = {"type": "assign", "assign": {"jar": ["glass bin"], "vase": ["glass bin"]}}
     task = Task("t-4", "materials", "glass", "kitchen", gold, "")
     choose = ClarifyingQuestion(
-        "Which ...?", "glass bin", ("cork", "jar", "vase"), (0.5, 0.5, 0.5), multiple=True
+        "Which ...?", "glass bin", ("cork", "jar", "vase"), (0.5, 0.5, 0.5), kind="choose"
     )
     assert gold_reply(task, choose) == "jar, vase"
     assert (
-        gold_reply(task, ClarifyingQuestion("Which ...?", "glass bin", ("cork", "tin"), (0.5, 0.5), True))
+        gold_reply(task, ClarifyingQuestion("Which ...?", "glass bin", ("cork", "tin"), (0.5, 0.5), "choose"))
         == "none"
     )
     assert gold_reply(task, ClarifyingQuestion("Should ...?", "glass bin", ("jar",), (0.5,))) == "yes"
     assert gold_reply(task, ClarifyingQuestion("Should ...?", "glass bin", ("cork",), (0.5,))) == "no"
+    one = ClarifyingQuestion("Which one ...?", "glass bin", ("cork", "jar", "vase"), (0.5, 0.3, 0.2), "one")
+    assert gold_reply(task, one) == "jar"

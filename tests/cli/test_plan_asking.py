@@ -22,7 +22,7 @@ CHOOSE = ClarifyingQuestion(
     "bowl",
     ("lemon", "lime", "cup"),
     (0.5, 0.6, 0.4),
-    multiple=True,
+    kind="choose",
 )
 
 
@@ -108,4 +108,4 @@ def test_a_reply_to_a_choose_question_that_is_not_an_answer_is_asked_again(
     monkeypatch.setattr(plan_cmd, "build_system", lambda settings, config, options: system)
     out = _plan(tmp_path, "--ask", answer=f"{first}\nnone\n")
     assert out.exit_code == 0, out.output
-    assert system.answers == ["none"] and "Give numbers from the list" in out.output
+    assert system.answers == ["none"] and "Give numbers or names" in out.output

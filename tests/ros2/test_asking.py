@@ -27,7 +27,7 @@ CHOOSE = ClarifyingQuestion(
     "user",
     ("sponge", "towel"),
     (0.5, 0.4),
-    multiple=True,
+    kind="choose",
 )
 
 

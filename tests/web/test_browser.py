@@ -40,7 +40,7 @@ CHOOSE = ClarifyingQuestion(
     "user",
     ("apple", "lemon", "lime"),
     (0.5, 0.6, 0.45),
-    multiple=True,
+    kind="choose",
 )
 
 
@@ -51,11 +51,31 @@ def asking_worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: Any 
     emit("plan", {"plan": plan, "refused": False, "reason": None, "usage": {}})
 
 
-def choosing_worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: Any = None) -> None:
+ONE = ClarifyingQuestion(
+    "Which one should I give to the user: the apple, the lemon or the lime? One of them, or none.",
+    "user",
+    ("apple", "lemon", "lime"),
+    (0.4, 0.35, 0.25),
+    kind="one",
+)
+
+
+def choosing_worker(
+    spec: Any,
+    emit: Callable[..., None],
+    out_dir: Path,
+    ask: Any = None,
+    question: ClarifyingQuestion = CHOOSE,
+) -> None:
     """A run whose planner is unsure about three objects for one target: one question, which go."""
-    chosen = CHOOSE.read(ask(CHOOSE)) if ask is not None else ()
+    chosen = question.read(ask(question)) if ask is not None else ()
     plan = [f"pick_and_place({o}, user)" for o in chosen or ()] + ["done()"]
     emit("plan", {"plan": plan, "refused": False, "reason": None, "usage": {}})
+
+
+def picking_worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: Any = None) -> None:
+    """A run whose planner has three candidates for a target taking one: which one."""
+    choosing_worker(spec, emit, out_dir, ask, ONE)
 
 
 @pytest.fixture
@@ -186,3 +206,46 @@ def test_the_page_asks_which_objects_go_and_the_ticked_ones_do(server: str, brow
     wait.until(when.text_to_be_present_in_element((By.ID, "status"), "Done."))
     plan = [li.text for li in browser.find_elements(By.CSS_SELECTOR, "#plan li")]
     assert plan == ["pick_and_place(lemon, user)", "pick_and_place(lime, user)", "done()"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("server", [picking_worker], indirect=True)
+def test_the_page_asks_which_one_with_radio_buttons(server: str, browser) -> None:
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support import expected_conditions as when
+    from selenium.webdriver.support.ui import Select, WebDriverWait
+
+    wait = WebDriverWait(browser, 30)
+    browser.get(server + "/")
+    wait.until(lambda b: len(Select(b.find_element(By.ID, "scene")).options) > 5)
+    browser.find_element(By.ID, "request").send_keys("Bring me something sour")
+    browser.find_element(By.ID, "run").click()
+    wait.until(when.visibility_of_element_located((By.ID, "choose-box")))
+    boxes = browser.find_elements(By.CSS_SELECTOR, "#choose-options input")
+    assert [b.get_attribute("type") for b in boxes] == ["radio"] * 3
+    boxes[0].click()
+    boxes[2].click()  # a radio button: the last one ticked is the one
+    browser.save_screenshot(str(SHOTS / "web-5-which-one.png"))
+    browser.find_element(By.ID, "answer-chosen").click()
+    wait.until(when.text_to_be_present_in_element((By.ID, "status"), "Done."))
+    plan = [li.text for li in browser.find_elements(By.CSS_SELECTOR, "#plan li")]
+    assert plan == ["pick_and_place(lime, user)", "done()"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("server", [picking_worker], indirect=True)
+def test_none_of_them_sends_nothing(server: str, browser) -> None:
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support import expected_conditions as when
+    from selenium.webdriver.support.ui import Select, WebDriverWait
+
+    wait = WebDriverWait(browser, 30)
+    browser.get(server + "/")
+    wait.until(lambda b: len(Select(b.find_element(By.ID, "scene")).options) > 5)
+    browser.find_element(By.ID, "request").send_keys("Bring me something sour")
+    browser.find_element(By.ID, "run").click()
+    wait.until(when.visibility_of_element_located((By.ID, "choose-box")))
+    browser.find_elements(By.CSS_SELECTOR, "#choose-options input")[1].click()  # changed their mind
+    browser.find_element(By.ID, "answer-none").click()
+    wait.until(when.text_to_be_present_in_element((By.ID, "status"), "Done."))
+    assert [li.text for li in browser.find_elements(By.CSS_SELECTOR, "#plan li")] == ["done()"]

@@ -107,21 +107,22 @@ def plan(
 
 
 def _ask_on_terminal(question: ClarifyingQuestion) -> str:
-    """The question on stderr (stdout stays the plan's): yes or no, or (a ``choose`` question) the
-    numbers or names of the objects that go, comma-separated, or ``none``; asked again until it is
-    an answer."""
+    """The question on stderr (stdout stays the plan's): yes or no; or the objects listed by number,
+    answered with numbers or names (``choose``: comma-separated, ``one``: one) or ``none``; asked
+    again until it is an answer."""
     text = terminal_safe(question.text)  # scene names and criteria come from files and requests
-    if not question.multiple:
+    if question.kind == "confirm":
         return click.prompt(f"Question: {text}", type=click.Choice(["yes", "no"]), err=True)
     click.echo(f"Question: {text}", err=True)
     for number, obj in enumerate(question.objects, 1):
         click.echo(f"  {number}. {terminal_safe(obj)}", err=True)
+    how = "numbers or names, comma-separated" if question.kind == "choose" else "a number or a name"
     while True:
-        reply = click.prompt("Which go (numbers or names, comma-separated; or none)", err=True)
+        reply = click.prompt(f"Which ({how}; or none)", err=True)
         chosen = question.read(_by_number(reply, question.objects))
         if chosen is not None:
             return question.normalised(chosen)
-        click.echo("Give numbers from the list or names, separated by commas, or: none", err=True)
+        click.echo(f"Give {how} from the list, or: none", err=True)
 
 
 def _by_number(reply: str, objects: tuple[str, ...]) -> str:

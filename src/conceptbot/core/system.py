@@ -28,6 +28,9 @@ completions)."""
 PLANNERS = ("auto", "goal", "steps")
 COVERAGES = (0.8, 0.9, 0.95)
 """The coverages the conformal calibration ships thresholds for."""
+LEVELS = ("plan", "decision")
+"""What the conformal coverage holds for: ``plan`` (every calibrated decision of a plan at once, the
+default) or ``decision`` (each decision on its own)."""
 """ConceptBot's planners: ``auto`` (the goal planner), ``goal``, ``steps`` (the paper's)."""
 
 
@@ -85,6 +88,8 @@ class SystemOptions:
             planner); the ``paper`` systems are always ``steps``.
         coverage: How often the goal planner's prediction set must hold a decision's right answer
             (one of :data:`COVERAGES`); higher asks more.
+        level: What the coverage holds for (:data:`LEVELS`): ``plan``, all of a plan's calibrated
+            decisions together, or ``decision``, each one (asks less, is wrong more often).
 
     Raises:
         ConfigError: A value of the wrong type, out of range or not one of the choices.
@@ -96,6 +101,7 @@ class SystemOptions:
     fallback: bool | None = None
     planner: str = "auto"
     coverage: float = 0.9
+    level: str = "plan"
 
     def __post_init__(self) -> None:
         if self.theta is not None:
@@ -111,6 +117,7 @@ class SystemOptions:
         _choice("planner_method", self.planner_method, METHODS)
         _choice("planner", self.planner, PLANNERS)
         _choice("coverage", self.coverage, COVERAGES)
+        _choice("level", self.level, LEVELS)
         if isinstance(self.n, bool) or not isinstance(self.n, int) or self.n < 1:
             raise ConfigError(f"n must be a whole number of completions >= 1, got {self.n!r}")
         if self.fallback is not None and not isinstance(self.fallback, bool):

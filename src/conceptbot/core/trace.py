@@ -250,6 +250,8 @@ class JudgementTrace:
             (``{"features": {...}, "statements": [...]}``), where the score is combined, else None.
         answers: The decision's conformal prediction set (``["yes"]``, ``["no"]``, or both: unsure),
             where the planner calibrated it, else None.
+        p_one: For a target taking one object, the probability that this is the one (a softmax of
+            the ranking over the candidates, 4 decimals), else None.
     """
 
     object: str
@@ -260,6 +262,7 @@ class JudgementTrace:
     model: float | None = None
     evidence: Mapping[str, Any] | None = None
     answers: tuple[str, ...] | None = None
+    p_one: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (``name_score`` only where there is one)."""
@@ -280,72 +283,74 @@ class JudgementTrace:
             }
         if self.answers is not None:
             data["answers"] = list(self.answers)
+        if self.p_one is not None:
+            data["p_one"] = self.p_one
         return data
 
 
-NONE = "none"  # the answer to a ``choose`` question that sends none of its objects
+NONE = "none"  # the answer that sends none of a ``choose`` or ``one`` question's objects
+KINDS = ("confirm", "choose", "one")
 
 
 @dataclass(frozen=True)
 class ClarifyingQuestion:
-    """A question the planner asks where calibrated decisions' conformal prediction sets hold both
-    answers: about one object (``confirm``: yes or no) or, where one target is unsure of several, about
-    all of them at once (``choose``: which of these go there; any, all or none).
+    """A question the planner asks where calibrated decisions' conformal prediction sets are unsure:
+    about one object (``confirm``: yes or no); where a target taking all that fit is unsure of
+    several, about all of them at once (``choose``: which of these go; any, all or none); where a
+    target taking one object has several candidates (``one``: which one, or none).
 
     Attributes:
-        text: The question in plain words ("Should I put the lemon in or on the bowl?", "Which of
-            these should I put in or on the salad bowl: the kiwi, the olive oil or the sugar?").
+        text: The question in plain words ("Should I put the lemon in or on the bowl?", "Which one
+            should I give to the user: the coke, the 7up or the water bottle? One, or none.").
         target: Where the objects would go.
-        objects: The objects it is about, most uncertain first.
-        p_yes: Each object's calibrated P(yes) (4 decimals), in the order of ``objects``.
-        multiple: A ``choose`` question (the options are the objects); else ``confirm`` (yes, no).
+        objects: The objects it is about, most uncertain (``one``: most likely) first.
+        p_yes: Each object's calibrated probability (4 decimals), in the order of ``objects``: P(yes)
+            for ``confirm`` and ``choose``, P(it is the one) for ``one``.
+        kind: One of :data:`KINDS`.
         answer: The person's answer as read (``yes``/``no``; for ``choose`` the chosen objects joined
-            by ", ", or ``none``); None where nobody was asked (the plan then acts on the likelier
-            answer of each decision).
+            by ", ", for ``one`` the object; or ``none``); None where nobody was asked (the plan then
+            acts on the likelier answers).
     """
 
     text: str
     target: str
     objects: tuple[str, ...]
     p_yes: tuple[float, ...]
-    multiple: bool = False
+    kind: str = "confirm"
     answer: str | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "objects", tuple(self.objects))
         object.__setattr__(self, "p_yes", tuple(self.p_yes))
-
-    @property
-    def kind(self) -> str:
-        """``confirm`` or ``choose``."""
-        return "choose" if self.multiple else "confirm"
+        if self.kind not in KINDS:
+            raise ValueError(f"kind must be one of {KINDS}, got {self.kind!r}")
 
     @property
     def options(self) -> tuple[str, ...]:
-        """What may be answered: yes or no, or (``choose``) any of the objects."""
-        return self.objects if self.multiple else ("yes", "no")
+        """What may be answered: yes or no, or (``choose``, ``one``) the objects."""
+        return ("yes", "no") if self.kind == "confirm" else self.objects
 
     def read(self, reply: object) -> tuple[str, ...] | None:
         """The objects a reply sends to the target (empty: none), or None for a reply that is not an
         answer. ``confirm``: yes or no. ``choose``: ``none``, or options separated by commas (in any
-        case, each at most once)."""
+        case, each at most once). ``one``: one option, or ``none``."""
         if not isinstance(reply, str):
             return None
         said = " ".join(reply.strip().lower().split())
-        if not self.multiple:
+        if self.kind == "confirm":
             return {"yes": self.objects, "no": ()}.get(said)
         if said == NONE:
             return ()
         names = {o.lower(): o for o in self.objects}
         parts = [" ".join(p.split()) for p in said.split(",")]
         chosen = [names.get(p) for p in parts]
-        if not parts or None in chosen or len(set(chosen)) != len(chosen):
+        if None in chosen or len(set(chosen)) != len(chosen) or (self.kind == "one" and len(chosen) != 1):
             return None
         return tuple(o for o in self.objects if o in chosen)
 
     def normalised(self, chosen: tuple[str, ...]) -> str:
         """The answer text for ``chosen`` (what :attr:`answer` records)."""
-        if not self.multiple:
+        if self.kind == "confirm":
             return "yes" if chosen else "no"
         return ", ".join(chosen) if chosen else NONE
 
@@ -373,18 +378,23 @@ class DecisionTrace:
         decided: False where the request named enough objects (nothing was asked).
         objects: Every other object's decision, in scene order (empty when not decided).
         context: The graph facts about the request put in the questions (None when not decided).
+        candidates: For a target taking one object, the conformal prediction set of which one
+            (most likely first; more than one: unsure), where the planner calibrated it, else None.
     """
 
     target: TargetTrace
     decided: bool
     objects: tuple[JudgementTrace, ...] = ()
     context: tuple[str, ...] | None = None
+    candidates: tuple[str, ...] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form: the target's fields, then the decisions."""
         data = {**self.target.to_dict(), "decided": self.decided}
         if self.context is not None:
             data["context"] = list(self.context)
+        if self.candidates is not None:
+            data["candidates"] = list(self.candidates)
         data["objects"] = [o.to_dict() for o in self.objects]
         return data
 

@@ -105,6 +105,7 @@ class ConceptBot:
         planner: str = "auto",
         thresholds: Thresholds | None = None,
         coverage: float = 0.9,
+        level: str = "plan",
     ) -> None:
         if config not in SWITCHES:
             raise ValueError(f"config must be one of {CONFIGS}")
@@ -153,7 +154,7 @@ class ConceptBot:
             thresholds,
             hazards=self.hazards,
             # Its decisions' conformal thresholds, fitted on the same combination's probabilities.
-            calibration=conformal.shipped("graph" if graph is not None else "nograph"),
+            calibration=conformal.shipped("graph" if graph is not None else "nograph", level),
             coverage=coverage,
         )
 

@@ -101,4 +101,7 @@ def judgement_trace(judgement: Judgement, name_score: float | None = None) -> Ju
         name_score=None if name_score is None else round(name_score, 3),
         model=None if judgement.model is None else round(judgement.model, 3),
         evidence=None if evidence is None else evidence.to_dict(),
+        p_one=None
+        if judgement.p_one is None or judgement.p_one != judgement.p_one
+        else round(judgement.p_one, 4),
     )

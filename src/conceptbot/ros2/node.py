@@ -281,7 +281,11 @@ class ConceptBotNode(Node):
         chosen = question.read(answer)
         if chosen is None:
             # Dropped, not fatal: the question stays open for an answer that fits it.
-            how = "yes or no" if not question.multiple else f"some of {', '.join(question.options)}, or none"
+            how = {
+                "confirm": "yes or no",
+                "choose": f"some of {', '.join(question.options)}, or none",
+                "one": f"one of {', '.join(question.options)}, or none",
+            }[question.kind]
             self.get_logger().warning(f"answer for {request_id!r} dropped: {answer!r:.80} is not {how}")
             return
         if not slot.give(question.normalised(chosen)):
@@ -300,7 +304,11 @@ class ConceptBotNode(Node):
                 self.publish(self.question_pub, question_payload(running.request.id, question))
                 answer = slot.wait(self.config.answer_timeout_s)
                 if answer is None:
-                    said = '"yes" or "no"' if not question.multiple else '"<objects that go>" or "none"'
+                    said = {
+                        "confirm": '"yes" or "no"',
+                        "choose": '"<objects that go, comma-separated>" or "none"',
+                        "one": '"<the object>" or "none"',
+                    }[question.kind]
                     how = f'{{"id": "{running.request.id}", "answer": {said}}}'
                     raise NoAnswerError(
                         f"no answer to {question.text!r} within {self.config.answer_timeout_s:g} s",

@@ -63,7 +63,7 @@ def test_several_unsure_decisions_of_a_target_are_one_question_and_its_answer_se
 
     found = clarify([BOWL], ranked, decisions, QHAT, 0.0, ask=person)
     assert (
-        len(asked) == 1 and asked[0].multiple and asked[0].objects == ("lemon", "cup")
+        len(asked) == 1 and asked[0].kind == "choose" and asked[0].objects == ("lemon", "cup")
     )  # most uncertain first
     assert asked[0].text == (
         "Which of these should I put in or on the bowl (an ingredient of hollandaise): "
@@ -97,12 +97,12 @@ def test_several_unsure_decisions_of_a_target_are_one_question_and_its_answer_se
     ],
 )
 def test_a_choose_question_reads_the_objects_named_and_nothing_else(reply: object, chosen: object) -> None:
-    question = ClarifyingQuestion("Which ...?", "bowl", ("lemon", "cup"), (0.5, 0.4), multiple=True)
+    question = ClarifyingQuestion("Which ...?", "bowl", ("lemon", "cup"), (0.5, 0.4), kind="choose")
     assert question.read(reply) == chosen
 
 
 def test_one_question_per_target_at_most_a_few_options_and_an_unusable_answer_leaves_it_open() -> None:
-    ranked, decisions = _case(*[(f"thing {i}", 0.5 + i / 100) for i in range(8)])
+    ranked, decisions = _case(*[(f"thing {i}", 0.5 + i / 100) for i in range(MAX_OPTIONS + 2)])
     found = clarify([BOWL], ranked, decisions, QHAT, 0.0, ask=lambda q: "maybe")
     assert len(found.questions) == 1
     assert found.questions[0].objects == tuple(f"thing {i}" for i in range(MAX_OPTIONS))
@@ -122,3 +122,51 @@ def test_a_decision_that_cannot_be_read_is_asked_about_and_sorts_are_not_asked_y
     ]
     sort = clarify(bins, {0: ranked[0], 1: []}, decisions + decisions, QHAT, 0.0)
     assert sort.questions == () and sort.confidence is None
+
+
+USER = Target("user", 1, "scored")
+
+
+def _one_of(*pairs: tuple[str, float]) -> tuple[dict[int, list[Judgement]], tuple[DecisionTrace, ...]]:
+    judgements = [Judgement(o, "user", 0.5, 0.0, scoring="logprob", p_one=p) for o, p in pairs]
+    judgements.sort(key=lambda j: -(j.p_one or 0.0))
+    decision = DecisionTrace(target_trace(USER), True, tuple(judgement_trace(j) for j in judgements))
+    return {0: judgements}, (decision,)
+
+
+def test_a_target_taking_one_object_asks_which_one_when_its_set_holds_several() -> None:
+    ranked, decisions = _one_of(("coke", 0.5), ("water", 0.35), ("sponge", 0.15))
+    found = clarify([USER], ranked, decisions, 0.8, 0.0)  # keeps candidates at P >= 0.2
+    [question] = found.questions
+    assert question.kind == "one" and question.objects == ("coke", "water")
+    assert (
+        question.text == "Which one should I give to the user: the coke or the water? One of them, or none."
+    )
+    assert found.decisions[0].candidates == ("coke", "water")
+    assert found.confidence == pytest.approx(0.5)  # acts on the likeliest
+    asked = clarify([USER], ranked, decisions, 0.8, 0.0, ask=lambda q: "water")
+    assert asked.questions[0].answer == "water" and asked.confidence == pytest.approx(1.0)
+    assert (asked.ranked[0][0].subject, asked.ranked[0][0].score) == ("water", ANSWERED)
+    assert all(j.score == -ANSWERED for j in asked.ranked[0][1:])  # the others, listed or not, do not go
+    assert asked.decisions[0].candidates == ("water",)
+    none = clarify([USER], ranked, decisions, 0.8, 0.0, ask=lambda q: "none")
+    assert all(j.score == -ANSWERED for j in none.ranked[0]) and none.decisions[0].candidates == ()
+
+
+def test_a_sure_choice_is_not_asked_and_an_unreadable_one_is() -> None:
+    ranked, decisions = _one_of(("coke", 0.9), ("water", 0.06), ("sponge", 0.04))
+    sure = clarify([USER], ranked, decisions, 0.8, 0.0)
+    assert sure.questions == () and sure.decisions[0].candidates == ("coke",)
+    assert sure.confidence == pytest.approx(0.9)
+    broken, traces = _one_of(("coke", math.nan), ("water", math.nan))
+    unreadable = clarify([USER], broken, traces, 0.8, 0.0)
+    assert unreadable.questions[0].objects == ("coke", "water") and unreadable.confidence == 0.0
+
+
+@pytest.mark.parametrize(
+    ("reply", "chosen"),
+    [("water", ("water",)), (" COKE", ("coke",)), ("none", ()), ("coke, water", None), ("yes", None)],
+)
+def test_a_which_one_question_takes_one_object_or_none(reply: str, chosen: object) -> None:
+    question = ClarifyingQuestion("Which one ...?", "user", ("coke", "water"), (0.5, 0.4), kind="one")
+    assert question.read(reply) == chosen

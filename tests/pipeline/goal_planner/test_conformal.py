@@ -51,10 +51,16 @@ def test_a_decision_is_sure_only_when_one_answer_is_likely_enough() -> None:
 
 def test_the_shipped_calibration_has_every_coverage_in_order() -> None:
     calibration = shipped()
-    assert set(calibration.qhat) == set(COVERAGES) and "1028 rows" in calibration.fitted_on
+    assert set(calibration.qhat) == set(COVERAGES) and "dev tasks" in calibration.fitted_on
+    decisions = shipped(level="decision")
+    assert set(decisions.qhat) == set(COVERAGES) and "1028 rows" in decisions.fitted_on
+    # All of a plan's decisions at once need a wider set than one decision does.
+    assert all(calibration.qhat[c] >= decisions.qhat[c] for c in COVERAGES)
     assert shipped("nograph").qhat != calibration.qhat
-    with pytest.raises(ValueError, match="no conformal calibration"):
+    with pytest.raises(ValueError, match="no plan-level conformal calibration"):
         shipped("other")
+    with pytest.raises(ValueError, match="no conformal level"):
+        shipped(level="task")
     thresholds = [calibration.threshold(c) for c in COVERAGES]
     assert thresholds == sorted(thresholds) and all(0.5 <= q <= 1.0 for q in thresholds)
     with pytest.raises(ValueError, match=r"no conformal threshold for coverage 0\.7"):

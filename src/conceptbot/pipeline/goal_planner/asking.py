@@ -1,18 +1,24 @@
-"""Where the goal planner is unsure, a question (issue 35; KnowNo's recipe): each calibrated yes/no
-decision of a target that takes every object fitting it gets its conformal prediction set
-(:mod:`.conformal`); a set with both answers is unsure. A target's unsure decisions make one
-question: about one object, yes or no ("Should I put the lemon in or on the bowl (an ingredient of
-hollandaise)?"); about several, which of them go ("Which of these should I put in or on the salad
-bowl (...): the kiwi, the olive oil or the sugar? Any, all or none."). The target with the most
-uncertain decision is asked first, at most :data:`MAX_QUESTIONS` per plan.
-Asked (``ask`` given), the answer replaces the decisions; not asked, the plan acts on each likelier
-answer and lists the question.
-The plan's confidence is the product of the probabilities of the answers it acts on (an answer
-given counts as sure).
+"""Where the goal planner is unsure, a question (issue 35; KnowNo's recipe). Two kinds of calibrated
+decision get conformal prediction sets (:mod:`.conformal`):
+
+- each yes/no decision of a target that takes every object fitting it: a set with both answers
+  is unsure. A target's unsure decisions make one question: about one object, yes or no ("Should
+  I put the lemon in or on the bowl (an ingredient of hollandaise)?"); about several, which of them
+  go ("Which of these should I put in or on the salad bowl (...): the kiwi, the olive oil or the
+  sugar? Any, all or none.");
+- which object a target taking one gets (the ranking as a softmax over the candidates): a set of
+  two or more is a question of which one ("Which one should I give to the user: the coke or the
+  water? One of them, or none.").
+
+The target with the most uncertain decision is asked first, at most :data:`MAX_QUESTIONS` per
+plan. Asked (``ask`` given), the answer replaces the decisions; not asked, the plan acts on each
+likelier answer and lists the question. The plan's confidence is the product of the probabilities
+of what it acts on (an answer given counts as sure).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 from conceptbot.core.system import Ask
@@ -23,7 +29,7 @@ from conceptbot.pipeline.goal_planner.targets import ALL, Target
 from conceptbot.pipeline.hazards import is_person
 
 MAX_QUESTIONS = 3  # per plan, one per target (only one target is asked about until sorts are)
-MAX_OPTIONS = 6  # objects in one question: a longer list is not one question a person reads
+MAX_OPTIONS = 12  # objects in one question (a checklist): past that, the likelier answers stand
 ANSWERED = 20.0  # the log-odds an answer sets: far beyond every threshold, either way
 
 
@@ -77,7 +83,7 @@ def question_for(number: int, target: Target, unsure: list[Judgement]) -> Clarif
         tuple(names),
         # A probability that is not a number (the decision could not be made) is shown as a coin toss.
         tuple(round(j.p_yes, 4) if j.p_yes == j.p_yes else 0.5 for j in kept),
-        multiple=len(kept) > 1,
+        kind="choose" if len(kept) > 1 else "confirm",
     )
 
 
@@ -88,6 +94,7 @@ def clarify(
     qhat: float,
     limit: float,
     ask: Ask | None = None,
+    which_one: bool = True,
 ) -> Clarified:
     """Sets, questions and answers for the calibrated decisions (see the module docstring).
 
@@ -100,6 +107,8 @@ def clarify(
             threshold), to tell the answer it acts on.
         ask: Asks the person; None: nobody is asked. A reply that is not an answer to the question
             (:meth:`ClarifyingQuestion.read`) counts as no answer.
+        which_one: Whether ``qhat`` holds for which-one decisions too (a plan-level calibration);
+            else targets taking one object are not asked about.
     """
     sets: dict[tuple[int, str], DecisionSet] = {}
     unsure: dict[int, list[Judgement]] = {}
@@ -114,19 +123,40 @@ def clarify(
                 sets[(number, judgement.subject)] = found
                 if not found.sure:
                     unsure.setdefault(number, []).append(judgement)
-    doubt = {number: sorted(js, key=_uncertainty) for number, js in unsure.items()}
+    # Targets taking one object: the set of which one.
+    candidates = {
+        number: one_of(ranked.get(number, []), qhat)
+        for number, target in enumerate(targets)
+        if which_one
+        and target.count == 1
+        and not target.rest
+        and any(j.p_one is not None for j in ranked.get(number, []))
+    }
+    doubt: dict[int, tuple[float, ClarifyingQuestion]] = {}
+    for number, js in unsure.items():
+        js = sorted(js, key=_uncertainty)
+        doubt[number] = (_uncertainty(js[0]), question_for(number, targets[number], js))
+    for number, found in candidates.items():
+        if len(found) > 1:
+            top = found[0].p_one if found[0].p_one == found[0].p_one else 0.5
+            doubt[number] = (abs(top - 0.5), which_one_question(targets[number], found))
     # One question per target, the target whose most uncertain decision is most uncertain first.
-    order = sorted(doubt, key=lambda number: _uncertainty(doubt[number][0]))
     questions = []
     answered: dict[tuple[int, str], str] = {}
-    for number in order[:MAX_QUESTIONS]:
-        question = question_for(number, targets[number], doubt[number])
+    for number in sorted(doubt, key=lambda n: doubt[n][0])[:MAX_QUESTIONS]:
+        question = doubt[number][1]
         chosen = question.read(ask(question)) if ask is not None else None
         if chosen is None:
             questions.append(question)
             continue
         questions.append(replace(question, answer=question.normalised(chosen)))
-        for obj in question.objects:
+        # A "which one" answer settles every candidate of the target, listed or not.
+        about = (
+            question.objects
+            if question.kind != "one"
+            else [j.subject for j in ranked[number] if j.p_one is not None]
+        )
+        for obj in about:
             answered[(number, obj)] = "yes" if obj in chosen else "no"
     if answered:
         ranked = dict(ranked)
@@ -145,7 +175,7 @@ def clarify(
             rest = [j for j in changed if j not in named]
             ranked[number] = named + sorted(rest, key=lambda j: -j.score)
     confidence = None
-    if sets:
+    if sets or candidates:
         confidence = 1.0
         for key, found in sets.items():
             if key in answered:
@@ -153,8 +183,45 @@ def clarify(
             acted_yes = next(j for j in ranked[key[0]] if j.subject == key[1]).score > limit
             acted = found.p_yes if acted_yes else 1.0 - found.p_yes
             confidence *= acted if acted == acted else 0.0  # unreadable (NaN): no confidence in it
-    traced = tuple(_with_sets(decision, number, sets, answered) for number, decision in enumerate(decisions))
-    return Clarified(ranked, traced, tuple(questions), confidence)
+        for number in candidates:
+            if not any(n == number for n, _ in answered):
+                best = max((j.p_one for j in ranked[number] if j.p_one is not None), default=math.nan)
+                confidence *= best if best == best else 0.0  # it acts on the likeliest one
+    traced = []
+    for number, decision in enumerate(decisions):
+        decision = _with_sets(decision, number, sets, answered)
+        if number in candidates:
+            settled = [o for (n, o), a in answered.items() if n == number and a == "yes"]
+            was_answered = any(n == number for n, _ in answered)
+            found = tuple(settled) if was_answered else tuple(j.subject for j in candidates[number])
+            decision = replace(decision, candidates=found)
+        traced.append(decision)
+    return Clarified(ranked, tuple(traced), tuple(questions), confidence)
+
+
+def one_of(judgements: list[Judgement], qhat: float) -> list[Judgement]:
+    """The conformal set of which one: the candidates at least ``1 - qhat`` likely, most likely first;
+    where none is (or the probabilities cannot be read), the :data:`MAX_OPTIONS` likeliest, so that
+    the person is asked rather than a guess made."""
+    scored = [j for j in judgements if j.p_one is not None]
+    readable = all(j.p_one == j.p_one for j in scored)
+    likeliest = sorted(scored, key=lambda j: -(j.p_one or 0.0)) if readable else scored
+    kept = [j for j in likeliest if readable and (j.p_one or 0.0) >= 1.0 - qhat]
+    return kept or likeliest[:MAX_OPTIONS]
+
+
+def which_one_question(target: Target, found: list[Judgement]) -> ClarifyingQuestion:
+    """The question of which one: "Which one should I give to the user: the coke, the 7up or the
+    water bottle? One of them, or none."."""
+    kept = found[:MAX_OPTIONS]
+    names = [j.subject for j in kept]
+    return ClarifyingQuestion(
+        f"Which one should I {_move(target)}: {_listed(names)}? One of them, or none.",
+        target.name,
+        tuple(names),
+        tuple(round(j.p_one, 4) if j.p_one is not None and j.p_one == j.p_one else 0.5 for j in kept),
+        kind="one",
+    )
 
 
 def _uncertainty(judgement: Judgement) -> float:

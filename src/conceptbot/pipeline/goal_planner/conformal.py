@@ -3,9 +3,12 @@ options, Ren et al., CoRL 2023): for a chosen coverage (0.9: the set contains th
 times in ten), a decision's prediction set holds every answer whose probability is at least
 ``1 - qhat``. One answer in the set: the planner acts on it. Both: it does not know, and should ask.
 
-``qhat`` is fitted on labelled decisions the planner never tuned on the test items with
-(``benchmarks/fit_judgements.py --conformal``: held-out combined probabilities on the judgement set)
-and shipped as data (``conformal.json``); another model needs its own.
+``qhat`` is fitted on labelled data the planner was never tuned on the test items with, and
+shipped as data (``conformal.json``); another model needs its own. Two levels: ``plan`` (the
+default), on the dev tasks, where a task's nonconformity is its worst decision's, so that all the
+decisions of a plan are covered together (``benchmarks/fit_conformal_plans.py``, KnowNo's
+multi-step form); ``decision``, on the judgement set's held-out combined probabilities, each
+decision on its own (``benchmarks/fit_judgements.py --conformal``).
 """
 
 from __future__ import annotations
@@ -18,11 +21,25 @@ from functools import cache
 from importlib import resources
 from typing import Any
 
-from conceptbot.core.system import COVERAGES
+from conceptbot.core.system import COVERAGES, LEVELS
 
-__all__ = ["COVERAGES", "Calibration", "DecisionSet", "conformal_threshold", "decision_set", "shipped"]
+__all__ = [
+    "COVERAGES",
+    "LEVELS",
+    "Calibration",
+    "DecisionSet",
+    "conformal_threshold",
+    "decision_set",
+    "shipped",
+]
 
 CALIBRATION = "conformal.json"
+CALIBRATION_DOC = (
+    "Split conformal thresholds (qhat) per combination and coverage, read by "
+    "conceptbot.pipeline.goal_planner.conformal. qhat: decision level, on the combination's held-out "
+    "P(yes) over the judgement set (benchmarks/fit_judgements.py --conformal --write). plan_qhat: plan "
+    "level, a dev task's worst decision (benchmarks/fit_conformal_plans.py --write). Refit for another model."
+)
 
 
 def conformal_threshold(scores: Sequence[float], coverage: float) -> float:
@@ -79,10 +96,12 @@ def decision_set(p_yes: float, qhat: float) -> DecisionSet:
 
 @dataclass(frozen=True)
 class Calibration:
-    """The shipped thresholds: ``qhat`` per coverage, and where they were fitted."""
+    """The shipped thresholds: ``qhat`` per coverage, where they were fitted, and whether they hold
+    for which-one decisions (``which_one``; the decision level's, from yes/no judgements, do not)."""
 
     qhat: dict[float, float]
     fitted_on: str
+    which_one: bool = True  # fitted on which-one decisions too (plan level), so they get sets
 
     def threshold(self, coverage: float) -> float:
         """``qhat`` for ``coverage`` (one of :data:`COVERAGES`).
@@ -97,16 +116,21 @@ class Calibration:
 
 
 @cache
-def shipped(combination: str = "graph") -> Calibration:
+def shipped(combination: str = "graph", level: str = "plan") -> Calibration:
     """The calibration shipped with the package (``conformal.json``) for a combination's
-    probabilities (``graph``: the default system's, ``nograph``: the ablation's).
+    probabilities (``graph``: the default system's, ``nograph``: the ablation's), at a level
+    (:data:`LEVELS`: ``plan`` from the dev tasks, ``benchmarks/fit_conformal_plans.py``;
+    ``decision`` from the judgement set, ``benchmarks/fit_judgements.py --conformal``).
 
     Raises:
-        ValueError: A combination without a calibration.
+        ValueError: A combination or level without a calibration.
     """
+    if level not in LEVELS:
+        raise ValueError(f"no conformal level {level!r}; known: {', '.join(LEVELS)}")
     text = resources.files("conceptbot.pipeline").joinpath(CALIBRATION).read_text(encoding="utf-8")
     data = json.loads(text)
-    if combination not in data["qhat"]:
-        raise ValueError(f"no conformal calibration for the {combination!r} combination")
-    fitted = data["qhat"][combination]
-    return Calibration({float(k): float(v) for k, v in fitted.items()}, str(data["fitted_on"]))
+    key, where = ("plan_qhat", "plan_fitted_on") if level == "plan" else ("qhat", "fitted_on")
+    if combination not in data.get(key, {}):
+        raise ValueError(f"no {level}-level conformal calibration for the {combination!r} combination")
+    fitted = data[key][combination]
+    return Calibration({float(k): float(v) for k, v in fitted.items()}, str(data[where]), level == "plan")

@@ -58,6 +58,8 @@ class Judgement:
         model: Where ``score`` combines the model's answer with the graph's evidence
             (:mod:`conceptbot.pipeline.goal_planner.combine`): the model's own calibrated log-odds; else None.
         evidence: The evidence that was combined, else None.
+        p_one: For a target taking one object, the probability that this is the one (a softmax of
+            the target's ranking over its candidates), else None.
     """
 
     subject: str
@@ -68,6 +70,7 @@ class Judgement:
     scoring: str = ""
     model: float | None = None
     evidence: Evidence | None = None
+    p_one: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form for the trace (``model`` and ``evidence`` only where the score is combined)."""

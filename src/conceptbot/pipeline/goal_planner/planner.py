@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Protocol
 
 from conceptbot.core.errors import (
@@ -156,6 +156,18 @@ def pick_text(target: str) -> str:
     return f"give to the {target}" if is_person(target) else f"put in or on the {target}"
 
 
+def _softmax(judgements: list[Judgement], order: dict[str, float]) -> list[float]:
+    """P(each judgement's object is the one) from the ranking's values; NaN throughout where a
+    value is not finite (the choice cannot be made: asking.py asks)."""
+    values = [order[j.subject] for j in judgements]
+    if not all(math.isfinite(v) for v in values):
+        return [math.nan] * len(values)
+    top = max(values)
+    weights = [math.exp(v - top) for v in values]
+    total = sum(weights)
+    return [w / total for w in weights]
+
+
 def _standardised(scores: dict[str, float]) -> dict[str, float]:
     """Scores as z-scores (0 mean, unit spread) so that two rankings can be added."""
     values = list(scores.values())
@@ -258,7 +270,9 @@ class GoalPlanner:
         asked = [j.scoring for js in ranked.values() for j in js if j.scoring]
         # Where a calibrated decision is unsure, a question (asked if someone answers): asking.py.
         qhat = self.calibration.threshold(self.coverage)
-        clarified = clarify(targets, ranked, decisions, qhat, self.thresholds.combined, ask)
+        clarified = clarify(
+            targets, ranked, decisions, qhat, self.thresholds.combined, ask, self.calibration.which_one
+        )
         ranked, decisions = clarified.ranked, clarified.decisions
         observer.event("decisions", DecisionsEvent(tuple(decisions)))
         pile: StackTrace | None = None
@@ -365,6 +379,11 @@ class GoalPlanner:
                 usage = usage + used
                 yes_no, named_z = _standardised(order), _standardised(names)
                 order = {o: yes_no[o] + self.thresholds.name_weight * named_z[o] for o in order}
+            if target.count == 1 and len(others) > 1:
+                # Which one: the ranking as a distribution over the candidates, for the conformal
+                # set of which one (asking.py).
+                chances = _softmax(judgements, order)
+                judgements = [replace(j, p_one=p) for j, p in zip(judgements, chances, strict=True)]
             ranked[number] = named + sorted(judgements, key=lambda j: -order[j.subject])
             decisions.append(
                 DecisionTrace(

@@ -221,13 +221,17 @@ function showQuestion(id, question) {
     const r = await fetch(`/api/runs/${id}/answer`, { method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify({ answer }) });
     if (!r.ok) setStatus("The question was no longer open.", "error");
   };
-  const choose = question.kind === "choose";
-  $("confirm-buttons").hidden = choose;
-  $("choose-box").hidden = !choose;
-  if (choose) {
-    // One checkbox per object: the ticked ones go to the target, none ticked is "none".
+  const listed = question.kind !== "confirm";
+  $("confirm-buttons").hidden = listed;
+  $("choose-box").hidden = !listed;
+  if (listed) {
+    // One box per object: checkboxes for "which of these go", radio buttons for "which one";
+    // the ticked ones go to the target, none ticked is "none".
+    const type = question.kind === "one" ? "radio" : "checkbox";
     $("choose-options").replaceChildren(...question.options.map((name, i) => el("li", {},
-      el("input", { type: "checkbox", id: `choose-${i}`, value: name }), el("label", { for: `choose-${i}` }, ` ${name}`))));
+      el("input", { type, name: "choose", id: `choose-${i}`, value: name }), el("label", { for: `choose-${i}` }, ` ${name}`))));
+    $("answer-chosen").textContent = question.kind === "one" ? "This one" : "These go";
+    $("answer-none").onclick = send("none");
     $("answer-chosen").onclick = () => {
       const ticked = [...$("choose-options").querySelectorAll("input:checked")].map((b) => b.value);
       send(ticked.length ? ticked.join(", ") : "none")();
