@@ -162,6 +162,8 @@ def _conceptbot(config: str, settings: Settings, options: SystemOptions, parts: 
         options.planner,
         coverage=options.coverage,
         level=options.level,
+        # A model calibrated with `conceptbot calibrate --conformal` asks by its own thresholds.
+        calibration_dir=settings.calibration_dir,
     )
 
 

@@ -1,8 +1,10 @@
-"""``conceptbot calibrate``: measure the similarity threshold for the configured embedder."""
+"""``conceptbot calibrate``: measure the similarity threshold for the configured embedder, or (with
+``--conformal``) fit the configured model's own conformal thresholds for asking."""
 
 from __future__ import annotations
 
 import json
+import os
 from dataclasses import asdict
 from pathlib import Path
 
@@ -10,8 +12,13 @@ import click
 from rich.console import Console
 from rich.table import Table
 
+from conceptbot.bench.conformal_fit import PlanFit, collect, fit
+from conceptbot.bench.grading import load_tasks
 from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.cli.params import FiniteFloatRange
+from conceptbot.cli.progress import count_progress
+from conceptbot.core.errors import ConceptBotError
+from conceptbot.core.system import SystemOptions
 from conceptbot.core.text import terminal_safe
 from conceptbot.knowledge.base import TARGET_PROPERTIES
 from conceptbot.knowledge.registry import open_graph
@@ -26,7 +33,9 @@ from conceptbot.pipeline.calibrate import (
     rows_for,
     thetas_between,
 )
+from conceptbot.pipeline.goal_planner.conformal import user_file
 from conceptbot.pipeline.retrieval import RelationRetriever, default_theta
+from conceptbot.systems import build_system
 
 PAPER_LINE = "paper (text-embedding-ada-002): " + ", ".join(
     f"~{kept:g} kept at >{theta:.2f}" for theta, kept in PAPER_REFERENCE.items()
@@ -46,6 +55,11 @@ PAPER_LINE = "paper (text-embedding-ada-002): " + ", ".join(
 @click.option("--to", "theta_to", default=0.90, show_default=True, type=FiniteFloatRange(-1, 1))
 @click.option("--step", default=0.05, show_default=True, type=FiniteFloatRange(0, 1, min_open=True))
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
+@click.option(
+    "--conformal",
+    is_flag=True,
+    help="Instead: fit the configured model's conformal thresholds for asking, on the dev tasks.",
+)
 @pass_app
 def calibrate(
     app: AppContext,
@@ -54,13 +68,22 @@ def calibrate(
     theta_to: float,
     step: float,
     as_json: bool,
+    conformal: bool,
 ) -> None:
     """Sweep the similarity threshold over the paper's objects and recommend one for the embedder.
 
     For each threshold: relations kept per object (mean, median, min, max) against the paper's
     target properties, and how many objects keep none. The recommendation is the threshold whose
     mean is closest to the paper's ~20 relations per object at 0.75 with ada-002.
+
+    With --conformal: plan the 85 dev tasks with the configured model (with and without the graph,
+    through the cache), fit the plan-level conformal thresholds the planner asks by, and keep them
+    in the home's calibration folder, where the planner finds them for this model (the shipped ones
+    are the embedded model's).
     """
+    if conformal:
+        _conformal(app, as_json)
+        return
     if theta_to < theta_from:
         raise click.BadParameter(f"--to {theta_to} is below --from {theta_from}", param_hint="--to")
     thetas = thetas_between(theta_from, theta_to, step)
@@ -135,3 +158,53 @@ def calibrate(
             f"(mean kept closest to the paper's ~{PAPER_KEPT:g}); current default {current:.2f}"
         )
     )
+
+
+def _conformal(app: AppContext, as_json: bool) -> None:
+    """``calibrate --conformal``: fit and store the configured model's plan-level thresholds."""
+    tasks = load_tasks(split="dev")
+    fits: dict[str, PlanFit] = {}
+    backend = model = ""
+    for combination, config in (("graph", "conceptbot"), ("nograph", "nokg")):
+        system = build_system(app.settings, config, SystemOptions())
+        if getattr(system, "planner_kind", None) != "goal":
+            raise ConceptBotError(
+                "the conformal calibration needs the goal planner, which needs a backend that scores options",
+                hint="use the llamacpp backend, or an OpenAI-compatible server with log-probabilities",
+            )
+        backend, model = system.calibration_key  # type: ignore[attr-defined]
+        with count_progress(len(tasks), f"calibrating {config}") as step:
+            scores = collect(system, tasks, lambda task, name=config: step(f"{name}: {task.id}"))
+        try:
+            fits[combination] = fit(scores)
+        except ValueError as exc:
+            raise ConceptBotError(
+                str(exc), hint="the dev tasks gave this model no calibrated decision"
+            ) from None
+    path = user_file(app.settings.calibration_dir, backend, model)
+    document = {
+        "_doc": "Written by `conceptbot calibrate --conformal`: plan-level conformal thresholds for this "
+        "model, read by conceptbot.pipeline.goal_planner.conformal.calibration_for.",
+        "backend": backend,
+        "model": model,
+        "fitted_on": (
+            f"{len(tasks)} dev tasks ({fits['graph'].tasks} with calibrated decisions), {backend}:{model}"
+        ),
+        "plan_qhat": {c: {str(k): round(q, 4) for k, q in f.qhat.items()} for c, f in fits.items()},
+        "held_out": {c: {str(k): round(h, 4) for k, h in f.held_out.items()} for c, f in fits.items()},
+    }
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")  # never a half-written file
+    tmp.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
+    os.replace(tmp, path)
+    if as_json:
+        click.echo(json.dumps({**document, "path": str(path)}, indent=2))
+        return
+    table = Table("combination", "coverage", "qhat", "held-out plan coverage", "tasks")
+    for combination, found in fits.items():
+        for coverage, q in found.qhat.items():
+            table.add_row(
+                combination, f"{coverage:g}", f"{q:.3f}", f"{found.held_out[coverage]:.1%}", str(found.tasks)
+            )
+    Console(width=max(Console().width, 80)).print(table)
+    click.echo(terminal_safe(f"wrote {path}; `conceptbot plan` with {backend}:{model} now asks by it"))

@@ -6,6 +6,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
 import click
+from rich.console import Console
 from rich.progress import (
     BarColumn,
     DownloadColumn,
@@ -64,6 +65,7 @@ def count_progress(total: int, description: str = "planning") -> Iterator[Callab
         MofNCompleteColumn(),
         TimeElapsedColumn(),
     )
-    with Progress(*columns) as progress:
+    # On stderr: stdout is the command's output (a table, or JSON another tool reads).
+    with Progress(*columns, console=Console(stderr=True)) as progress:
         task_id = progress.add_task(terminal_safe(description), total=total)
         yield lambda text: progress.update(task_id, advance=1, description=terminal_safe(text))

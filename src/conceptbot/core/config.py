@@ -95,6 +95,11 @@ class Settings:
         return self.home / "cache.db"
 
     @property
+    def calibration_dir(self) -> Path:
+        """Where ``conceptbot calibrate --conformal`` keeps each model's own calibration."""
+        return self.home / "calibration"
+
+    @property
     def kg_path(self) -> Path:
         """The SQLite knowledge graph."""
         return self.home / "kg" / "conceptnet.db"

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 from conceptbot.core.limits import check_request
 from conceptbot.core.observe import SILENT, Observer
@@ -106,6 +107,7 @@ class ConceptBot:
         thresholds: Thresholds | None = None,
         coverage: float = 0.9,
         level: str = "plan",
+        calibration_dir: Path | None = None,
     ) -> None:
         if config not in SWITCHES:
             raise ValueError(f"config must be one of {CONFIGS}")
@@ -128,6 +130,8 @@ class ConceptBot:
         if planner == "goal" and not (self.switches.urp and llm.capabilities.scoring):
             planner = "steps"  # the goal planner needs the request compiled and options scored
         self.planner_kind = planner
+        # Which model's conformal calibration it reads (conformal.user_file), for calibrate --conformal.
+        self.calibration_key = (llm.backend, llm.model)
         facts = FactFinder(retriever)
         graph = retriever.graph if retriever is not None else None
         # Criterion decisions weigh the graph's statements as evidence beside the model's answer
@@ -154,7 +158,10 @@ class ConceptBot:
             thresholds,
             hazards=self.hazards,
             # Its decisions' conformal thresholds, fitted on the same combination's probabilities.
-            calibration=conformal.shipped("graph" if graph is not None else "nograph", level),
+            # The model's own where `conceptbot calibrate --conformal` wrote one in calibration_dir.
+            calibration=conformal.calibration_for(
+                calibration_dir, llm.backend, llm.model, "graph" if graph is not None else "nograph", level
+            ),
             coverage=coverage,
         )
 

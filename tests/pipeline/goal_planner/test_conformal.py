@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 import random
 
@@ -65,3 +66,42 @@ def test_the_shipped_calibration_has_every_coverage_in_order() -> None:
     assert thresholds == sorted(thresholds) and all(0.5 <= q <= 1.0 for q in thresholds)
     with pytest.raises(ValueError, match=r"no conformal threshold for coverage 0\.7"):
         calibration.threshold(0.7)
+
+
+def test_a_models_own_calibration_is_read_before_the_shipped_one(tmp_path) -> None:
+    from conceptbot.pipeline.goal_planner.conformal import calibration_for, user_file
+
+    path = user_file(tmp_path, "openai-compatible", "my/model:7b")
+    assert path.parent == tmp_path and path.name == "conformal-openai-compatible-my-model-7b.json"
+    assert calibration_for(tmp_path, "openai-compatible", "my/model:7b") == shipped()  # none written yet
+    own = {"graph": {"0.8": 0.5, "0.9": 0.6, "0.95": 0.7}, "nograph": {"0.8": 0.4, "0.9": 0.5, "0.95": 0.6}}
+    path.write_text(json.dumps({"plan_qhat": own, "fitted_on": "mine"}))
+    found = calibration_for(tmp_path, "openai-compatible", "my/model:7b", "nograph")
+    assert found.qhat == {0.8: 0.4, 0.9: 0.5, 0.95: 0.6} and found.fitted_on == "mine" and found.which_one
+    assert calibration_for(tmp_path, "llamacpp", "other") == shipped()  # another model's file is not it
+    assert calibration_for(tmp_path, "openai-compatible", "my/model:7b", level="decision") == shipped(
+        level="decision"
+    )
+
+
+@pytest.mark.parametrize(
+    "text", ["not json", "[]", '{"plan_qhat": {"graph": {"0.8": 0.5}}, "fitted_on": "x"}', "NAN"]
+)
+def test_a_broken_calibration_file_is_one_clear_error(tmp_path, text: str) -> None:
+    from conceptbot.core.errors import ConfigError
+    from conceptbot.pipeline.goal_planner.conformal import calibration_for, user_file
+
+    user_file(tmp_path, "b", "m").write_text(text)
+    with pytest.raises(ConfigError, match="is not a conformal calibration") as caught:
+        calibration_for(tmp_path, "b", "m")
+    assert "calibrate --conformal" in (caught.value.hint or "")
+
+
+def test_a_threshold_out_of_range_is_refused(tmp_path) -> None:
+    from conceptbot.core.errors import ConfigError
+    from conceptbot.pipeline.goal_planner.conformal import calibration_for, user_file
+
+    bad = {"graph": {"0.8": 0.5, "0.9": float("nan"), "0.95": 0.7}}
+    user_file(tmp_path, "b", "m").write_text(json.dumps({"plan_qhat": bad, "fitted_on": "x"}))
+    with pytest.raises(ConfigError, match=r"not a number in \[0, 1\]"):
+        calibration_for(tmp_path, "b", "m")

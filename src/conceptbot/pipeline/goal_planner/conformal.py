@@ -15,12 +15,15 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cache
 from importlib import resources
+from pathlib import Path
 from typing import Any
 
+from conceptbot.core.errors import ConfigError
 from conceptbot.core.system import COVERAGES, LEVELS
 
 __all__ = [
@@ -28,9 +31,11 @@ __all__ = [
     "LEVELS",
     "Calibration",
     "DecisionSet",
+    "calibration_for",
     "conformal_threshold",
     "decision_set",
     "shipped",
+    "user_file",
 ]
 
 CALIBRATION = "conformal.json"
@@ -134,3 +139,36 @@ def shipped(combination: str = "graph", level: str = "plan") -> Calibration:
         raise ValueError(f"no {level}-level conformal calibration for the {combination!r} combination")
     fitted = data[key][combination]
     return Calibration({float(k): float(v) for k, v in fitted.items()}, str(data[where]), level == "plan")
+
+
+def user_file(directory: Path, backend: str, model: str) -> Path:
+    """Where ``conceptbot calibrate --conformal`` keeps a model's own calibration."""
+    name = re.sub(r"[^A-Za-z0-9._-]+", "-", f"{backend}-{model}").strip("-.") or "model"
+    return directory / f"conformal-{name[:120]}.json"
+
+
+def calibration_for(
+    directory: Path | None, backend: str, model: str, combination: str = "graph", level: str = "plan"
+) -> Calibration:
+    """The model's own plan-level calibration where ``conceptbot calibrate --conformal`` wrote one
+    (in ``directory``), else the shipped one (fitted for the embedded model).
+
+    Raises:
+        ConfigError: A calibration file that is not one (with how to make it again).
+    """
+    path = user_file(directory, backend, model) if directory is not None else None
+    if level != "plan" or path is None or not path.is_file():
+        return shipped(combination, level)
+    fix = f"run `conceptbot calibrate --conformal` again, or remove {path}"
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        fitted = data["plan_qhat"][combination]
+        qhat = {float(c): float(fitted[str(c)]) for c in COVERAGES}
+        where = str(data["fitted_on"])
+    except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError) as exc:
+        raise ConfigError(
+            f"{path} is not a conformal calibration ({type(exc).__name__}: {exc})", hint=fix
+        ) from None
+    if not all(0.0 <= q <= 1.0 for q in qhat.values()):  # NaN fails too
+        raise ConfigError(f"{path}: a threshold is not a number in [0, 1]", hint=fix)
+    return Calibration(qhat, where, True)
