@@ -161,9 +161,8 @@ def test_ask_and_watch_the_plan_in_chromium(server: str, browser) -> None:
     assert (SHOTS / "web-2-plan.png").stat().st_size > 10_000
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("server", [asking_worker], indirect=True)
-def test_the_page_asks_and_the_answer_finishes_the_plan(server: str, browser) -> None:
+def _ask(server: str, browser, box: str) -> None:
+    """Open the page, send a request, and wait for the question's ``box`` to show."""
     from selenium.webdriver.common.by import By
     from selenium.webdriver.support import expected_conditions as when
     from selenium.webdriver.support.ui import Select, WebDriverWait
@@ -173,12 +172,29 @@ def test_the_page_asks_and_the_answer_finishes_the_plan(server: str, browser) ->
     wait.until(lambda b: len(Select(b.find_element(By.ID, "scene")).options) > 5)
     browser.find_element(By.ID, "request").send_keys("Bring me something sour")
     browser.find_element(By.ID, "run").click()
-    wait.until(when.visibility_of_element_located((By.ID, "question-box")))
+    wait.until(when.visibility_of_element_located((By.ID, box)))
+
+
+def _planned(browser) -> list[str]:
+    """Wait for the run to finish; the plan's actions as shown."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support import expected_conditions as when
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    WebDriverWait(browser, 30).until(when.text_to_be_present_in_element((By.ID, "status"), "Done."))
+    return [li.text for li in browser.find_elements(By.CSS_SELECTOR, "#plan li")]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("server", [asking_worker], indirect=True)
+def test_the_page_asks_and_the_answer_finishes_the_plan(server: str, browser) -> None:
+    from selenium.webdriver.common.by import By
+
+    _ask(server, browser, "question-box")
     assert browser.find_element(By.ID, "question-text").text == QUESTION.text
     browser.save_screenshot(str(SHOTS / "web-3-question.png"))
     browser.find_element(By.ID, "answer-no").click()
-    wait.until(when.text_to_be_present_in_element((By.ID, "status"), "Done."))
-    assert [li.text for li in browser.find_elements(By.CSS_SELECTOR, "#plan li")] == ["done()"]
+    assert _planned(browser) == ["done()"]
     assert not browser.find_element(By.ID, "question-box").is_displayed()
 
 
@@ -186,15 +202,8 @@ def test_the_page_asks_and_the_answer_finishes_the_plan(server: str, browser) ->
 @pytest.mark.parametrize("server", [choosing_worker], indirect=True)
 def test_the_page_asks_which_objects_go_and_the_ticked_ones_do(server: str, browser) -> None:
     from selenium.webdriver.common.by import By
-    from selenium.webdriver.support import expected_conditions as when
-    from selenium.webdriver.support.ui import Select, WebDriverWait
 
-    wait = WebDriverWait(browser, 30)
-    browser.get(server + "/")
-    wait.until(lambda b: len(Select(b.find_element(By.ID, "scene")).options) > 5)
-    browser.find_element(By.ID, "request").send_keys("Bring me something sour")
-    browser.find_element(By.ID, "run").click()
-    wait.until(when.visibility_of_element_located((By.ID, "choose-box")))
+    _ask(server, browser, "choose-box")
     assert browser.find_element(By.ID, "question-text").text == CHOOSE.text
     assert not browser.find_element(By.ID, "answer-yes").is_displayed()
     labels = [li.text.strip() for li in browser.find_elements(By.CSS_SELECTOR, "#choose-options li")]
@@ -203,49 +212,30 @@ def test_the_page_asks_which_objects_go_and_the_ticked_ones_do(server: str, brow
     browser.find_element(By.ID, "choose-2").click()
     browser.save_screenshot(str(SHOTS / "web-4-choose.png"))
     browser.find_element(By.ID, "answer-chosen").click()
-    wait.until(when.text_to_be_present_in_element((By.ID, "status"), "Done."))
-    plan = [li.text for li in browser.find_elements(By.CSS_SELECTOR, "#plan li")]
-    assert plan == ["pick_and_place(lemon, user)", "pick_and_place(lime, user)", "done()"]
+    assert _planned(browser) == ["pick_and_place(lemon, user)", "pick_and_place(lime, user)", "done()"]
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("server", [picking_worker], indirect=True)
 def test_the_page_asks_which_one_with_radio_buttons(server: str, browser) -> None:
     from selenium.webdriver.common.by import By
-    from selenium.webdriver.support import expected_conditions as when
-    from selenium.webdriver.support.ui import Select, WebDriverWait
 
-    wait = WebDriverWait(browser, 30)
-    browser.get(server + "/")
-    wait.until(lambda b: len(Select(b.find_element(By.ID, "scene")).options) > 5)
-    browser.find_element(By.ID, "request").send_keys("Bring me something sour")
-    browser.find_element(By.ID, "run").click()
-    wait.until(when.visibility_of_element_located((By.ID, "choose-box")))
+    _ask(server, browser, "choose-box")
     boxes = browser.find_elements(By.CSS_SELECTOR, "#choose-options input")
     assert [b.get_attribute("type") for b in boxes] == ["radio"] * 3
     boxes[0].click()
     boxes[2].click()  # a radio button: the last one ticked is the one
     browser.save_screenshot(str(SHOTS / "web-5-which-one.png"))
     browser.find_element(By.ID, "answer-chosen").click()
-    wait.until(when.text_to_be_present_in_element((By.ID, "status"), "Done."))
-    plan = [li.text for li in browser.find_elements(By.CSS_SELECTOR, "#plan li")]
-    assert plan == ["pick_and_place(lime, user)", "done()"]
+    assert _planned(browser) == ["pick_and_place(lime, user)", "done()"]
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("server", [picking_worker], indirect=True)
 def test_none_of_them_sends_nothing(server: str, browser) -> None:
     from selenium.webdriver.common.by import By
-    from selenium.webdriver.support import expected_conditions as when
-    from selenium.webdriver.support.ui import Select, WebDriverWait
 
-    wait = WebDriverWait(browser, 30)
-    browser.get(server + "/")
-    wait.until(lambda b: len(Select(b.find_element(By.ID, "scene")).options) > 5)
-    browser.find_element(By.ID, "request").send_keys("Bring me something sour")
-    browser.find_element(By.ID, "run").click()
-    wait.until(when.visibility_of_element_located((By.ID, "choose-box")))
+    _ask(server, browser, "choose-box")
     browser.find_elements(By.CSS_SELECTOR, "#choose-options input")[1].click()  # changed their mind
     browser.find_element(By.ID, "answer-none").click()
-    wait.until(when.text_to_be_present_in_element((By.ID, "status"), "Done."))
-    assert [li.text for li in browser.find_elements(By.CSS_SELECTOR, "#plan li")] == ["done()"]
+    assert _planned(browser) == ["done()"]
