@@ -109,19 +109,44 @@ def test_one_question_per_target_at_most_a_few_options_and_an_unusable_answer_le
     assert all(q.answer is None for q in found.questions) and found.ranked == ranked
 
 
-def test_a_decision_that_cannot_be_read_is_asked_about_and_sorts_are_not_asked_yet() -> None:
+def test_a_decision_that_cannot_be_read_is_asked_about() -> None:
     ranked, decisions = _case(("lemon", 0.95))
     ranked[0].append(Judgement("egg", BOWL.criterion, math.nan, math.nan, model=0.0))
     found = clarify([BOWL], ranked, decisions, QHAT, 0.0)
     assert [q.objects for q in found.questions] == [("egg",)]
     assert found.questions[0].p_yes == (0.5,)  # shown as a coin toss: JSON has no NaN
     assert found.confidence == 0.0  # and no confidence in a plan that rests on it
-    bins = [
-        Target("paper bin", ALL, "named", criterion="paper"),
-        Target("glass bin", ALL, "named", criterion="glass"),
+
+
+def _judged(obj: str, p: float, criterion: str) -> Judgement:
+    score = math.log(p / (1 - p))
+    return Judgement(obj, criterion, p, score, model=score)
+
+
+def test_a_sort_asks_per_bin_and_its_confidence_follows_where_each_object_goes() -> None:
+    paper = Target("paper bin", ALL, "named", criterion="paper")
+    glass = Target("glass bin", ALL, "named", criterion="glass")
+    ranked = {
+        0: [_judged("bag", 0.95, "paper"), _judged("jar", 0.45, "paper")],
+        1: [_judged("jar", 0.6, "glass"), _judged("bag", 0.02, "glass")],
+    }
+    traces = tuple(
+        DecisionTrace(target_trace(t), True, tuple(judgement_trace(j) for j in ranked[n]))
+        for n, t in enumerate((paper, glass))
+    )
+    found = clarify([paper, glass], ranked, traces, QHAT, 0.0)
+    assert [(q.target, q.objects) for q in found.questions] == [
+        ("paper bin", ("jar",)),
+        ("glass bin", ("jar",)),
     ]
-    sort = clarify(bins, {0: ranked[0], 1: []}, decisions + decisions, QHAT, 0.0)
-    assert sort.questions == () and sort.confidence is None
+    # The jar goes to the glass bin, where it fits best: the plan acts on "no" for the paper bin.
+    assert found.confidence == pytest.approx(0.95 * 0.55 * 0.6 * 0.98)
+    asked = clarify(
+        [paper, glass], ranked, traces, QHAT, 0.0, ask=lambda q: "no" if q.target == "paper bin" else "yes"
+    )
+    assert [q.answer for q in asked.questions] == ["no", "yes"] and asked.confidence == pytest.approx(
+        0.95 * 0.98
+    )
 
 
 USER = Target("user", 1, "scored")

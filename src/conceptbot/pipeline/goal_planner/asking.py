@@ -1,11 +1,11 @@
 """Where the goal planner is unsure, a question (issue 35; KnowNo's recipe). Two kinds of calibrated
 decision get conformal prediction sets (:mod:`.conformal`):
 
-- each yes/no decision of a target that takes every object fitting it: a set with both answers
-  is unsure. A target's unsure decisions make one question: about one object, yes or no ("Should
-  I put the lemon in or on the bowl (an ingredient of hollandaise)?"); about several, which of them
-  go ("Which of these should I put in or on the salad bowl (...): the kiwi, the olive oil or the
-  sugar? Any, all or none.");
+- each yes/no decision of a target that takes every object fitting it (in a sort too: "is the
+  milk jug plastic?" for the plastic bin): a set with both answers is unsure. A target's unsure
+  decisions make one question: about one object, yes or no ("Should I put the lemon in or on the
+  bowl (an ingredient of hollandaise)?"); about several, which of them go ("Which of these should I
+  put in or on the salad bowl (...): the kiwi, the olive oil or the sugar? Any, all or none.");
 - which object a target taking one gets (the ranking as a softmax over the candidates): a set of
   two or more is a question of which one ("Which one should I give to the user: the coke or the
   water? One of them, or none.").
@@ -95,6 +95,7 @@ def clarify(
     limit: float,
     ask: Ask | None = None,
     which_one: bool = True,
+    sort_limit: float = -5.0,
 ) -> Clarified:
     """Sets, questions and answers for the calibrated decisions (see the module docstring).
 
@@ -109,20 +110,21 @@ def clarify(
             (:meth:`ClarifyingQuestion.read`) counts as no answer.
         which_one: Whether ``qhat`` holds for which-one decisions too (a plan-level calibration);
             else targets taking one object are not asked about.
+        sort_limit: In a sort, the score above which an object may go to the target it fits best
+            (the planner's ``partition`` threshold), to tell the answer it acts on.
     """
     sets: dict[tuple[int, str], DecisionSet] = {}
     unsure: dict[int, list[Judgement]] = {}
-    if not is_sort(targets):
-        for number, target in enumerate(targets):
-            if target.count != ALL or target.rest:
+    for number, target in enumerate(targets):
+        if target.count != ALL or target.rest:
+            continue
+        for judgement in ranked.get(number, []):
+            if judgement.model is None:  # named, or not a calibrated combination
                 continue
-            for judgement in ranked.get(number, []):
-                if judgement.model is None:  # named, or not a calibrated combination
-                    continue
-                found = decision_set(judgement.p_yes, qhat)
-                sets[(number, judgement.subject)] = found
-                if not found.sure:
-                    unsure.setdefault(number, []).append(judgement)
+            found = decision_set(judgement.p_yes, qhat)
+            sets[(number, judgement.subject)] = found
+            if not found.sure:
+                unsure.setdefault(number, []).append(judgement)
     # Targets taking one object: the set of which one.
     candidates = {
         number: one_of(ranked.get(number, []), qhat)
@@ -177,11 +179,11 @@ def clarify(
     confidence = None
     if sets or candidates:
         confidence = 1.0
+        acts = _acted(targets, ranked, limit, sort_limit)
         for key, found in sets.items():
             if key in answered:
                 continue
-            acted_yes = next(j for j in ranked[key[0]] if j.subject == key[1]).score > limit
-            acted = found.p_yes if acted_yes else 1.0 - found.p_yes
+            acted = found.p_yes if acts[key] else 1.0 - found.p_yes
             confidence *= acted if acted == acted else 0.0  # unreadable (NaN): no confidence in it
         for number in candidates:
             if not any(n == number for n, _ in answered):
@@ -222,6 +224,31 @@ def which_one_question(target: Target, found: list[Judgement]) -> ClarifyingQues
         tuple(round(j.p_one, 4) if j.p_one is not None and j.p_one == j.p_one else 0.5 for j in kept),
         kind="one",
     )
+
+
+def _acted(
+    targets: list[Target], ranked: dict[int, list[Judgement]], limit: float, sort_limit: float
+) -> dict[tuple[int, str], bool]:
+    """Whether the plan acts on yes for each (target, object) decision: above ``limit``; in a sort,
+    the target the object fits best, above ``sort_limit`` (as ``GoalPlanner._choose`` does)."""
+    sorting = is_sort(targets)
+    best: dict[str, tuple[float, int]] = {}
+    if sorting:
+        for number, target in enumerate(targets):
+            if target.rest:
+                continue
+            for j in ranked.get(number, []):
+                if j.subject not in best or j.score > best[j.subject][0]:
+                    best[j.subject] = (j.score, number)
+    return {
+        (number, j.subject): (
+            best.get(j.subject, (0.0, -1))[1] == number and j.score > sort_limit
+            if sorting
+            else j.score > limit
+        )
+        for number in ranked
+        for j in ranked[number]
+    }
 
 
 def _uncertainty(judgement: Judgement) -> float:

@@ -271,7 +271,14 @@ class GoalPlanner:
         # Where a calibrated decision is unsure, a question (asked if someone answers): asking.py.
         qhat = self.calibration.threshold(self.coverage)
         clarified = clarify(
-            targets, ranked, decisions, qhat, self.thresholds.combined, ask, self.calibration.which_one
+            targets,
+            ranked,
+            decisions,
+            qhat,
+            self.thresholds.combined,
+            ask,
+            self.calibration.which_one,
+            self.thresholds.partition,
         )
         ranked, decisions = clarified.ranked, clarified.decisions
         observer.event("decisions", DecisionsEvent(tuple(decisions)))
