@@ -16,9 +16,9 @@ import json
 from pathlib import Path
 from typing import Any
 
-from conceptbot.bench.grading import Task, gold_answer, gold_reply, grade, load_tasks, task_scene
+from conceptbot.bench.conformal_fit import labelled
+from conceptbot.bench.grading import gold_reply, grade, load_tasks, task_scene
 from conceptbot.core.config import load_settings
-from conceptbot.core.plan import Plan
 from conceptbot.core.system import COVERAGES, LEVELS, SystemOptions
 from conceptbot.core.trace import ClarifyingQuestion
 from conceptbot.systems import build_system
@@ -39,7 +39,7 @@ def measure(split: str, system_name: str, coverage: float, level: str = "plan") 
         scene = task_scene(task)
         alone = system.plan(task.request, scene)
         solo += grade(task, alone.actions, alone.refused).ok
-        found = covered_decisions(task, alone)
+        found = [decision.covered for decision in labelled(task, alone)]
         calibrated += len(found)
         covered += sum(found)
         if found:
@@ -78,21 +78,6 @@ def measure(split: str, system_name: str, coverage: float, level: str = "plan") 
     }
 
 
-def covered_decisions(task: Task, plan: Plan) -> list[bool]:
-    """Whether each calibrated decision's set holds the gold: a yes/no decision's answers the gold
-    answer, a which-one decision's candidates an object the gold accepts there (one where the gold
-    accepts none of the target's objects is left out, as in the calibration)."""
-    found = []
-    for d in plan.trace.decisions or ():
-        found += [
-            gold_answer(task, j.object, d.target.to) in j.answers for j in d.objects if j.answers is not None
-        ]
-        accepted = {j.object for j in d.objects if gold_answer(task, j.object, d.target.to) == "yes"}
-        if d.candidates is not None and accepted:
-            found.append(bool(accepted & set(d.candidates)))
-    return found
-
-
 def _in_bin(pairs: list[tuple[float, float]], k: int, bins: int = BINS) -> list[tuple[float, float]]:
     """The pairs whose prediction falls in bin ``k`` of ``bins`` (1.0 in the last)."""
     return [(p, y) for p, y in pairs if k / bins <= p < (k + 1) / bins or (k == bins - 1 and p == 1.0)]
@@ -118,11 +103,11 @@ def reliability(split: str, system_name: str) -> dict[str, Any]:
     plans: list[tuple[float, float]] = []
     for task in load_tasks(split=split):
         plan = system.plan(task.request, task_scene(task))
-        for decision in plan.trace.decisions or ():
-            for judgement in decision.objects:
-                if judgement.answers is not None and judgement.p_yes == judgement.p_yes:
-                    yes = gold_answer(task, judgement.object, decision.target.to) == "yes"
-                    decisions.append((judgement.p_yes, 1.0 if yes else 0.0))
+        decisions += [
+            (found.p_yes, 1.0 if found.yes else 0.0)
+            for found in labelled(task, plan)
+            if found.p_yes is not None and found.p_yes == found.p_yes
+        ]
         if plan.confidence is not None:
             plans.append((plan.confidence, 1.0 if grade(task, plan.actions, plan.refused).ok else 0.0))
     return {
@@ -151,9 +136,7 @@ def plot_reliability(found: dict[str, Any]) -> None:
         pairs = found["_pairs"][key]
         xs, ys = [], []
         for k in range(BINS):
-            inside = [
-                (p, y) for p, y in pairs if k / BINS <= p < (k + 1) / BINS or (k == BINS - 1 and p == 1.0)
-            ]
+            inside = _in_bin(pairs, k)
             if inside:
                 xs.append(sum(p for p, _ in inside) / len(inside))
                 ys.append(sum(y for _, y in inside) / len(inside))

@@ -23,7 +23,7 @@ import argparse
 import json
 from pathlib import Path
 
-from conceptbot.bench.conformal_fit import PlanFit, collect, fit
+from conceptbot.bench.conformal_fit import SYSTEMS, PlanFit, collect, fit
 from conceptbot.bench.grading import load_tasks
 from conceptbot.core.config import load_settings
 from conceptbot.core.system import SystemOptions
@@ -31,7 +31,6 @@ from conceptbot.pipeline.goal_planner.conformal import CALIBRATION_DOC
 from conceptbot.systems import build_system
 
 CONFORMAL = Path("src/conceptbot/pipeline/conformal.json")
-SYSTEMS = (("graph", "conceptbot"), ("nograph", "nokg"))
 
 
 def fit_system(system_name: str) -> PlanFit:

@@ -19,28 +19,56 @@ from conceptbot.core.plan import Plan
 from conceptbot.core.system import COVERAGES, PlannerSystem
 from conceptbot.pipeline.goal_planner.conformal import conformal_threshold
 
+SYSTEMS = (("graph", "conceptbot"), ("nograph", "nokg"))
+"""Each combination the calibration ships, and the system whose plans it is fitted on."""
+
 
 def nonconformity(p_right: float) -> float:
     """``1 - p_right``; 1 (keep everything) for a probability that cannot be read."""
     return 1.0 - p_right if 0.0 <= p_right <= 1.0 else 1.0
 
 
-def task_scores(task: Task, plan: Plan) -> list[float]:
-    """Each calibrated decision's nonconformity in ``plan`` (planned for ``task`` without asking)."""
-    found: list[float] = []
+@dataclass(frozen=True)
+class Labelled:
+    """A calibrated decision of a plan, judged against the gold.
+
+    Attributes:
+        p_right: The probability the planner gave the right answer: the gold's answer of a yes/no
+            decision; the likeliest object the gold accepts of a which-one decision.
+        covered: Whether its prediction set holds the right answer.
+        p_yes: A yes/no decision's P(yes) (None for which-one).
+        yes: A yes/no decision's gold answer (None for which-one).
+    """
+
+    p_right: float
+    covered: bool
+    p_yes: float | None = None
+    yes: bool | None = None
+
+
+def labelled(task: Task, plan: Plan) -> list[Labelled]:
+    """Each calibrated decision in ``plan`` (planned for ``task`` without asking), judged by the gold
+    (a which-one decision whose target the gold accepts no object for is left out)."""
+    found: list[Labelled] = []
     for d in plan.trace.decisions or ():
         for j in d.objects:
             if j.answers is not None:
                 yes = gold_answer(task, j.object, d.target.to) == "yes"
-                found.append(nonconformity(j.p_yes if yes else 1.0 - j.p_yes))
-        accepted = [
-            j.p_one
+                right = j.p_yes if yes else 1.0 - j.p_yes
+                found.append(Labelled(right, ("yes" if yes else "no") in j.answers, j.p_yes, yes))
+        accepted = {
+            j.object: j.p_one
             for j in d.objects
             if j.p_one is not None and gold_answer(task, j.object, d.target.to) == "yes"
-        ]
+        }
         if d.candidates is not None and accepted:
-            found.append(nonconformity(max(accepted)))
+            found.append(Labelled(max(accepted.values()), bool(accepted.keys() & set(d.candidates))))
     return found
+
+
+def task_scores(task: Task, plan: Plan) -> list[float]:
+    """Each calibrated decision's nonconformity in ``plan`` (planned for ``task`` without asking)."""
+    return [nonconformity(found.p_right) for found in labelled(task, plan)]
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ import click
 from rich.console import Console
 from rich.table import Table
 
-from conceptbot.bench.conformal_fit import PlanFit, collect, fit
+from conceptbot.bench.conformal_fit import SYSTEMS, PlanFit, collect, fit
 from conceptbot.bench.grading import load_tasks
 from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.cli.params import FiniteFloatRange
@@ -165,7 +165,7 @@ def _conformal(app: AppContext, as_json: bool) -> None:
     tasks = load_tasks(split="dev")
     fits: dict[str, PlanFit] = {}
     backend = model = ""
-    for combination, config in (("graph", "conceptbot"), ("nograph", "nokg")):
+    for combination, config in SYSTEMS:
         system = build_system(app.settings, config, SystemOptions())
         if getattr(system, "planner_kind", None) != "goal":
             raise ConceptBotError(

@@ -28,7 +28,7 @@ from conceptbot.pipeline.goal_planner.decide import Judgement
 from conceptbot.pipeline.goal_planner.targets import ALL, Target
 from conceptbot.pipeline.hazards import is_person
 
-MAX_QUESTIONS = 3  # per plan, one per target (only one target is asked about until sorts are)
+MAX_QUESTIONS = 3  # per plan, one per target (a sort may have more unsure bins)
 MAX_OPTIONS = 12  # objects in one question (a checklist): past that, the likelier answers stand
 ANSWERED = 20.0  # the log-odds an answer sets: far beyond every threshold, either way
 
@@ -81,8 +81,7 @@ def question_for(number: int, target: Target, unsure: list[Judgement]) -> Clarif
         question_text(names, target),
         target.name,
         tuple(names),
-        # A probability that is not a number (the decision could not be made) is shown as a coin toss.
-        tuple(round(j.p_yes, 4) if j.p_yes == j.p_yes else 0.5 for j in kept),
+        tuple(_shown(j.p_yes) for j in kept),
         kind="choose" if len(kept) > 1 else "confirm",
     )
 
@@ -160,9 +159,10 @@ def clarify(
         )
         for obj in about:
             answered[(number, obj)] = "yes" if obj in chosen else "no"
+    settled = {n for n, _ in answered}  # the targets an answer settled
     if answered:
         ranked = dict(ranked)
-        for number in {n for n, _ in answered}:
+        for number in settled:
             changed = [
                 replace(
                     j,
@@ -186,16 +186,17 @@ def clarify(
             acted = found.p_yes if acts[key] else 1.0 - found.p_yes
             confidence *= acted if acted == acted else 0.0  # unreadable (NaN): no confidence in it
         for number in candidates:
-            if not any(n == number for n, _ in answered):
+            if number not in settled:
                 best = max((j.p_one for j in ranked[number] if j.p_one is not None), default=math.nan)
                 confidence *= best if best == best else 0.0  # it acts on the likeliest one
     traced = []
     for number, decision in enumerate(decisions):
         decision = _with_sets(decision, number, sets, answered)
         if number in candidates:
-            settled = [o for (n, o), a in answered.items() if n == number and a == "yes"]
-            was_answered = any(n == number for n, _ in answered)
-            found = tuple(settled) if was_answered else tuple(j.subject for j in candidates[number])
+            if number in settled:
+                found = tuple(o for (n, o), a in answered.items() if n == number and a == "yes")
+            else:
+                found = tuple(j.subject for j in candidates[number])
             decision = replace(decision, candidates=found)
         traced.append(decision)
     return Clarified(ranked, tuple(traced), tuple(questions), confidence)
@@ -221,7 +222,7 @@ def which_one_question(target: Target, found: list[Judgement]) -> ClarifyingQues
         f"Which one should I {_move(target)}: {_listed(names)}? One of them, or none.",
         target.name,
         tuple(names),
-        tuple(round(j.p_one, 4) if j.p_one is not None and j.p_one == j.p_one else 0.5 for j in kept),
+        tuple(_shown(j.p_one) for j in kept),
         kind="one",
     )
 
@@ -249,6 +250,12 @@ def _acted(
         for number in ranked
         for j in ranked[number]
     }
+
+
+def _shown(p: float | None) -> float:
+    """A probability for a question (4 decimals); one that is not a number (the decision could not
+    be made) as a coin toss: JSON has no NaN."""
+    return round(p, 4) if p is not None and p == p else 0.5
 
 
 def _uncertainty(judgement: Judgement) -> float:
