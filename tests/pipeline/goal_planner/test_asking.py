@@ -29,7 +29,7 @@ def _case(*pairs: tuple[str, float]) -> tuple[dict[int, list[Judgement]], tuple[
 
 def test_an_unsure_decision_is_a_question_and_the_plan_acts_on_the_likelier_answer() -> None:
     ranked, decisions = _case(("lemon", 0.55), ("butter", 0.95), ("cup", 0.1))
-    found = clarify([BOWL], ranked, decisions, QHAT, 0.0)
+    found = clarify([BOWL], ranked, decisions, QHAT)
     assert found.questions == (
         ClarifyingQuestion(
             "Should I put the lemon in or on the bowl (an ingredient of hollandaise)?",
@@ -40,17 +40,19 @@ def test_an_unsure_decision_is_a_question_and_the_plan_acts_on_the_likelier_answ
     )
     assert found.questions[0].options == ("yes", "no")
     assert found.ranked == ranked  # nobody asked: the decisions stand
-    assert found.confidence == pytest.approx(0.55 * 0.95 * 0.9)
+    # The confidence is read from the final moves: what the plan does after the risk checks.
+    assert found.confidence([("butter", "bowl"), ("lemon", "bowl")]) == pytest.approx(0.55 * 0.95 * 0.9)
+    assert found.confidence([("butter", "bowl")]) == pytest.approx(0.45 * 0.95 * 0.9)  # lemon dropped
     answers = {o.object: o.answers for o in found.decisions[0].objects}
     assert answers == {"butter": ("yes",), "lemon": ("yes", "no"), "cup": ("no",)}
 
 
 def test_a_confirm_answer_replaces_the_decision_and_counts_as_sure() -> None:
     ranked, decisions = _case(("lemon", 0.55), ("butter", 0.95), ("cup", 0.1))
-    found = clarify([BOWL], ranked, decisions, QHAT, 0.0, ask=lambda q: " No ")
+    found = clarify([BOWL], ranked, decisions, QHAT, ask=lambda q: " No ")
     assert [q.answer for q in found.questions] == ["no"]
     assert found.ranked[0][-1].subject == "lemon" and found.ranked[0][-1].score == -ANSWERED
-    assert found.confidence == pytest.approx(0.95 * 0.9)
+    assert found.confidence([("butter", "bowl")]) == pytest.approx(0.95 * 0.9)
 
 
 def test_several_unsure_decisions_of_a_target_are_one_question_and_its_answer_settles_them() -> None:
@@ -61,7 +63,7 @@ def test_several_unsure_decisions_of_a_target_are_one_question_and_its_answer_se
         asked.append(question)
         return "Cup"
 
-    found = clarify([BOWL], ranked, decisions, QHAT, 0.0, ask=person)
+    found = clarify([BOWL], ranked, decisions, QHAT, ask=person)
     assert (
         len(asked) == 1 and asked[0].kind == "choose" and asked[0].objects == ("lemon", "cup")
     )  # most uncertain first
@@ -72,10 +74,10 @@ def test_several_unsure_decisions_of_a_target_are_one_question_and_its_answer_se
     assert [q.answer for q in found.questions] == ["cup"]
     order = [(j.subject, j.score) for j in found.ranked[0]]
     assert order == [("cup", ANSWERED), ("butter", pytest.approx(math.log(19))), ("lemon", -ANSWERED)]
-    assert found.confidence == pytest.approx(0.95)
+    assert found.confidence([("cup", "bowl"), ("butter", "bowl")]) == pytest.approx(0.95)
     answers = {o.object: o.answers for o in found.decisions[0].objects}
     assert answers["lemon"] == ("no",) and answers["cup"] == ("yes",)
-    none = clarify([BOWL], ranked, decisions, QHAT, 0.0, ask=lambda q: "none")
+    none = clarify([BOWL], ranked, decisions, QHAT, ask=lambda q: "none")
     assert none.questions[0].answer == "none" and all(
         j.score < 0 for j in none.ranked[0] if j.subject != "butter"
     )
@@ -103,7 +105,7 @@ def test_a_choose_question_reads_the_objects_named_and_nothing_else(reply: objec
 
 def test_one_question_per_target_at_most_a_few_options_and_an_unusable_answer_leaves_it_open() -> None:
     ranked, decisions = _case(*[(f"thing {i}", 0.5 + i / 100) for i in range(MAX_OPTIONS + 2)])
-    found = clarify([BOWL], ranked, decisions, QHAT, 0.0, ask=lambda q: "maybe")
+    found = clarify([BOWL], ranked, decisions, QHAT, ask=lambda q: "maybe")
     assert len(found.questions) == 1
     assert found.questions[0].objects == tuple(f"thing {i}" for i in range(MAX_OPTIONS))
     assert all(q.answer is None for q in found.questions) and found.ranked == ranked
@@ -112,10 +114,10 @@ def test_one_question_per_target_at_most_a_few_options_and_an_unusable_answer_le
 def test_a_decision_that_cannot_be_read_is_asked_about() -> None:
     ranked, decisions = _case(("lemon", 0.95))
     ranked[0].append(Judgement("egg", BOWL.criterion, math.nan, math.nan, model=0.0))
-    found = clarify([BOWL], ranked, decisions, QHAT, 0.0)
+    found = clarify([BOWL], ranked, decisions, QHAT)
     assert [q.objects for q in found.questions] == [("egg",)]
     assert found.questions[0].p_yes == (0.5,)  # shown as a coin toss: JSON has no NaN
-    assert found.confidence == 0.0  # and no confidence in a plan that rests on it
+    assert found.confidence([("lemon", "bowl")]) == 0.0  # and no confidence in a plan resting on it
 
 
 def _judged(obj: str, p: float, criterion: str) -> Judgement:
@@ -134,19 +136,19 @@ def test_a_sort_asks_per_bin_and_its_confidence_follows_where_each_object_goes()
         DecisionTrace(target_trace(t), True, tuple(judgement_trace(j) for j in ranked[n]))
         for n, t in enumerate((paper, glass))
     )
-    found = clarify([paper, glass], ranked, traces, QHAT, 0.0)
+    found = clarify([paper, glass], ranked, traces, QHAT)
     assert [(q.target, q.objects) for q in found.questions] == [
         ("paper bin", ("jar",)),
         ("glass bin", ("jar",)),
     ]
     # The jar goes to the glass bin, where it fits best: the plan acts on "no" for the paper bin.
-    assert found.confidence == pytest.approx(0.95 * 0.55 * 0.6 * 0.98)
+    moves = [("bag", "paper bin"), ("jar", "glass bin")]
+    assert found.confidence(moves) == pytest.approx(0.95 * 0.55 * 0.6 * 0.98)
     asked = clarify(
-        [paper, glass], ranked, traces, QHAT, 0.0, ask=lambda q: "no" if q.target == "paper bin" else "yes"
+        [paper, glass], ranked, traces, QHAT, ask=lambda q: "no" if q.target == "paper bin" else "yes"
     )
-    assert [q.answer for q in asked.questions] == ["no", "yes"] and asked.confidence == pytest.approx(
-        0.95 * 0.98
-    )
+    assert [q.answer for q in asked.questions] == ["no", "yes"]
+    assert asked.confidence(moves) == pytest.approx(0.95 * 0.98)
 
 
 USER = Target("user", 1, "scored")
@@ -161,31 +163,35 @@ def _one_of(*pairs: tuple[str, float]) -> tuple[dict[int, list[Judgement]], tupl
 
 def test_a_target_taking_one_object_asks_which_one_when_its_set_holds_several() -> None:
     ranked, decisions = _one_of(("coke", 0.5), ("water", 0.35), ("sponge", 0.15))
-    found = clarify([USER], ranked, decisions, 0.8, 0.0)  # keeps candidates at P >= 0.2
+    found = clarify([USER], ranked, decisions, 0.8)  # keeps candidates at P >= 0.2
     [question] = found.questions
     assert question.kind == "one" and question.objects == ("coke", "water")
     assert (
         question.text == "Which one should I give to the user: the coke or the water? One of them, or none."
     )
     assert found.decisions[0].candidates == ("coke", "water")
-    assert found.confidence == pytest.approx(0.5)  # acts on the likeliest
-    asked = clarify([USER], ranked, decisions, 0.8, 0.0, ask=lambda q: "water")
-    assert asked.questions[0].answer == "water" and asked.confidence == pytest.approx(1.0)
+    assert found.confidence([("coke", "user")]) == pytest.approx(0.5)  # acts on the likeliest
+    assert found.confidence([("water", "user")]) == pytest.approx(0.35)  # the coke was vetoed
+    assert found.confidence([]) == pytest.approx(1.0)  # emptied by the risk checks: theirs
+    asked = clarify([USER], ranked, decisions, 0.8, ask=lambda q: "water")
+    assert asked.questions[0].answer == "water"
+    assert asked.confidence([("water", "user")]) == pytest.approx(1.0)
     assert (asked.ranked[0][0].subject, asked.ranked[0][0].score) == ("water", ANSWERED)
     assert all(j.score == -ANSWERED for j in asked.ranked[0][1:])  # the others, listed or not, do not go
     assert asked.decisions[0].candidates == ("water",)
-    none = clarify([USER], ranked, decisions, 0.8, 0.0, ask=lambda q: "none")
+    none = clarify([USER], ranked, decisions, 0.8, ask=lambda q: "none")
     assert all(j.score == -ANSWERED for j in none.ranked[0]) and none.decisions[0].candidates == ()
 
 
 def test_a_sure_choice_is_not_asked_and_an_unreadable_one_is() -> None:
     ranked, decisions = _one_of(("coke", 0.9), ("water", 0.06), ("sponge", 0.04))
-    sure = clarify([USER], ranked, decisions, 0.8, 0.0)
+    sure = clarify([USER], ranked, decisions, 0.8)
     assert sure.questions == () and sure.decisions[0].candidates == ("coke",)
-    assert sure.confidence == pytest.approx(0.9)
+    assert sure.confidence([("coke", "user")]) == pytest.approx(0.9)
     broken, traces = _one_of(("coke", math.nan), ("water", math.nan))
-    unreadable = clarify([USER], broken, traces, 0.8, 0.0)
-    assert unreadable.questions[0].objects == ("coke", "water") and unreadable.confidence == 0.0
+    unreadable = clarify([USER], broken, traces, 0.8)
+    assert unreadable.questions[0].objects == ("coke", "water")
+    assert unreadable.confidence([("coke", "user")]) == 0.0
 
 
 @pytest.mark.parametrize(
@@ -195,3 +201,10 @@ def test_a_sure_choice_is_not_asked_and_an_unreadable_one_is() -> None:
 def test_a_which_one_question_takes_one_object_or_none(reply: str, chosen: object) -> None:
     question = ClarifyingQuestion("Which one ...?", "user", ("coke", "water"), (0.5, 0.4), kind="one")
     assert question.read(reply) == chosen
+
+
+def test_a_plan_without_a_calibrated_decision_has_no_confidence() -> None:
+    named = Target("user", 1, "named", named=["coke"])
+    judgements = [Judgement("coke", "user", 1.0, 10.0)]
+    found = clarify([named], {0: judgements}, (DecisionTrace(target_trace(named), False),), QHAT)
+    assert found.questions == () and found.confidence([("coke", "user")]) is None

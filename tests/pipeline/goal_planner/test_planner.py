@@ -198,6 +198,11 @@ def test_an_unsafe_move_is_dropped_and_the_target_takes_its_next_best_object() -
         ("scissors", "judged dangerous", "the risk question flagged it (no OPE rating to check it)")
     ]
     assert result.steps[0].chosen == "pick_and_place(safety scissors, child)" and not result.refused
+    # The confidence describes what the plan does after the veto: the safety scissors' chance.
+    [decision] = result.trace.decisions
+    chances = {j.object: j.p_one for j in decision.objects}
+    assert chances["scissors"] > chances["safety scissors"]
+    assert result.confidence == pytest.approx(chances["safety scissors"], abs=1e-4)
 
 
 class RatingOPE:

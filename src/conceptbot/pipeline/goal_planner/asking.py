@@ -12,14 +12,15 @@ decision get conformal prediction sets (:mod:`.conformal`):
 
 The target with the most uncertain decision is asked first, at most :data:`MAX_QUESTIONS` per
 plan. Asked (``ask`` given), the answer replaces the decisions; not asked, the plan acts on each
-likelier answer and lists the question. The plan's confidence is the product of the probabilities
-of what it acts on (an answer given counts as sure).
+likelier answer and lists the question. The plan's confidence (:meth:`Clarified.confidence`) is read
+from its final moves, after the risk checks: the product of the probabilities of what those moves do
+for each calibrated decision (an answer given counts as sure).
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, replace
+from collections.abc import Iterable
+from dataclasses import dataclass, field, replace
 
 from conceptbot.core.system import Ask
 from conceptbot.core.trace import ClarifyingQuestion, DecisionTrace, JudgementTrace
@@ -35,12 +36,47 @@ ANSWERED = 20.0  # the log-odds an answer sets: far beyond every threshold, eith
 
 @dataclass(frozen=True)
 class Clarified:
-    """The decisions after asking, with their sets, the questions and the plan's confidence."""
+    """The decisions after asking, with their sets and the questions.
+
+    Attributes:
+        ranked: Each target's judgements, best first, with the answers applied.
+        decisions: Each target's decision trace, with its sets (or answers).
+        questions: The questions, asked (with their answers) or not.
+        places: The targets' destinations, by position.
+        sets: The yes/no decisions no answer settled, by (target position, object).
+        which: The which-one targets no answer settled: their scored candidates.
+        calibrated: Whether the plan has a calibrated decision (answered ones included).
+    """
 
     ranked: dict[int, list[Judgement]]
     decisions: tuple[DecisionTrace, ...]
     questions: tuple[ClarifyingQuestion, ...]
-    confidence: float | None
+    places: tuple[str, ...] = ()
+    sets: dict[tuple[int, str], DecisionSet] = field(default_factory=dict)
+    which: dict[int, list[Judgement]] = field(default_factory=dict)
+    calibrated: bool = False
+
+    def confidence(self, moves: Iterable[tuple[str, str]]) -> float | None:
+        """The probability that the plan's final ``moves`` (object, destination) are right in every
+        calibrated decision no answer settled (None: the plan has no calibrated decision).
+
+        A yes/no decision counts its P(yes) when its object went to its target, else P(no): an
+        object the risk checks dropped counts as not moved. A which-one decision counts the
+        ``p_one`` of the object the target got (a replacement after a veto included); a target the
+        risk checks left empty counts for nothing: what it does is the checks' decision, which has
+        no calibrated probability. A probability that cannot be read (NaN) makes the confidence 0."""
+        if not self.calibrated:
+            return None
+        done = set(moves)
+        confidence = 1.0
+        for (number, obj), found in self.sets.items():
+            acted = found.p_yes if (obj, self.places[number]) in done else 1.0 - found.p_yes
+            confidence *= acted if acted == acted else 0.0
+        for number, judgements in self.which.items():
+            got = [j.p_one for j in judgements if (j.subject, self.places[number]) in done]
+            if got and got[0] is not None:
+                confidence *= got[0] if got[0] == got[0] else 0.0
+        return confidence
 
 
 def is_sort(targets: list[Target]) -> bool:
@@ -91,10 +127,8 @@ def clarify(
     ranked: dict[int, list[Judgement]],
     decisions: tuple[DecisionTrace, ...],
     qhat: float,
-    limit: float,
     ask: Ask | None = None,
     which_one: bool = True,
-    sort_limit: float = -5.0,
 ) -> Clarified:
     """Sets, questions and answers for the calibrated decisions (see the module docstring).
 
@@ -103,14 +137,10 @@ def clarify(
         ranked: Each target's judgements, best first.
         decisions: Each target's decision trace.
         qhat: The conformal threshold at the planner's coverage.
-        limit: The combined score above which the planner takes an object (its ``combined``
-            threshold), to tell the answer it acts on.
         ask: Asks the person; None: nobody is asked. A reply that is not an answer to the question
             (:meth:`ClarifyingQuestion.read`) counts as no answer.
         which_one: Whether ``qhat`` holds for which-one decisions too (a plan-level calibration);
             else targets taking one object are not asked about.
-        sort_limit: In a sort, the score above which an object may go to the target it fits best
-            (the planner's ``partition`` threshold), to tell the answer it acts on.
     """
     sets: dict[tuple[int, str], DecisionSet] = {}
     unsure: dict[int, list[Judgement]] = {}
@@ -176,19 +206,6 @@ def clarify(
             named = [j for j in changed if j.model is None and j.scoring == ""]
             rest = [j for j in changed if j not in named]
             ranked[number] = named + sorted(rest, key=lambda j: -j.score)
-    confidence = None
-    if sets or candidates:
-        confidence = 1.0
-        acts = _acted(targets, ranked, limit, sort_limit)
-        for key, found in sets.items():
-            if key in answered:
-                continue
-            acted = found.p_yes if acts[key] else 1.0 - found.p_yes
-            confidence *= acted if acted == acted else 0.0  # unreadable (NaN): no confidence in it
-        for number in candidates:
-            if number not in settled:
-                best = max((j.p_one for j in ranked[number] if j.p_one is not None), default=math.nan)
-                confidence *= best if best == best else 0.0  # it acts on the likeliest one
     traced = []
     for number, decision in enumerate(decisions):
         decision = _with_sets(decision, number, sets, answered)
@@ -199,7 +216,15 @@ def clarify(
                 found = tuple(j.subject for j in candidates[number])
             decision = replace(decision, candidates=found)
         traced.append(decision)
-    return Clarified(ranked, tuple(traced), tuple(questions), confidence)
+    return Clarified(
+        ranked,
+        tuple(traced),
+        tuple(questions),
+        tuple(t.name for t in targets),
+        {key: found for key, found in sets.items() if key not in answered},
+        {number: ranked[number] for number in candidates if number not in settled},
+        bool(sets or candidates),
+    )
 
 
 def one_of(judgements: list[Judgement], qhat: float) -> list[Judgement]:
@@ -225,31 +250,6 @@ def which_one_question(target: Target, found: list[Judgement]) -> ClarifyingQues
         tuple(_shown(j.p_one) for j in kept),
         kind="one",
     )
-
-
-def _acted(
-    targets: list[Target], ranked: dict[int, list[Judgement]], limit: float, sort_limit: float
-) -> dict[tuple[int, str], bool]:
-    """Whether the plan acts on yes for each (target, object) decision: above ``limit``; in a sort,
-    the target the object fits best, above ``sort_limit`` (as ``GoalPlanner._choose`` does)."""
-    sorting = is_sort(targets)
-    best: dict[str, tuple[float, int]] = {}
-    if sorting:
-        for number, target in enumerate(targets):
-            if target.rest:
-                continue
-            for j in ranked.get(number, []):
-                if j.subject not in best or j.score > best[j.subject][0]:
-                    best[j.subject] = (j.score, number)
-    return {
-        (number, j.subject): (
-            best.get(j.subject, (0.0, -1))[1] == number and j.score > sort_limit
-            if sorting
-            else j.score > limit
-        )
-        for number in ranked
-        for j in ranked[number]
-    }
 
 
 def _shown(p: float | None) -> float:

@@ -270,16 +270,7 @@ class GoalPlanner:
         asked = [j.scoring for js in ranked.values() for j in js if j.scoring]
         # Where a calibrated decision is unsure, a question (asked if someone answers): asking.py.
         qhat = self.calibration.threshold(self.coverage)
-        clarified = clarify(
-            targets,
-            ranked,
-            decisions,
-            qhat,
-            self.thresholds.combined,
-            ask,
-            self.calibration.which_one,
-            self.thresholds.partition,
-        )
+        clarified = clarify(targets, ranked, decisions, qhat, ask, self.calibration.which_one)
         ranked, decisions = clarified.ranked, clarified.decisions
         observer.event("decisions", DecisionsEvent(tuple(decisions)))
         pile: StackTrace | None = None
@@ -345,7 +336,8 @@ class GoalPlanner:
             usage,
             properties,
             clarified.questions,
-            clarified.confidence,
+            # From the final moves: what the plan does after the risk checks (asking.py).
+            clarified.confidence(moves),
         )
 
     def _decide(
