@@ -656,3 +656,10 @@ def test_the_simulated_person_replies_to_both_kinds_of_question() -> None:
     assert gold_reply(task, ClarifyingQuestion("Should ...?", "glass bin", ("cork",), (0.5,))) == "no"
     one = ClarifyingQuestion("Which one ...?", "glass bin", ("cork", "jar", "vase"), (0.5, 0.3, 0.2), "one")
     assert gold_reply(task, one) == "jar"
+    # Where the set missed what they meant, the person names it from the others.
+    missed = ClarifyingQuestion(
+        "Which one ...?", "glass bin", ("cork", "tin"), (0.6, 0.4), "one", others=("lid", "vase")
+    )
+    assert gold_reply(task, missed) == "vase"
+    alone = ClarifyingQuestion("Which one ...?", "glass bin", ("cork",), (0.6,), "one")
+    assert gold_reply(task, alone) == "none"

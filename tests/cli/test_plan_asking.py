@@ -109,3 +109,22 @@ def test_a_reply_to_a_choose_question_that_is_not_an_answer_is_asked_again(
     out = _plan(tmp_path, "--ask", answer=f"{first}\nnone\n")
     assert out.exit_code == 0, out.output
     assert system.answers == ["none"] and "Give numbers or names" in out.output
+
+
+def test_a_which_one_question_takes_another_candidate_by_name(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    one = ClarifyingQuestion(
+        "Which one should I give to the user: the lemon or the lime? One of them, another, or none.",
+        "user",
+        ("lemon", "lime"),
+        (0.5, 0.4),
+        kind="one",
+        others=("orange", "cup"),
+    )
+    system = Unsure(one)
+    monkeypatch.setattr(plan_cmd, "build_system", lambda settings, config, options: system)
+    out = _plan(tmp_path, "--ask", answer="3\nOrange\n")  # no third in the list: asked again
+    assert out.exit_code == 0, out.output
+    assert "  1. lemon\n  2. lime\n  or another: orange, cup\n" in out.output
+    assert system.answers == ["orange"] and "Give a number or a name" in out.output

@@ -52,11 +52,12 @@ def asking_worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: Any 
 
 
 ONE = ClarifyingQuestion(
-    "Which one should I give to the user: the apple, the lemon or the lime? One of them, or none.",
+    "Which one should I give to the user: the apple, the lemon or the lime? One of them, another, or none.",
     "user",
     ("apple", "lemon", "lime"),
     (0.4, 0.35, 0.25),
     kind="one",
+    others=("orange",),
 )
 
 
@@ -222,12 +223,25 @@ def test_the_page_asks_which_one_with_radio_buttons(server: str, browser) -> Non
 
     _ask(server, browser, "choose-box")
     boxes = browser.find_elements(By.CSS_SELECTOR, "#choose-options input")
-    assert [b.get_attribute("type") for b in boxes] == ["radio"] * 3
+    assert [b.get_attribute("type") for b in boxes] == ["radio"] * 4
+    labels = [li.text.strip() for li in browser.find_elements(By.CSS_SELECTOR, "#choose-options li")]
+    assert labels == ["apple", "lemon", "lime", "or another: orange"]  # what the set left out
     boxes[0].click()
     boxes[2].click()  # a radio button: the last one ticked is the one
     browser.save_screenshot(str(SHOTS / "web-5-which-one.png"))
     browser.find_element(By.ID, "answer-chosen").click()
     assert _planned(browser) == ["pick_and_place(lime, user)", "done()"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("server", [picking_worker], indirect=True)
+def test_the_person_may_pick_another_than_those_listed(server: str, browser) -> None:
+    from selenium.webdriver.common.by import By
+
+    _ask(server, browser, "choose-box")
+    browser.find_elements(By.CSS_SELECTOR, "#choose-options input")[3].click()
+    browser.find_element(By.ID, "answer-chosen").click()
+    assert _planned(browser) == ["pick_and_place(orange, user)", "done()"]
 
 
 @pytest.mark.slow

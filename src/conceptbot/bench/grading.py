@@ -740,7 +740,11 @@ def gold_answer(task: Task, obj: str, destination: str) -> str:
 
 def gold_reply(task: Task, question: ClarifyingQuestion) -> str:
     """The reply of a person who wants the gold (:func:`gold_answer` for each object): ``yes`` or
-    ``no`` to a ``confirm`` question, the objects that go (or ``none``) to a ``choose`` one, the
-    first that goes (or ``none``) to a ``one`` question."""
+    ``no`` to a ``confirm`` question, the objects that go (or ``none``) to a ``choose`` one; to a
+    ``one`` question the first listed that goes, else the first of its ``others`` that goes (the
+    person names what they meant), else ``none``."""
     chosen = tuple(o for o in question.objects if gold_answer(task, o, question.target) == "yes")
-    return question.normalised(chosen[:1] if question.kind == "one" else chosen)
+    if question.kind != "one":
+        return question.normalised(chosen)
+    named = chosen or tuple(o for o in question.others if gold_answer(task, o, question.target) == "yes")
+    return question.normalised(named[:1])

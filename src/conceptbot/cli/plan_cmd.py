@@ -108,14 +108,16 @@ def plan(
 
 def _ask_on_terminal(question: ClarifyingQuestion) -> str:
     """The question on stderr (stdout stays the plan's): yes or no; or the objects listed by number,
-    answered with numbers or names (``choose``: comma-separated, ``one``: one) or ``none``; asked
-    again until it is an answer."""
+    answered with numbers or names (``choose``: comma-separated, ``one``: one, or another's name)
+    or ``none``; asked again until it is an answer."""
     text = terminal_safe(question.text)  # scene names and criteria come from files and requests
     if question.kind == "confirm":
         return click.prompt(f"Question: {text}", type=click.Choice(["yes", "no"]), err=True)
     click.echo(f"Question: {text}", err=True)
     for number, obj in enumerate(question.objects, 1):
         click.echo(f"  {number}. {terminal_safe(obj)}", err=True)
+    if question.others:  # a which-one question: the person may name what the list missed
+        click.echo(f"  or another: {terminal_safe(', '.join(question.others))}", err=True)
     how = "numbers or names, comma-separated" if question.kind == "choose" else "a number or a name"
     while True:
         reply = click.prompt(f"Which ({how}; or none)", err=True)

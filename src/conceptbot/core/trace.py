@@ -297,7 +297,8 @@ class ClarifyingQuestion:
     """A question the planner asks where calibrated decisions' conformal prediction sets are unsure:
     about one object (``confirm``: yes or no); where a target taking all that fit is unsure of
     several, about all of them at once (``choose``: which of these go; any, all or none); where a
-    target taking one object has several candidates (``one``: which one, or none).
+    target taking one object has several candidates (``one``: which one, another the person names,
+    or none).
 
     Attributes:
         text: The question in plain words ("Should I put the lemon in or on the bowl?", "Which one
@@ -310,6 +311,8 @@ class ClarifyingQuestion:
         answer: The person's answer as read (``yes``/``no``; for ``choose`` the chosen objects joined
             by ", ", for ``one`` the object; or ``none``); None where nobody was asked (the plan then
             acts on the likelier answers).
+        others: For ``one``: the target's other candidates, which the person may name instead of
+            the listed ones (the set missed what they meant: "none of those, the reading glasses").
     """
 
     text: str
@@ -318,12 +321,16 @@ class ClarifyingQuestion:
     p_yes: tuple[float, ...]
     kind: str = "confirm"
     answer: str | None = None
+    others: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "objects", tuple(self.objects))
+        object.__setattr__(self, "others", tuple(self.others))
         object.__setattr__(self, "p_yes", tuple(self.p_yes))
         if self.kind not in KINDS:
             raise ValueError(f"kind must be one of {KINDS}, got {self.kind!r}")
+        if self.others and self.kind != "one":
+            raise ValueError("only a which-one question takes another object than those listed")
 
     @property
     def options(self) -> tuple[str, ...]:
@@ -333,7 +340,7 @@ class ClarifyingQuestion:
     def read(self, reply: object) -> tuple[str, ...] | None:
         """The objects a reply sends to the target (empty: none), or None for a reply that is not an
         answer. ``confirm``: yes or no. ``choose``: ``none``, or options separated by commas (in any
-        case, each at most once). ``one``: one option, or ``none``."""
+        case, each at most once). ``one``: one option or one of :attr:`others`, or ``none``."""
         if not isinstance(reply, str):
             return None
         said = " ".join(reply.strip().lower().split())
@@ -341,12 +348,12 @@ class ClarifyingQuestion:
             return {"yes": self.objects, "no": ()}.get(said)
         if said == NONE:
             return ()
-        names = {o.lower(): o for o in self.objects}
+        names = {o.lower(): o for o in (*self.objects, *self.others)}
         parts = [" ".join(p.split()) for p in said.split(",")]
         chosen = [names.get(p) for p in parts]
         if None in chosen or len(set(chosen)) != len(chosen) or (self.kind == "one" and len(chosen) != 1):
             return None
-        return tuple(o for o in self.objects if o in chosen)
+        return tuple(o for o in (*self.objects, *self.others) if o in chosen)
 
     def normalised(self, chosen: tuple[str, ...]) -> str:
         """The answer text for ``chosen`` (what :attr:`answer` records)."""
@@ -366,6 +373,7 @@ class ClarifyingQuestion:
             "options": list(self.options),
             "answer": self.answer,
             "chosen": list(chosen) if chosen is not None else None,
+            "others": list(self.others),
         }
 
 

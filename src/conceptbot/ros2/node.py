@@ -284,7 +284,7 @@ class ConceptBotNode(Node):
             how = {
                 "confirm": "yes or no",
                 "choose": f"some of {', '.join(question.options)}, or none",
-                "one": f"one of {', '.join(question.options)}, or none",
+                "one": f"one of {', '.join((*question.options, *question.others))}, or none",
             }[question.kind]
             self.get_logger().warning(f"answer for {request_id!r} dropped: {answer!r:.80} is not {how}")
             return

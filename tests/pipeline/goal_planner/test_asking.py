@@ -167,7 +167,8 @@ def test_a_target_taking_one_object_asks_which_one_when_its_set_holds_several() 
     [question] = found.questions
     assert question.kind == "one" and question.objects == ("coke", "water")
     assert (
-        question.text == "Which one should I give to the user: the coke or the water? One of them, or none."
+        question.text
+        == "Which one should I give to the user: the coke or the water? One of them, another, or none."
     )
     assert found.decisions[0].candidates == ("coke", "water")
     assert found.confidence([("coke", "user")]) == pytest.approx(0.5)  # acts on the likeliest
@@ -196,11 +197,35 @@ def test_a_sure_choice_is_not_asked_and_an_unreadable_one_is() -> None:
 
 @pytest.mark.parametrize(
     ("reply", "chosen"),
-    [("water", ("water",)), (" COKE", ("coke",)), ("none", ()), ("coke, water", None), ("yes", None)],
+    [
+        ("water", ("water",)),
+        (" COKE", ("coke",)),
+        ("sponge", ("sponge",)),
+        ("none", ()),
+        ("coke, water", None),
+        ("coke, sponge", None),
+        ("yes", None),
+        ("spoon", None),
+    ],
 )
 def test_a_which_one_question_takes_one_object_or_none(reply: str, chosen: object) -> None:
-    question = ClarifyingQuestion("Which one ...?", "user", ("coke", "water"), (0.5, 0.4), kind="one")
+    question = ClarifyingQuestion(
+        "Which one ...?", "user", ("coke", "water"), (0.5, 0.4), kind="one", others=("sponge",)
+    )
     assert question.read(reply) == chosen
+
+
+def test_a_which_one_question_offers_the_targets_other_candidates_and_takes_one() -> None:
+    ranked, decisions = _one_of(("coke", 0.5), ("water", 0.35), ("sponge", 0.15))
+    found = clarify([USER], ranked, decisions, 0.8)
+    [question] = found.questions
+    assert question.others == ("sponge",) and question.text.endswith("One of them, another, or none.")
+    assert question.to_dict()["others"] == ["sponge"]
+    asked = clarify([USER], ranked, decisions, 0.8, ask=lambda q: "sponge")
+    assert asked.questions[0].answer == "sponge" and asked.decisions[0].candidates == ("sponge",)
+    assert (asked.ranked[0][0].subject, asked.ranked[0][0].score) == ("sponge", ANSWERED)
+    with pytest.raises(ValueError, match="which-one"):
+        ClarifyingQuestion("Which ...?", "bowl", ("lemon",), (0.5,), kind="choose", others=("cup",))
 
 
 def test_a_plan_without_a_calibrated_decision_has_no_confidence() -> None:

@@ -8,7 +8,8 @@ decision get conformal prediction sets (:mod:`.conformal`):
   put in or on the salad bowl (...): the kiwi, the olive oil or the sugar? Any, all or none.");
 - which object a target taking one gets (the ranking as a softmax over the candidates): a set of
   two or more is a question of which one ("Which one should I give to the user: the coke or the
-  water? One of them, or none.").
+  water? One of them, another, or none."); the person may name another of the target's candidates,
+  since a set can miss what they meant.
 
 The target with the most uncertain decision is asked first, at most :data:`MAX_QUESTIONS` per
 plan. Asked (``ask`` given), the answer replaces the decisions; not asked, the plan acts on each
@@ -170,7 +171,8 @@ def clarify(
     for number, found in candidates.items():
         if len(found) > 1:
             top = found[0].p_one if found[0].p_one == found[0].p_one else 0.5
-            doubt[number] = (abs(top - 0.5), which_one_question(targets[number], found))
+            others = [j.subject for j in ranked.get(number, []) if j.p_one is not None]
+            doubt[number] = (abs(top - 0.5), which_one_question(targets[number], found, others))
     # One question per target, the target whose most uncertain decision is most uncertain first.
     questions = []
     answered: dict[tuple[int, str], str] = {}
@@ -238,17 +240,23 @@ def one_of(judgements: list[Judgement], qhat: float) -> list[Judgement]:
     return kept or likeliest[:MAX_OPTIONS]
 
 
-def which_one_question(target: Target, found: list[Judgement]) -> ClarifyingQuestion:
+def which_one_question(
+    target: Target, found: list[Judgement], others: Iterable[str] = ()
+) -> ClarifyingQuestion:
     """The question of which one: "Which one should I give to the user: the coke, the 7up or the
-    water bottle? One of them, or none."."""
+    water bottle? One of them, another, or none." ``others``: the target's other candidates, which
+    the person may name instead (a set can miss what they meant)."""
     kept = found[:MAX_OPTIONS]
     names = [j.subject for j in kept]
+    rest = tuple(o for o in others if o not in names)
     return ClarifyingQuestion(
-        f"Which one should I {_move(target)}: {_listed(names)}? One of them, or none.",
+        f"Which one should I {_move(target)}: {_listed(names)}? "
+        + ("One of them, another, or none." if rest else "One of them, or none."),
         target.name,
         tuple(names),
         tuple(_shown(j.p_one) for j in kept),
         kind="one",
+        others=rest,
     )
 
 

@@ -228,8 +228,10 @@ function showQuestion(id, question) {
     // One box per object: checkboxes for "which of these go", radio buttons for "which one";
     // the ticked ones go to the target, none ticked is "none".
     const type = question.kind === "one" ? "radio" : "checkbox";
-    $("choose-options").replaceChildren(...question.options.map((name, i) => el("li", {},
-      el("input", { type, name: "choose", id: `choose-${i}`, value: name }), el("label", { for: `choose-${i}` }, ` ${name}`))));
+    // A which-one question's others follow, marked: the person may pick what the set missed.
+    const others = question.others || [];
+    $("choose-options").replaceChildren(...[...question.options, ...others].map((name, i) => el("li", i < question.options.length ? {} : { class: "other" },
+      el("input", { type, name: "choose", id: `choose-${i}`, value: name }), el("label", { for: `choose-${i}` }, ` ${i === question.options.length ? "or another: " : ""}${name}`))));
     $("answer-chosen").textContent = question.kind === "one" ? "This one" : "These go";
     $("answer-none").onclick = send("none");
     $("answer-chosen").onclick = () => {
