@@ -19,7 +19,7 @@ from typing import Any
 from conceptbot.bench.conformal_fit import labelled
 from conceptbot.bench.grading import gold_reply, grade, load_tasks, task_scene
 from conceptbot.core.config import load_settings
-from conceptbot.core.system import COVERAGES, LEVELS, SystemOptions
+from conceptbot.core.system import ASK_ALL, COVERAGES, LEVELS, SystemOptions
 from conceptbot.core.trace import ClarifyingQuestion
 from conceptbot.systems import build_system
 
@@ -178,7 +178,9 @@ def main() -> None:
             plot_reliability(found)
             print(f"wrote {OUT} and {RELIABILITY}")
         return
-    rows = [measure(args.split, s, c, args.level) for s in args.systems.split(",") for c in COVERAGES]
+    # ASK_ALL: every calibrated decision asked, the most the answers can do (the ceiling).
+    coverages = (*COVERAGES, ASK_ALL)
+    rows = [measure(args.split, s, c, args.level) for s in args.systems.split(",") for c in coverages]
     columns = ("cover", "alone", "asked", "help", "q/task", "obj/q", "emp.cov", "dec.cov", "n task")
     print(f"{'system':10} {'level':8} " + " ".join(f"{c:>7}" for c in columns))
     for r in rows:
@@ -204,7 +206,8 @@ def main() -> None:
 
 def plot(rows: list[dict[str, Any]]) -> None:
     """Success against help rate, one line per split and system through its coverages (KnowNo's
-    figure), with the success without questions as the line's start."""
+    figure), with the success without questions as the line's start and every decision asked
+    (coverage 1.0) as its end."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -225,6 +228,7 @@ def plot(rows: list[dict[str, Any]]) -> None:
         ax.plot(xs, ys, marker="o", label=f"{split}: {system}, {level} level")
         for r in line:
             ax.annotate(str(r["coverage"]), (r["help_rate"], r["success"]), fontsize=7)
+    ax.scatter([40], [90], marker="*", s=120, color="red", label="issue 35's target (test, 0.9)")
     ax.set_xlabel("tasks with a question (%)")
     ax.set_ylabel("success with the answers (%)")
     ax.set_title("Asking instead of guessing (embedded 1.5B; labels: coverage)")

@@ -69,10 +69,11 @@ from conceptbot.systems import SYSTEMS, build_system
 )
 @click.option(
     "--coverage",
-    type=click.Choice(["0.8", "0.9", "0.95"]),
+    type=click.Choice(["0.8", "0.9", "0.95", "1"]),
     default="0.9",
     show_default=True,
-    help="How often a decision's prediction set must hold the right answer (higher asks more).",
+    help="How often a decision's prediction set must hold the right answer (higher asks more; "
+    "1: ask about every calibrated decision).",
 )
 @pass_app
 def plan(

@@ -28,6 +28,9 @@ completions)."""
 PLANNERS = ("auto", "goal", "steps")
 COVERAGES = (0.8, 0.9, 0.95)
 """The coverages the conformal calibration ships thresholds for."""
+ASK_ALL = 1.0
+"""The coverage at which every calibrated decision is a question (a set of every answer always
+holds the right one, so it needs no fit): the most a person's answers can do for a plan."""
 LEVELS = ("plan", "decision")
 """What the conformal coverage holds for: ``plan`` (every calibrated decision of a plan at once, the
 default) or ``decision`` (each decision on its own)."""
@@ -87,7 +90,7 @@ class SystemOptions:
         planner: ``auto`` (the goal planner), ``goal`` or ``steps`` (the paper's step-by-step
             planner); the ``paper`` systems are always ``steps``.
         coverage: How often the goal planner's prediction set must hold a decision's right answer
-            (one of :data:`COVERAGES`); higher asks more.
+            (one of :data:`COVERAGES`, or :data:`ASK_ALL`: ask about every one); higher asks more.
         level: What the coverage holds for (:data:`LEVELS`): ``plan``, all of a plan's calibrated
             decisions together, or ``decision``, each one (asks less, is wrong more often).
 
@@ -116,7 +119,7 @@ class SystemOptions:
             object.__setattr__(self, "theta", float(self.theta))
         _choice("planner_method", self.planner_method, METHODS)
         _choice("planner", self.planner, PLANNERS)
-        _choice("coverage", self.coverage, COVERAGES)
+        _choice("coverage", self.coverage, (*COVERAGES, ASK_ALL))
         _choice("level", self.level, LEVELS)
         if isinstance(self.n, bool) or not isinstance(self.n, int) or self.n < 1:
             raise ConfigError(f"n must be a whole number of completions >= 1, got {self.n!r}")

@@ -233,3 +233,12 @@ def test_a_plan_without_a_calibrated_decision_has_no_confidence() -> None:
     judgements = [Judgement("coke", "user", 1.0, 10.0)]
     found = clarify([named], {0: judgements}, (DecisionTrace(target_trace(named), False),), QHAT)
     assert found.questions == () and found.confidence([("coke", "user")]) is None
+
+
+def test_at_threshold_one_every_calibrated_decision_is_asked() -> None:
+    ranked, decisions = _case(("lemon", 0.55), ("butter", 0.99), ("cup", 0.01))
+    [question] = clarify([BOWL], ranked, decisions, 1.0).questions
+    assert set(question.objects) == {"lemon", "butter", "cup"}
+    ones, traces = _one_of(("coke", 0.98), ("water", 0.01), ("sponge", 0.01))
+    [which] = clarify([USER], ones, traces, 1.0).questions
+    assert which.kind == "one" and which.objects == ("coke", "water", "sponge")

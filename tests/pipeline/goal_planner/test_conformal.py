@@ -105,3 +105,10 @@ def test_a_threshold_out_of_range_is_refused(tmp_path) -> None:
     user_file(tmp_path, "b", "m").write_text(json.dumps({"plan_qhat": bad, "fitted_on": "x"}))
     with pytest.raises(ConfigError, match=r"not a number in \[0, 1\]"):
         calibration_for(tmp_path, "b", "m")
+
+
+def test_at_coverage_one_every_answer_is_kept_without_a_fit() -> None:
+    from conceptbot.core.system import ASK_ALL, SystemOptions
+
+    assert shipped().threshold(ASK_ALL) == 1.0 and shipped("nograph", "decision").threshold(ASK_ALL) == 1.0
+    assert SystemOptions(coverage=ASK_ALL).coverage == 1.0

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from conceptbot.core.errors import ConfigError
-from conceptbot.core.system import COVERAGES, LEVELS
+from conceptbot.core.system import ASK_ALL, COVERAGES, LEVELS
 
 __all__ = [
     "COVERAGES",
@@ -109,11 +109,13 @@ class Calibration:
     which_one: bool = True  # fitted on which-one decisions too (plan level), so they get sets
 
     def threshold(self, coverage: float) -> float:
-        """``qhat`` for ``coverage`` (one of :data:`COVERAGES`).
+        """``qhat`` for ``coverage`` (one of :data:`COVERAGES`; :data:`ASK_ALL` keeps every answer).
 
         Raises:
             ValueError: A coverage without a fitted threshold.
         """
+        if coverage == ASK_ALL:
+            return 1.0
         if coverage not in self.qhat:
             shown = ", ".join(str(c) for c in sorted(self.qhat))
             raise ValueError(f"no conformal threshold for coverage {coverage}; fitted: {shown}")
