@@ -74,6 +74,23 @@ def choosing_worker(
     emit("plan", {"plan": plan, "refused": False, "reason": None, "usage": {}})
 
 
+def confident_worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: Any = None) -> None:
+    """A run whose plan carries a confidence and each target's share of it."""
+    shares = [{"to": "user", "confidence": 0.6}, {"to": "bowl", "confidence": 0.7}]
+    plan = ["pick_and_place(apple, user)", "done()"]
+    emit(
+        "plan",
+        {
+            "plan": plan,
+            "refused": False,
+            "reason": None,
+            "usage": {},
+            "confidence": 0.42,
+            "confidence_by_target": shares,
+        },
+    )
+
+
 def picking_worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: Any = None) -> None:
     """A run whose planner has three candidates for a target taking one: which one."""
     choosing_worker(spec, emit, out_dir, ask, ONE)
@@ -253,3 +270,26 @@ def test_none_of_them_sends_nothing(server: str, browser) -> None:
     browser.find_elements(By.CSS_SELECTOR, "#choose-options input")[1].click()  # changed their mind
     browser.find_element(By.ID, "answer-none").click()
     assert _planned(browser) == ["done()"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("server", [confident_worker], indirect=True)
+def test_the_page_shows_the_plans_confidence_and_where_it_is_lost(server: str, browser) -> None:
+    from selenium.webdriver.common.by import By
+
+    _ask(server, browser, "plan-box")
+    assert _planned(browser) == ["pick_and_place(apple, user)", "done()"]
+    assert browser.find_element(By.ID, "confidence").text == (
+        "Confidence 0.42 that its calibrated decisions are all right (the user 0.60, the bowl 0.70)"
+    )
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("server", [asking_worker], indirect=True)
+def test_a_plan_without_a_confidence_shows_none(server: str, browser) -> None:
+    from selenium.webdriver.common.by import By
+
+    _ask(server, browser, "question-box")
+    browser.find_element(By.ID, "answer-yes").click()
+    assert _planned(browser) == ["pick_and_place(apple, user)", "done()"]
+    assert browser.find_element(By.ID, "confidence").text == ""

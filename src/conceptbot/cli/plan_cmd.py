@@ -247,7 +247,8 @@ def _goal(console: Console, trace: PlanTrace) -> None:
     for decision in trace.decisions or ():
         if not decision.decided:
             continue
-        title = plain(f"Decisions for the {decision.target.to} (calibrated log-odds of yes)")
+        share = f"; confidence {decision.confidence:.2f}" if decision.confidence is not None else ""
+        title = plain(f"Decisions for the {decision.target.to} (calibrated log-odds of yes{share})")
         # The name ranking (which object, all listed in one question) exists for targets taking N.
         names = any(row.name_score is not None for row in decision.objects)
         # Combined decisions: the model's own log-odds beside the score, and the graph's evidence.

@@ -388,6 +388,9 @@ class DecisionTrace:
         context: The graph facts about the request put in the questions (None when not decided).
         candidates: For a target taking one object, the conformal prediction set of which one
             (most likely first; more than one: unsure), where the planner calibrated it, else None.
+        confidence: The probability that the plan's final moves are right in this target's
+            calibrated decisions (4 decimals; an answer counts as sure), where it has any: the
+            plan's confidence is the product of these, so the trace shows where it is lost.
     """
 
     target: TargetTrace
@@ -395,6 +398,7 @@ class DecisionTrace:
     objects: tuple[JudgementTrace, ...] = ()
     context: tuple[str, ...] | None = None
     candidates: tuple[str, ...] | None = None
+    confidence: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form: the target's fields, then the decisions."""
@@ -403,6 +407,8 @@ class DecisionTrace:
             data["context"] = list(self.context)
         if self.candidates is not None:
             data["candidates"] = list(self.candidates)
+        if self.confidence is not None:
+            data["confidence"] = self.confidence
         data["objects"] = [o.to_dict() for o in self.objects]
         return data
 

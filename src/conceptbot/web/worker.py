@@ -153,6 +153,14 @@ def make_worker(systems: SystemFactory, can_simulate: bool) -> Worker:
                     "refused": plan.refused,
                     "reason": plan.reason,
                     "usage": usage_dict(plan.usage),
+                    # The probability that the calibrated decisions are right, and each target's
+                    # share of it (where it is lost); None and [] for planners without them.
+                    "confidence": plan.confidence,
+                    "confidence_by_target": [
+                        {"to": d.target.to, "confidence": d.confidence}
+                        for d in plan.trace.decisions or ()
+                        if d.confidence is not None
+                    ],
                 },
             )
             return plan

@@ -242,3 +242,25 @@ def test_at_threshold_one_every_calibrated_decision_is_asked() -> None:
     ones, traces = _one_of(("coke", 0.98), ("water", 0.01), ("sponge", 0.01))
     [which] = clarify([USER], ones, traces, 1.0).questions
     assert which.kind == "one" and which.objects == ("coke", "water", "sponge")
+
+
+def test_each_targets_share_of_the_confidence_is_reported_and_multiplies_to_it() -> None:
+    paper = Target("paper bin", ALL, "named", criterion="paper")
+    glass = Target("glass bin", ALL, "named", criterion="glass")
+    ranked = {
+        0: [_judged("bag", 0.95, "paper"), _judged("jar", 0.45, "paper")],
+        1: [_judged("jar", 0.6, "glass"), _judged("bag", 0.02, "glass")],
+    }
+    traces = tuple(
+        DecisionTrace(target_trace(t), True, tuple(judgement_trace(j) for j in ranked[n]))
+        for n, t in enumerate((paper, glass))
+    )
+    moves = [("bag", "paper bin"), ("jar", "glass bin")]
+    found = clarify([paper, glass], ranked, traces, QHAT)
+    assert found.factors(moves) == pytest.approx({0: 0.95 * 0.55, 1: 0.6 * 0.98})
+    assert found.confidence(moves) == pytest.approx(0.95 * 0.55 * 0.6 * 0.98)
+    # An answered target is sure: its share is 1.
+    asked = clarify(
+        [paper, glass], ranked, traces, QHAT, ask=lambda q: "no" if q.target == "paper bin" else ""
+    )
+    assert asked.factors(moves) == pytest.approx({0: 0.95, 1: 0.6 * 0.98})

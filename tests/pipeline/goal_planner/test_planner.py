@@ -203,6 +203,7 @@ def test_an_unsafe_move_is_dropped_and_the_target_takes_its_next_best_object() -
     chances = {j.object: j.p_one for j in decision.objects}
     assert chances["scissors"] > chances["safety scissors"]
     assert result.confidence == pytest.approx(chances["safety scissors"], abs=1e-4)
+    assert decision.confidence == pytest.approx(result.confidence, abs=1e-4)  # where it is lost
 
 
 class RatingOPE:

@@ -20,6 +20,7 @@ for each calibrated decision (an answer given counts as sure).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 
@@ -47,6 +48,7 @@ class Clarified:
         sets: The yes/no decisions no answer settled, by (target position, object).
         which: The which-one targets no answer settled: their scored candidates.
         calibrated: Whether the plan has a calibrated decision (answered ones included).
+        asked: The targets an answer settled decisions of.
     """
 
     ranked: dict[int, list[Judgement]]
@@ -56,28 +58,36 @@ class Clarified:
     sets: dict[tuple[int, str], DecisionSet] = field(default_factory=dict)
     which: dict[int, list[Judgement]] = field(default_factory=dict)
     calibrated: bool = False
+    asked: tuple[int, ...] = ()
 
     def confidence(self, moves: Iterable[tuple[str, str]]) -> float | None:
         """The probability that the plan's final ``moves`` (object, destination) are right in every
-        calibrated decision no answer settled (None: the plan has no calibrated decision).
+        calibrated decision no answer settled (None: the plan has no calibrated decision): the
+        product of :meth:`factors`."""
+        if not self.calibrated:
+            return None
+        return math.prod(self.factors(moves).values())
+
+    def factors(self, moves: Iterable[tuple[str, str]]) -> dict[int, float]:
+        """Per target position, the probability that ``moves`` are right in its calibrated
+        decisions no answer settled (1.0 for a target whose decisions were all answered; targets
+        without a calibrated decision are left out).
 
         A yes/no decision counts its P(yes) when its object went to its target, else P(no): an
         object the risk checks dropped counts as not moved. A which-one decision counts the
         ``p_one`` of the object the target got (a replacement after a veto included); a target the
         risk checks left empty counts for nothing: what it does is the checks' decision, which has
-        no calibrated probability. A probability that cannot be read (NaN) makes the confidence 0."""
-        if not self.calibrated:
-            return None
+        no calibrated probability. A probability that cannot be read (NaN) counts as 0."""
         done = set(moves)
-        confidence = 1.0
-        for (number, obj), found in self.sets.items():
-            acted = found.p_yes if (obj, self.places[number]) in done else 1.0 - found.p_yes
-            confidence *= acted if acted == acted else 0.0
+        found = dict.fromkeys(self.asked, 1.0)
+        for (number, obj), decision in self.sets.items():
+            acted = decision.p_yes if (obj, self.places[number]) in done else 1.0 - decision.p_yes
+            found[number] = found.get(number, 1.0) * (acted if acted == acted else 0.0)
         for number, judgements in self.which.items():
             got = [j.p_one for j in judgements if (j.subject, self.places[number]) in done]
-            if got and got[0] is not None:
-                confidence *= got[0] if got[0] == got[0] else 0.0
-        return confidence
+            chance = got[0] if got and got[0] is not None else 1.0
+            found[number] = found.get(number, 1.0) * (chance if chance == chance else 0.0)
+        return found
 
 
 def is_sort(targets: list[Target]) -> bool:
@@ -226,6 +236,7 @@ def clarify(
         {key: found for key, found in sets.items() if key not in answered},
         {number: ranked[number] for number in candidates if number not in settled},
         bool(sets or candidates),
+        tuple(sorted(settled)),
     )
 
 

@@ -320,6 +320,12 @@ class GoalPlanner:
                 ),
                 [],
             )
+        # Where the confidence is lost: each target's share, from the final moves (asking.py).
+        factors = clarified.factors(moves)
+        decisions = tuple(
+            replace(d, confidence=round(factors[n], 4)) if n in factors else d
+            for n, d in enumerate(decisions)
+        )
         steps = self._steps(moves, candidates, scene, properties, asked[-1] if asked else "")
         for step in steps:
             observer.event("step", step)

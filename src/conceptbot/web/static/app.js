@@ -54,7 +54,7 @@ async function init() {
 
 function clear() {
   for (const id of ["question-box", "refusal", "plan-box", "sim-box", "ope-box", "urp-box", "goal-box", "steps-box"]) $(id).hidden = true;
-  for (const id of ["plan", "properties", "relations", "keyword-relations", "targets", "decisions", "risk-checks", "steps", "sim-pictures"]) $(id).replaceChildren();
+  for (const id of ["plan", "confidence", "properties", "relations", "keyword-relations", "targets", "decisions", "risk-checks", "steps", "sim-pictures"]) $(id).replaceChildren();
 }
 
 async function start(event) {
@@ -254,6 +254,10 @@ function showPlan(e) {
   $("plan").replaceChildren(...e.plan.map((a) => el("li", {}, a)));
   const total = e.usage.total;
   if (total) $("usage").textContent = `${total.latency_s.toFixed(1)} s, ${total.prompt_tokens + total.completion_tokens} tokens, ${total.calls} LLM calls`;
+  // The plan's confidence and where it is lost (absent for planners without calibrated decisions).
+  const shares = (e.confidence_by_target || []).map((t) => `the ${t.to} ${t.confidence.toFixed(2)}`).join(", ");
+  $("confidence").textContent = typeof e.confidence === "number"
+    ? `Confidence ${e.confidence.toFixed(2)} that its calibrated decisions are all right${shares ? " (" + shares + ")" : ""}` : "";
   if (e.refused) showRefusal(e.reason || "judged unsafe");
 }
 
