@@ -125,7 +125,8 @@ def _judged(obj: str, p: float, criterion: str) -> Judgement:
     return Judgement(obj, criterion, p, score, model=score)
 
 
-def test_a_sort_asks_per_bin_and_its_confidence_follows_where_each_object_goes() -> None:
+def _sort() -> tuple[Target, Target, dict[int, list[Judgement]], tuple[DecisionTrace, ...]]:
+    """A sort of a bag and a jar into a paper bin and a glass bin; the jar is unsure in both."""
     paper = Target("paper bin", ALL, "named", criterion="paper")
     glass = Target("glass bin", ALL, "named", criterion="glass")
     ranked = {
@@ -136,6 +137,11 @@ def test_a_sort_asks_per_bin_and_its_confidence_follows_where_each_object_goes()
         DecisionTrace(target_trace(t), True, tuple(judgement_trace(j) for j in ranked[n]))
         for n, t in enumerate((paper, glass))
     )
+    return paper, glass, ranked, traces
+
+
+def test_a_sort_asks_per_bin_and_its_confidence_follows_where_each_object_goes() -> None:
+    paper, glass, ranked, traces = _sort()
     found = clarify([paper, glass], ranked, traces, QHAT)
     assert [(q.target, q.objects) for q in found.questions] == [
         ("paper bin", ("jar",)),
@@ -245,16 +251,7 @@ def test_at_threshold_one_every_calibrated_decision_is_asked() -> None:
 
 
 def test_each_targets_share_of_the_confidence_is_reported_and_multiplies_to_it() -> None:
-    paper = Target("paper bin", ALL, "named", criterion="paper")
-    glass = Target("glass bin", ALL, "named", criterion="glass")
-    ranked = {
-        0: [_judged("bag", 0.95, "paper"), _judged("jar", 0.45, "paper")],
-        1: [_judged("jar", 0.6, "glass"), _judged("bag", 0.02, "glass")],
-    }
-    traces = tuple(
-        DecisionTrace(target_trace(t), True, tuple(judgement_trace(j) for j in ranked[n]))
-        for n, t in enumerate((paper, glass))
-    )
+    paper, glass, ranked, traces = _sort()
     moves = [("bag", "paper bin"), ("jar", "glass bin")]
     found = clarify([paper, glass], ranked, traces, QHAT)
     assert found.factors(moves) == pytest.approx({0: 0.95 * 0.55, 1: 0.6 * 0.98})
