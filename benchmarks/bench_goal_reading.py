@@ -1,6 +1,6 @@
 """How often a request's goal is read exactly right: the goal reader (``pipeline/goal``) and today's
 ``TargetFinder`` (``pipeline/goal_planner/targets.py``) on the goal set
-(``benchmarks/data/goal_set.json``: the 85 dev requests and rounds of hand-written paraphrases).
+(``benchmarks/data/goal_set.json``: the dev requests and rounds of hand-written paraphrases).
 No model is run.
 
 Exact match is :func:`conceptbot.pipeline.goal.same_goal`: same stack, dish and need-presence, and the

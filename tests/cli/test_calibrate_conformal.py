@@ -9,6 +9,7 @@ from typing import Any
 
 import pytest
 
+from conceptbot.bench.grading import load_tasks
 from conceptbot.cli import calibrate_cmd
 from conceptbot.core.config import load_settings
 from conceptbot.core.plan import Done, Plan
@@ -50,7 +51,8 @@ def test_calibrate_conformal_writes_the_models_thresholds_for_the_planner(
     assert out.code == 0, out.stderr
     assert out.stdout.lstrip().startswith("{"), (out.stdout[:300], out.stderr[-500:])
     data = json.loads(out.stdout)
-    assert [s.planned for s in systems] == [85, 85]  # every dev task, with and without the graph
+    dev = len(load_tasks(split="dev"))
+    assert [s.planned for s in systems] == [dev, dev]  # every dev task, with and without the graph
     assert data["model"] == "my-model" and set(data["plan_qhat"]) == {"graph", "nograph"}
     found = calibration_for(load_settings().calibration_dir, "openai-compatible", "my-model")
     assert Path(data["path"]).is_file() and found.qhat == {

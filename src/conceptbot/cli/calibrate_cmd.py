@@ -76,7 +76,7 @@ def calibrate(
     target properties, and how many objects keep none. The recommendation is the threshold whose
     mean is closest to the paper's ~20 relations per object at 0.75 with ada-002.
 
-    With --conformal: plan the 85 dev tasks with the configured model (with and without the graph,
+    With --conformal: plan the dev tasks with the configured model (with and without the graph,
     through the cache), fit the plan-level conformal thresholds the planner asks by, and keep them
     in the home's calibration folder, where the planner finds them for this model (the shipped ones
     are the embedded model's).

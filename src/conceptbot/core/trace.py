@@ -190,6 +190,8 @@ class TargetTrace:
         dish: The dish the request asks for, when the graph knows it as one, or "".
         ingredients: Whether the objects that go are a dish's ingredients.
         rest: Whether it takes whatever no other target takes ("the rest"; in the JSON only when so).
+        part: What this target is for where the request asks for several things of different kinds
+            ("as something to eat"; in the JSON only when set).
     """
 
     to: str
@@ -201,6 +203,7 @@ class TargetTrace:
     dish: str = ""
     ingredients: bool = False
     rest: bool = False
+    part: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form."""
@@ -214,6 +217,7 @@ class TargetTrace:
             "dish": self.dish,
             "ingredients": self.ingredients,
             **({"rest": True} if self.rest else {}),
+            **({"part": self.part} if self.part else {}),
         }
 
 

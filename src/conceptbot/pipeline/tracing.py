@@ -86,6 +86,7 @@ def target_trace(target: Target) -> TargetTrace:
         dish=target.dish,
         ingredients=target.ingredients,
         rest=target.rest,
+        part=target.part,
     )
 
 

@@ -108,3 +108,33 @@ def test_names_with_marks_are_read_as_their_words_and_planned_with_their_own_spe
     goal = read_plainly(GoalReader(), "give the apple [/x] to the child [bold]", scene)
     [target] = goal.targets
     assert (target.to, target.takes, target.named) == ("child", "named", ("apple [/x]",))
+
+
+def test_several_kinds_of_thing_each_carry_what_they_are_for() -> None:
+    goal = Goal(
+        targets=(
+            GoalTarget("user", "criterion", (), "something to write with", 1),
+            GoalTarget("user", "criterion", (), "something to write on", 1),
+            GoalTarget("shoe box", "named", ("conch shell",), "", 1),
+        )
+    )
+    write, paper, box = to_targets(goal, SHELLS)
+    assert (write.part, paper.part, box.part) == (
+        "as something to write with",
+        "as something to write on",
+        "",
+    )
+    assert write.to_dict()["part"] == "as something to write with" and "part" not in box.to_dict()
+    needs = Goal(
+        need="x",
+        targets=(
+            GoalTarget(None, "need", (), "I cut my finger"),
+            GoalTarget(None, "need", (), "my head aches"),
+        ),
+    )
+    assert [t.part for t in to_targets(needs, SHELLS)] == ['for "I cut my finger"', 'for "my head aches"']
+    # one thing asked for is asked about as before, with the whole request
+    (one,) = to_targets(
+        Goal(targets=(GoalTarget("user", "criterion", (), "something to write with", 1),)), SHELLS
+    )
+    assert one.part == ""

@@ -476,6 +476,46 @@ def test_two_targets_for_one_place_each_take_their_own_objects() -> None:
     assert "pick_and_place(chips, user)" not in [c.action for c in result.steps[1].candidates]
 
 
+def test_several_kinds_of_thing_are_each_asked_about_with_their_own_words() -> None:
+    # "Give me something to cut with and something to eat": each part's questions say what it is
+    # for, so each target ranks by its own answers (not both by the request's best two)
+    cut = Target("user", 1, "named", [], part="as something to cut with")
+    eat = Target("user", 1, "named", [], part="as something to eat")
+    scores = [
+        PRIOR,  # "give ... to the user as something to cut with": the content-free object
+        [-0.1, -3.0],  # scissors: yes
+        [-0.5, -1.5],  # safety scissors: lean yes
+        [-3.0, -0.1],  # glue: no
+        [-3.0, -0.1],  # chips: no
+        [-1.0, -2.0, -4.0, -4.0],  # the name ranking, for the request
+        NEUTRAL,
+        PRIOR,  # "... as something to eat"
+        [-3.0, -0.1],  # scissors: no
+        [-3.0, -0.1],  # safety scissors: no
+        [-2.0, -0.5],  # glue: no
+        [-0.1, -3.0],  # chips: yes
+        [-4.0, -4.0, -3.0, -1.0],
+        NEUTRAL,
+        PRIOR,
+        SAFE,  # scissors to the user
+        PRIOR,
+        SAFE,  # chips to the user
+    ]
+    llm = FakeLLM(scores=scores)
+    planner = GoalPlanner(_FixedTargets([cut, eat]), Decider(llm, FactFinder(None)))
+    result = planner.plan("Give me something to cut with and something to eat", SCENE)
+    assert format_actions(result.actions) == [
+        "pick_and_place(scissors, user)",
+        "pick_and_place(chips, user)",
+        "done()",
+    ]
+    asked = [m.content for r in llm.score_requests for m in r.messages if m.role == "user"]
+    assert any("give the scissors to the user as something to cut with?" in q for q in asked)
+    assert any("give the chips to the user as something to eat?" in q for q in asked)
+    assert any("Which object should the robot give to the user as something to eat?" in q for q in asked)
+    assert [d.target.part for d in result.trace.decisions or ()] == [cut.part, eat.part]
+
+
 @pytest.mark.parametrize("bad", [float("nan"), float("inf")])
 def test_a_decision_with_a_non_finite_score_moves_nothing(bad: float) -> None:
     """NaN <= limit is False: without the check a NaN score would count as a fit and move the object."""

@@ -21,6 +21,12 @@ right):
   question: 88% per object), the dev needs fell from 10/21 to 8/21 (2026-12-02): a yes/no per
   object ranks the one that helps worse than the name ranking does.
 * ``all``: every object. A stacking goal gives no targets: the planner piles the objects itself.
+
+Where the goal asks for two or more things of different kinds, each taking a number ("something to
+eat and something to drink") or each a need of its own ("I'm chilly and there's nothing to do"),
+each target carries its ``part`` ("as something to eat", 'for "I'm chilly"'): without it the
+targets asked the same question against the whole request and took its two best answers, often
+two of one kind.
 """
 
 from __future__ import annotations
@@ -83,6 +89,7 @@ def to_targets(goal: Goal, scene: Scene, choose: Chooser | None = None) -> list[
         return []
     dish = goal.dish or ""
     targets = []
+    several = sum(_counted(t) for t in goal.targets) >= 2
     for target in goal.targets:
         if target.to is not None:
             places, how = [(target.to, 0.0)], "named"
@@ -108,9 +115,22 @@ def to_targets(goal: Goal, scene: Scene, choose: Chooser | None = None) -> list[
                     dish if target.takes == "ingredients" else "",
                     target.takes == "ingredients",
                     target.takes == "remainder",
+                    _part(target) if several and _counted(target) else "",
                 )
             )
     return targets
+
+
+def _counted(target: GoalTarget) -> bool:
+    """A target taking a number of objects by its words: one of several things asked for."""
+    return target.takes == "need" or (target.takes == "criterion" and target.count != GOAL_ALL)
+
+
+def _part(target: GoalTarget) -> str:
+    """What the target is for, as the questions say it (see the module docstring)."""
+    if target.takes == "need":
+        return f'for "{target.criterion}"' if target.criterion else ""
+    return f"as {target.criterion}"
 
 
 class ScoredChooser:

@@ -268,9 +268,14 @@ def _receives(doc: Doc, at: int, end: int) -> int:
 
 
 def _key(doc: Doc, first: int, end: int, mentions: Sequence[Mention]) -> tuple[str, list[int]]:
-    """A "by <key>" phrase ("by material", "according to colour") and its tokens."""
+    """A "by <key>" phrase ("by material", "according to colour", "into the bin for its material")
+    and its tokens."""
     for i in range(first, end):
         word = _lower(doc[i])
+        if word == "for" and i + 2 < end and _lower(doc[i + 1]) in ("its", "their") and i > first:
+            place = _mention_at(mentions, i - 1)
+            if place is not None and place.kind == "place" and doc[i + 2].tag_ in ("NN", "NNS"):
+                return "by " + _lower(doc[i + 2]), [i, i + 1, i + 2]  # "into the bin for its material"
         size = 2 if word == "according" and i + 1 < end and _lower(doc[i + 1]) == "to" else 1
         if word not in ("by", "according") or (word == "according" and size == 1):
             continue

@@ -2,7 +2,8 @@
 
 Two goals match when they agree on ``stack``, on the dish (its words compared as below, or both
 none), on whether there is a need (its words are not compared: any wording of "my phone is almost
-dead" is the same need), and on their targets taken as a multiset: equal ``to``, ``takes``,
+dead" is the same need, and so are a need target's words, but not how many need targets there
+are), and on their targets taken as a multiset: equal ``to``, ``takes``,
 ``named`` (as sets) and ``count``, and criteria equal as word sequences after lemmatising and
 dropping punctuation, stop words and the generic nouns "one", "thing", "item", "object", "stuff"
 (so "the broken ones" == "broken" == "ones that are broken"). spaCy's stop words include words that
@@ -73,7 +74,7 @@ def _key(target: GoalTarget) -> tuple:
         target.to or "",
         target.takes,
         tuple(sorted(target.named)),
-        words(target.criterion),
+        () if target.takes == "need" else words(target.criterion),  # a need's words: as the goal's
         str(target.count),
     )
 

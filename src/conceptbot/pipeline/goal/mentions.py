@@ -109,7 +109,8 @@ def _shortened(
 
 
 def _groups(doc: Doc, scene: Scene, spelled: dict[str, list[str]], used: list[bool]) -> list[Mention]:
-    """Plural heads naming several destinations ("the wood, metal and fabric bins", "the bins")."""
+    """Plural heads naming several destinations ("the wood, metal and fabric bins", "the bins"), and
+    a singular head naming each object's own one of them ("the bin for its material")."""
     heads: dict[str, list[str]] = {}
     for name in scene.destinations:
         if spelled[name]:
@@ -117,7 +118,10 @@ def _groups(doc: Doc, scene: Scene, spelled: dict[str, list[str]], used: list[bo
     found = []
     for token in doc:
         group = heads.get(token.lemma_.lower())
-        if used[token.i] or not group or token.text.lower() == token.lemma_.lower() or token.tag_ == "VBG":
+        singular = token.text.lower() == token.lemma_.lower()
+        if used[token.i] or not group or token.tag_ == "VBG":
+            continue
+        if singular and not (len(group) > 1 and _each_its_own(doc, token)):
             continue
         if not _ends_phrase(doc, token.i + 1):
             continue
@@ -131,6 +135,19 @@ def _groups(doc: Doc, scene: Scene, spelled: dict[str, list[str]], used: list[bo
         found.append(Mention(tuple(described or group), start, token.i + 1, "place"))
         used[start : token.i + 1] = [True] * (token.i + 1 - start)
     return found
+
+
+#: Verbs that make a singular head each object's own place ("the tray where it belongs").
+OWN_PLACE = frozenset({"belong", "match", "go", "fit"})
+
+
+def _each_its_own(doc: Doc, token: Token) -> bool:
+    """Whether a singular head names each object's own place, so every place it could be: "the bin
+    for its material", "the tray where it belongs", "the bin that matches it"."""
+    after = doc[token.i + 1 : token.i + 3]
+    if len(after) == 2 and after[0].text.lower() == "for" and after[1].text.lower() in ("its", "their"):
+        return True
+    return any(c.dep_ == "relcl" and c.lemma_.lower() in OWN_PLACE for c in token.children)
 
 
 def _modifies(token: Token) -> bool:

@@ -19,7 +19,9 @@ Clauses (:mod:`conceptbot.pipeline.goal.parse`) become targets:
   omelette", "pancakes would be lovely", "a bowl of guacamole" is guacamole); the dish's
   ingredients go to a place the planner chooses. ``is_dish`` (a graph check) can reject a dish, and
   then the thing wished for goes to the user.
-* With neither: a need ("my phone battery is almost empty"), met by what the planner chooses.
+* With neither: a need ("my phone battery is almost empty"), met by what the planner chooses; a
+  request stating two needs ("I'm chilly and there's nothing to do") has a need target per part,
+  with the part's words as its criterion (:mod:`conceptbot.pipeline.goal.needs`).
 * Stacking ("stack", "pile ... up", "into one pile", "on top of each other") makes ``stack`` true and
   one target, to None, of what is stacked (every object unless the request says otherwise).
 """
@@ -35,6 +37,7 @@ from typing import TYPE_CHECKING
 from conceptbot.core.scene import Scene
 from conceptbot.pipeline.goal.clauses import analyse
 from conceptbot.pipeline.goal.mentions import Mention, scene_mentions
+from conceptbot.pipeline.goal.needs import need_parts
 from conceptbot.pipeline.goal.parse import Clause, chunks, vocabulary
 from conceptbot.pipeline.goal.themes import (
     Reading,
@@ -158,7 +161,10 @@ class GoalReader:
                 targets, dish = found, named_dish
         if not targets and not stack:
             need = request.strip().rstrip(".!?")
-            targets = [GoalTarget(None, "need")]
+            # "I'm chilly and there's nothing to do": a need per part, each met by its own object
+            targets = [GoalTarget(None, "need", (), part) for part in need_parts(doc)] or [
+                GoalTarget(None, "need")
+            ]
         return Goal(stack, dish, need, tuple(targets))
 
     def _wished(

@@ -28,6 +28,11 @@ class Reading:
     count: Count = ALL
 
 
+#: Words that stand in for the phrase's noun in a second conjunct ("a tool to measure with and one
+#: to tighten screws"): the criterion says the noun ("tool to tighten screws").
+STANDS_IN = frozenset({"one", "another"})
+
+
 def _lower(token: Token) -> str:
     return token.text.lower()
 
@@ -182,6 +187,7 @@ def _listed(token: Token) -> list[Token]:
     found = []
     for child in token.children:
         nominal = child.tag_.startswith("NN") or child.pos_ in ("NOUN", "PROPN", "PRON")
+        nominal = nominal or _lower(child) in STANDS_IN  # "a tool to measure with and one to ..."
         if not nominal or child.i < token.i:
             continue
         listed = child.dep_ == "conj" or (
@@ -253,6 +259,17 @@ def extend_with_conjuncts(doc: Doc, theme: Sequence[int], allowed: set[int]) -> 
     return tuple(sorted(inside | extra))
 
 
+def _standing_in(doc: Doc, part: Sequence[int], first: Sequence[int], reading: Reading) -> Reading:
+    """A conjunct led by "one"/"another" with the first conjunct's noun in its place (see
+    :data:`STANDS_IN`), counted as one."""
+    lead = doc[part[0]]
+    noun = _head(doc, first)
+    if _lower(lead) not in STANDS_IN or noun is None or reading.takes != "criterion" or part == first:
+        return reading
+    rest = "".join(doc[i].text_with_ws for i in part[1:]).strip()
+    return Reading("criterion", (), f"{noun.text} {rest}".strip(), 1)
+
+
 def read_themes(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> list[Reading]:
     """What a theme sends, one reading per coordinated phrase: the named objects as one reading,
     each phrase describing objects as one of its own ("the pear and something to write with"); a list
@@ -270,7 +287,7 @@ def read_themes(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> li
         )
         for p in parts
     ]
-    readings = [read_theme(doc, p, mentions) for p in parts]
+    readings = [_standing_in(doc, p, parts[0], read_theme(doc, p, mentions)) for p in parts]
     if any(r.takes not in ("named", "criterion") for r in readings):
         return [read_theme(doc, run, mentions)]
     criteria = [r for r in readings if r.takes == "criterion"]

@@ -32,8 +32,8 @@ class GoalTarget:
         named: The scene objects the request names for it, in scene spelling.
         criterion: The request's words that say which objects go ("poisonous", "made entirely of
             glass", "something to write with"), "by <key>" for a place in a sort by a key ("by
-            material"), "" otherwise (a place in a sort the words give nothing else for: its name
-            decides).
+            material"), a need's part for one of several needs ("I'm chilly"), "" otherwise (a
+            place in a sort the words give nothing else for: its name decides).
         count: How many objects the words ask for, or ``"all"``.
     """
 

@@ -99,9 +99,10 @@ def is_sort(targets: list[Target]) -> bool:
 def _move(target: Target, obj: str = "") -> str:
     """ "give the X to the user" / "put the X in or on the bowl" (without an object: "give to ...")."""
     what = f" the {obj}" if obj else ""
+    part = f" {target.part}" if target.part else ""  # "as something to eat"
     if is_person(target.name):
-        return f"give{what} to the {target.name}"
-    return f"put{what} in or on the {target.name}"
+        return f"give{what} to the {target.name}{part}"
+    return f"put{what} in or on the {target.name}{part}"
 
 
 def _listed(objects: list[str]) -> str:

@@ -156,6 +156,12 @@ def pick_text(target: str) -> str:
     return f"give to the {target}" if is_person(target) else f"put in or on the {target}"
 
 
+def _for(move: str, target: Target) -> str:
+    """The move, with what it is for where the request asks for several kinds of thing ("give
+    the X to the user as something to eat")."""
+    return f"{move} {target.part}" if target.part else move
+
+
 def _softmax(judgements: list[Judgement], order: dict[str, float]) -> list[float]:
     """P(each judgement's object is the one) from the ranking's values; NaN throughout where a
     value is not finite (the choice cannot be made: asking.py asks)."""
@@ -371,7 +377,7 @@ class GoalPlanner:
                     request, target.criterion, others, scene, dish=target.dish
                 )
             else:
-                move = move_text("{object}", target.name)
+                move = _for(move_text("{object}", target.name), target)
                 judgements, context, used = self.decider.moves(request, target.name, move, others, scene)
             usage = usage + used
             order = {j.subject: j.score for j in judgements}
@@ -380,7 +386,8 @@ class GoalPlanner:
                 # Which N objects: rank by the yes/no decision and the name ranking together (each
                 # standardised; the name ranking weighted by ``name_weight``); the floor still
                 # applies to the decision's own score.
-                names, used = self.decider.name_scores(request, pick_text(target.name), others)
+                pick = _for(pick_text(target.name), target)
+                names, used = self.decider.name_scores(request, pick, others)
                 usage = usage + used
                 yes_no, named_z = _standardised(order), _standardised(names)
                 order = {o: yes_no[o] + self.thresholds.name_weight * named_z[o] for o in order}

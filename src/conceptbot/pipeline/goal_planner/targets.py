@@ -158,6 +158,9 @@ class Target:
         dish: The dish the request asks to be made ("hollandaise"), when the graph says it is one.
         ingredients: The objects that go are the ingredients of food to prepare.
         rest: It takes whatever no other target takes ("the rest", "everything else").
+        part: Where the request asks for several things of different kinds ("something to eat and
+            something to drink", "I'm chilly and there's nothing to do"), what this one is for, as
+            the questions say it ("as something to eat", 'for "I'm chilly"'); "" otherwise.
     """
 
     name: str
@@ -169,6 +172,7 @@ class Target:
     dish: str = ""
     ingredients: bool = False
     rest: bool = False
+    part: str = ""
 
     def to_dict(self) -> dict:
         """JSON form for the trace."""
@@ -182,6 +186,7 @@ class Target:
             "dish": self.dish,
             "ingredients": self.ingredients,
             "rest": self.rest,
+            **({"part": self.part} if self.part else {}),
         }
 
 
