@@ -7,6 +7,9 @@ tasks with a question (help rate), questions per task, and the empirical coverag
 decisions' prediction sets against the gold. Rows go to ``results/asking.json`` (``--write``).
 
     .venv/bin/python benchmarks/bench_asking.py --split dev [--systems conceptbot,nokg] [--write]
+
+``--tasks id,id`` measures those tasks only and prints each one's outcome (alone, asked, the
+questions); such rows are not written (they are not the split's figures).
 """
 
 from __future__ import annotations
@@ -29,10 +32,14 @@ RELIABILITY = Path("results/asking-reliability.png")
 BINS = 10
 
 
-def measure(split: str, system_name: str, coverage: float, level: str = "plan") -> dict[str, Any]:
-    """One row: the split's tasks planned with and without the gold answers."""
+def measure(
+    split: str, system_name: str, coverage: float, level: str = "plan", ids: frozenset[str] = frozenset()
+) -> dict[str, Any]:
+    """One row: the split's tasks (``ids``: only those) planned with and without the gold answers;
+    with ``ids``, each task's outcome too (``per_task``)."""
     system = build_system(load_settings(), system_name, SystemOptions(coverage=coverage, level=level))
-    tasks = load_tasks(split=split)
+    tasks = [t for t in load_tasks(split=split) if not ids or t.id in ids]
+    per_task = []
     solo = helped = asked_tasks = questions = options = covered = calibrated = 0
     plans_calibrated = plans_covered = 0
     for task in tasks:
@@ -51,6 +58,15 @@ def measure(split: str, system_name: str, coverage: float, level: str = "plan") 
 
         answered = system.plan(task.request, scene, ask=person) if alone.questions else alone
         helped += grade(task, answered.actions, answered.refused).ok
+        if ids:
+            per_task.append(
+                {
+                    "task": task.id,
+                    "alone": grade(task, alone.actions, alone.refused).ok,
+                    "asked": grade(task, answered.actions, answered.refused).ok,
+                    "questions": [f"{q.text} -> {q.answer}" for q in answered.questions],
+                }
+            )
         questions += len(answered.questions)
         options += sum(len(q.objects) for q in answered.questions)
         asked_tasks += bool(answered.questions)
@@ -75,6 +91,7 @@ def measure(split: str, system_name: str, coverage: float, level: str = "plan") 
         "tasks_with_calibrated_decisions": plans_calibrated,
         "calibrated_decisions": calibrated,
         "decision_coverage": round(covered / calibrated, 4) if calibrated else None,
+        **({"per_task": per_task} if ids else {}),
     }
 
 
@@ -156,10 +173,14 @@ def main() -> None:
     parser.add_argument("--systems", default="conceptbot,nokg")
     parser.add_argument("--level", choices=LEVELS, default="plan", help="what the coverage holds for")
     parser.add_argument("--write", action="store_true", help=f"add the rows to {OUT}")
+    parser.add_argument("--tasks", default="", help="only these task ids (comma-separated; not written)")
     parser.add_argument(
         "--reliability", action="store_true", help="only the reliability of the probabilities (no questions)"
     )
     args = parser.parse_args()
+    ids = frozenset(t for t in args.tasks.split(",") if t)
+    if ids and args.write:
+        parser.error("--tasks measures a subset: its rows are not the split's, so --write is refused")
     if args.reliability:
         found = reliability(args.split, args.systems.split(",")[0])
         shown = {k: v for k, v in found.items() if not k.startswith("_")}
@@ -180,7 +201,7 @@ def main() -> None:
         return
     # ASK_ALL: every calibrated decision asked, the most the answers can do (the ceiling).
     coverages = (*COVERAGES, ASK_ALL)
-    rows = [measure(args.split, s, c, args.level) for s in args.systems.split(",") for c in coverages]
+    rows = [measure(args.split, s, c, args.level, ids) for s in args.systems.split(",") for c in coverages]
     columns = ("cover", "alone", "asked", "help", "q/task", "obj/q", "emp.cov", "dec.cov", "n task")
     print(f"{'system':10} {'level':8} " + " ".join(f"{c:>7}" for c in columns))
     for r in rows:
@@ -190,6 +211,10 @@ def main() -> None:
             f"{r['objects_per_question']!s:>7} {r['empirical_coverage']!s:>7} {r['decision_coverage']!s:>7} "
             f"{r['tasks_with_calibrated_decisions']:>7}"
         )
+        for outcome in r.get("per_task", []):
+            print(f"    {outcome['task']}: alone {outcome['alone']}, asked {outcome['asked']}")
+            for question in outcome["questions"]:
+                print(f"        {question}")
     if args.write:
         document = json.loads(OUT.read_text()) if OUT.exists() else {"asking": []}
 

@@ -158,3 +158,26 @@ def test_readable_output_of_the_goal_planner_shows_targets_decisions_and_risk() 
     assert "-> user (named in the request): 1" in text and "Decisions for the user" in text
     assert "name" in text and "+1.00" in text  # the apple's name score: -1 against the neutral -2
     assert "risk: give the apple to the user" in text and "pick_and_place(apple, user)" in text
+
+
+def test_readable_output_says_what_each_of_several_things_is_for() -> None:
+    from rich.console import Console
+
+    import conceptbot.cli.main  # noqa: F401  (the command modules are imported through it)
+    from conceptbot.cli.plan_cmd import show
+    from conceptbot.core.scene import scene_from_dict
+    from conceptbot.models.fake import FakeLLM
+    from conceptbot.pipeline.conceptbot import ConceptBot
+
+    scene = scene_from_dict(SCENE)
+    prior, yes, no = [-1.0, -1.0], [-0.1, -3.0], [-3.0, -0.1]
+    eat, clean, neutral = [-1.0, -3.0], [-3.0, -1.0], [-2.0, -2.0]  # name rankings (apple, sponge)
+    scores = [prior, yes, no, eat, neutral, prior, no, yes, clean, neutral, prior, yes, prior, yes]
+    plan = ConceptBot(FakeLLM(scores=scores), None, "urp", planner="goal").plan(
+        "Bring me something to eat and something to clean with", scene
+    )
+    console = Console(record=True, width=160)
+    show(plan, console)
+    text = console.export_text()
+    assert "; as something to eat" in text and "; as something to clean with" in text
+    assert "pick_and_place(apple, user)" in text and "pick_and_place(sponge, user)" in text

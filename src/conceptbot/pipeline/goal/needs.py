@@ -109,6 +109,7 @@ def _stative(head: Token) -> bool:
 
 
 def _subject(token: Token) -> bool:
+    """Whether a verb has a subject of its own (a clause, not a second verb of the same one)."""
     return any(c.dep_ in SUBJECTS for c in token.children)
 
 

@@ -178,7 +178,8 @@ function showGoal(goal) {
   $("targets").replaceChildren(...goal.targets.map((t) => el("li", {},
     `→ ${t.to}: ${t.count} (${t.how}${t.named.length ? ", named: " + t.named.join(", ") : ""}` +
     `${t.criterion ? ", objects that fit “" + t.criterion + "”" : ""}` +
-    `${t.dish ? ", a dish the graph knows: " + t.dish : ""}${t.rest ? ", the rest" : ""})`)));
+    `${t.dish ? ", a dish the graph knows: " + t.dish : ""}${t.rest ? ", the rest" : ""}` +
+    `${t.part ? ", " + t.part : ""})`)));
   if (goal.stack) $("targets").append(el("li", {}, "stack the objects"));
 }
 
