@@ -262,9 +262,10 @@ def extend_with_conjuncts(doc: Doc, theme: Sequence[int], allowed: set[int]) -> 
 def _standing_in(doc: Doc, part: Sequence[int], first: Sequence[int], reading: Reading) -> Reading:
     """A conjunct led by "one"/"another" with the first conjunct's noun in its place (see
     :data:`STANDS_IN`), counted as one."""
-    lead = doc[part[0]]
+    if _lower(doc[part[0]]) not in STANDS_IN or reading.takes != "criterion" or part == first:
+        return reading
     noun = _head(doc, first)
-    if _lower(lead) not in STANDS_IN or noun is None or reading.takes != "criterion" or part == first:
+    if noun is None:
         return reading
     rest = "".join(doc[i].text_with_ws for i in part[1:]).strip()
     return Reading("criterion", (), f"{noun.text} {rest}".strip(), 1)

@@ -96,13 +96,19 @@ def is_sort(targets: list[Target]) -> bool:
     return len(judged) >= 2 and all(t.count == ALL for t in judged)
 
 
-def _move(target: Target, obj: str = "") -> str:
-    """ "give the X to the user" / "put the X in or on the bowl" (without an object: "give to ...")."""
+def move_words(to: str, obj: str = "", part: str = "") -> str:
+    """The move in words, for the questions: "give the X to the user" / "put the X in or on the
+    bowl" (without an object: "give to ..."), with what it is for where the request asks for
+    several kinds of thing (``part``: "... as something to eat")."""
     what = f" the {obj}" if obj else ""
-    part = f" {target.part}" if target.part else ""  # "as something to eat"
-    if is_person(target.name):
-        return f"give{what} to the {target.name}{part}"
-    return f"put{what} in or on the {target.name}{part}"
+    tail = f" {part}" if part else ""
+    if is_person(to):
+        return f"give{what} to the {to}{tail}"
+    return f"put{what} in or on the {to}{tail}"
+
+
+def _move(target: Target, obj: str = "") -> str:
+    return move_words(target.name, obj, target.part)
 
 
 def _listed(objects: list[str]) -> str:

@@ -56,7 +56,7 @@ from conceptbot.core.trace import (
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.affordance import Gripper, affordance
-from conceptbot.pipeline.goal_planner.asking import clarify, is_sort
+from conceptbot.pipeline.goal_planner.asking import clarify, is_sort, move_words
 from conceptbot.pipeline.goal_planner.conformal import Calibration, shipped
 from conceptbot.pipeline.goal_planner.decide import Decider, Judgement
 from conceptbot.pipeline.goal_planner.targets import ALL, Target, mentions
@@ -142,24 +142,6 @@ class GoalPlanResult:
     properties: dict[str, ObjectProperties] = field(default_factory=dict)
     questions: tuple[ClarifyingQuestion, ...] = ()
     confidence: float | None = None
-
-
-def move_text(obj: str, target: str) -> str:
-    """The move in words, for the questions."""
-    if is_person(target):
-        return f"give the {obj} to the {target}"
-    return f"put the {obj} in or on the {target}"
-
-
-def pick_text(target: str) -> str:
-    """The move without its object, for the name ranking ("give to the user")."""
-    return f"give to the {target}" if is_person(target) else f"put in or on the {target}"
-
-
-def _for(move: str, target: Target) -> str:
-    """The move, with what it is for where the request asks for several kinds of thing ("give
-    the X to the user as something to eat")."""
-    return f"{move} {target.part}" if target.part else move
 
 
 def _softmax(judgements: list[Judgement], order: dict[str, float]) -> list[float]:
@@ -377,7 +359,7 @@ class GoalPlanner:
                     request, target.criterion, others, scene, dish=target.dish
                 )
             else:
-                move = _for(move_text("{object}", target.name), target)
+                move = move_words(target.name, "{object}", target.part)
                 judgements, context, used = self.decider.moves(request, target.name, move, others, scene)
             usage = usage + used
             order = {j.subject: j.score for j in judgements}
@@ -386,7 +368,7 @@ class GoalPlanner:
                 # Which N objects: rank by the yes/no decision and the name ranking together (each
                 # standardised; the name ranking weighted by ``name_weight``); the floor still
                 # applies to the decision's own score.
-                pick = _for(pick_text(target.name), target)
+                pick = move_words(target.name, part=target.part)  # without the object: "give to ..."
                 names, used = self.decider.name_scores(request, pick, others)
                 usage = usage + used
                 yes_no, named_z = _standardised(order), _standardised(names)
@@ -494,7 +476,7 @@ class GoalPlanner:
         decision the backend cannot make (an error, a non-finite score) drops it too, and so does a
         score that compares with nothing (NaN): the move is kept only when its score is known and at
         or below the threshold."""
-        move = move_text(obj, target)
+        move = move_words(target, obj)
         s_aff, factors = affordance(PickAndPlace(obj, target), scene, properties, [], self.gripper)
         ope = _evidence(properties[obj], target) if obj in properties else None
         veto = self.hazards.veto(obj, target, properties)
