@@ -540,3 +540,55 @@ def test_requests_put_as_questions_send_to_who_asks_or_is_named(reader: GoalRead
         GoalTarget("user", "criterion", (), "something to brush him with", 1),
     )
     _is(reader, "Would you mind passing the dog lead my way?", KENNEL, _named("user", "dog lead"))
+
+
+@pytest.mark.parametrize(
+    "request_",
+    [
+        "Grab me something to nibble on, and a cushion too.",
+        "Could you bring me something to nibble on, and a cushion as well?",
+        "Let me have something to nibble on, and also a cushion.",
+    ],
+)
+def test_a_second_thing_after_a_comma_is_a_second_thing(reader: GoalReader, request_: str) -> None:
+    # the small parser joins "and a cushion" to the verb, not to the first object (pipeline/goal/repair)
+    _is(
+        reader,
+        request_,
+        _DESK,
+        GoalTarget("user", "criterion", (), "something to nibble on", 1),
+        GoalTarget("user", "criterion", (), "cushion", 1),
+    )
+
+
+def test_a_gapped_second_clause_keeps_its_own_place(reader: GoalReader) -> None:
+    _is(
+        reader,
+        "Put the plum in the cupboard, and the notebook on the windowsill.",
+        _DESK,
+        _named("cupboard", "plum"),
+        _named("windowsill", "notebook"),
+    )
+    _is(reader, "Put the plum, and only the plum, in the cupboard.", _DESK, _named("cupboard", "plum"))
+
+
+@pytest.mark.parametrize(
+    "request_",
+    [
+        "Give me two tools: one to drive in nails and one for sanding.",
+        "Give me two tools, one to drive in nails and one for sanding.",
+        "Could you hand me a tool to drive in nails and another for sanding?",
+    ],
+)
+def test_each_listed_one_stands_in_for_the_tool(reader: GoalReader, request_: str) -> None:
+    read = reader.read(
+        request_,
+        scene_from_dict({"pickable_objects": ["claw hammer", "sandpaper", "tape"], "destinations": ["user"]}),
+    )
+    criteria = sorted(t.criterion for t in read.targets)
+    assert [t.count for t in read.targets] == [1, 1], read.to_dict()
+    assert criteria == ["tool for sanding", "tool to drive in nails"], read.to_dict()
+
+
+def test_a_colon_list_of_named_things_sends_them(reader: GoalReader) -> None:
+    _is(reader, "I need two things: the notebook and the plum.", _DESK, _named("user", "notebook", "plum"))

@@ -150,7 +150,7 @@ def chunks(doc: Doc, mentions: Sequence[Mention]) -> list[Chunk]:
             start, after = i, "hard"
         if _in_mention(mentions, i):
             continue
-        if word in HARD or _dash(token):
+        if (word in HARD and not _lists_items(token, mentions)) or _dash(token):
             if i > start:
                 pieces.append(Chunk(start, i, after))
             start, after = i + 1, "colon" if word == ":" else "hard"
@@ -162,6 +162,19 @@ def chunks(doc: Doc, mentions: Sequence[Mention]) -> list[Chunk]:
         pieces.append(Chunk(start, len(doc), after))
     pieces = [p for p in pieces if any(not doc[i].is_punct for i in range(p.start, p.end))]
     return _merged(doc, pieces, mentions)
+
+
+def _lists_items(token: Token, mentions: Sequence[Mention]) -> bool:
+    """Whether a colon opens the list of the phrase before it ("two tools: one to measure with and
+    one for screws"), so that it joins, not divides: the parser makes the list's first item an
+    apposition of that phrase, with the other items its conjuncts, and no place follows (a place
+    pairs what comes before with it: "food in the pantry basket, everything poisonous in ...")."""
+    if token.text != ":" or any(m.kind in ("place", "both") and m.start > token.i for m in mentions):
+        return False
+    return any(
+        t.dep_ == "appos" and t.head.i < token.i and any(c.dep_ == "conj" for c in t.children)
+        for t in token.doc[token.i + 1 :]
+    )
 
 
 def _dash(token: Token) -> bool:

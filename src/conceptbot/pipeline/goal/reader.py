@@ -39,6 +39,7 @@ from conceptbot.pipeline.goal.clauses import analyse
 from conceptbot.pipeline.goal.mentions import Mention, scene_mentions
 from conceptbot.pipeline.goal.needs import need_parts
 from conceptbot.pipeline.goal.parse import Clause, chunks, vocabulary
+from conceptbot.pipeline.goal.repair import repair
 from conceptbot.pipeline.goal.themes import (
     Reading,
     conjuncts,
@@ -136,7 +137,7 @@ class GoalReader:
     def _read(self, request: str, scene: Scene) -> Goal:
         vocab = vocabulary()
         # the tokenizer leaves a final "." on a word with a symbol in it ("a PB&J."): split it off
-        doc = self.nlp(re.sub(r"(?<=[^\s.!?])([.!?]+)\s*$", r" \1", request))
+        doc = repair(self.nlp(re.sub(r"(?<=[^\s.!?])([.!?]+)\s*$", r" \1", request)))
         spelled = self._spell(scene.names)
         mentions = scene_mentions(
             doc, scene, spelled, vocab["people"], vocab["recipient_pronouns"], self.is_person

@@ -38,14 +38,15 @@ def _lower(token: Token) -> str:
 
 
 def objects_in(run: Sequence[int], mentions: Sequence[Mention]) -> tuple[str, ...]:
-    """The pickable objects a run names, in text order."""
+    """The pickable objects a run names, in text order, each once ("the plum, and only the plum")."""
     inside = set(run)
-    return tuple(
+    named = (
         n
         for m in mentions
         if m.kind in ("object", "both") and set(range(m.start, m.end)) <= inside
         for n in m.names
     )
+    return tuple(dict.fromkeys(named))
 
 
 def _remainder(doc: Doc, run: Sequence[int]) -> bool:
@@ -87,6 +88,14 @@ def _stripped(doc: Doc, run: Sequence[int]) -> list[int]:
             break
     while out and _lower(doc[out[0]]) in lead:
         out = out[1:]
+    # "a toy too", "a cuddly toy as well", "a tool for measuring and": not the phrase's words
+    trailing = [w.split() for w in vocab["also"]] + [["and"], ["or"]]
+    cut = True
+    while cut and out:
+        cut = False
+        for phrase in trailing:
+            if len(out) > len(phrase) and [_lower(doc[i]) for i in out[-len(phrase) :]] == phrase:
+                out, cut = out[: -len(phrase)], True
     return out
 
 
@@ -193,12 +202,27 @@ def _listed(token: Token) -> list[Token]:
         listed = child.dep_ == "conj" or (
             child.dep_ in ("appos", "dep")
             and child.left_edge.i > 0
-            and child.doc[child.left_edge.i - 1].text == ","
+            and child.doc[child.left_edge.i - 1].text in (",", ":")
             and any(c.dep_ == "conj" for c in child.children)
         )
         if listed:
             found += [child, *_listed(child)]
     return found
+
+
+def _enumerated(token: Token) -> list[Token]:
+    """The items a phrase lists after a colon or a comma ("two tools: one to measure with and one
+    for screws", "two things, a pen and a pad"): the apposition and its conjuncts; [] where the
+    phrase lists none (an apposition without a conjunct only renames the phrase)."""
+    for child in token.children:
+        if child.dep_ != "appos" or child.i < token.i or child.left_edge.i == 0:
+            continue
+        if child.doc[child.left_edge.i - 1].text not in (":", ","):
+            continue
+        items = [child, *_listed(child)]
+        if len(items) >= 2:
+            return items
+    return []
 
 
 def _own_span(token: Token, members: set[int]) -> tuple[int, ...]:
@@ -220,7 +244,13 @@ def conjuncts(doc: Doc, run: Sequence[int]) -> list[tuple[int, ...]]:
     head = next((t for t in heads if t.tag_.startswith("NN") or t.pos_ in ("NOUN", "PROPN", "PRON")), None)
     if head is None:
         return [tuple(run)]
-    listed = [t for t in _listed(head) if t.i in inside]
+    listed_out = _enumerated(head)
+    if listed_out:  # "two tools: one to measure with and one for screws": the items, not the head
+        head, listed = listed_out[0], [t for t in listed_out[1:] if t.i in inside]
+        if head.i not in inside:
+            return [tuple(run)]
+    else:
+        listed = [t for t in _listed(head) if t.i in inside]
     if not listed:
         return [tuple(run)]
     members = {head.i, *(t.i for t in listed)}
@@ -259,16 +289,22 @@ def extend_with_conjuncts(doc: Doc, theme: Sequence[int], allowed: set[int]) -> 
     return tuple(sorted(inside | extra))
 
 
-def _standing_in(doc: Doc, part: Sequence[int], first: Sequence[int], reading: Reading) -> Reading:
+def _standing_in(
+    doc: Doc, part: Sequence[int], first: Sequence[int], reading: Reading, listed: str | None = None
+) -> Reading:
     """A conjunct led by "one"/"another" with the first conjunct's noun in its place (see
-    :data:`STANDS_IN`), counted as one."""
-    if _lower(doc[part[0]]) not in STANDS_IN or reading.takes != "criterion" or part == first:
+    :data:`STANDS_IN`), counted as one; ``listed``: the noun of a phrase listing its items ("two
+    tools: one ... and one ..."), which every item stands in for, the first included."""
+    if _lower(doc[part[0]]) not in STANDS_IN or reading.takes != "criterion":
         return reading
-    noun = _head(doc, first)
+    if listed is None and part == first:
+        return reading
+    head = _head(doc, first) if listed is None else None
+    noun = listed if listed is not None else (head.text if head is not None else None)
     if noun is None:
         return reading
     rest = "".join(doc[i].text_with_ws for i in part[1:]).strip()
-    return Reading("criterion", (), f"{noun.text} {rest}".strip(), 1)
+    return Reading("criterion", (), f"{noun} {rest}".strip(), 1)
 
 
 def read_themes(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> list[Reading]:
@@ -288,7 +324,9 @@ def read_themes(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> li
         )
         for p in parts
     ]
-    readings = [_standing_in(doc, p, parts[0], read_theme(doc, p, mentions)) for p in parts]
+    listing = next((doc[i] for i in run if _enumerated(doc[i]) and i not in parts[0]), None)
+    noun = listing.lemma_ if listing is not None else None  # "two tools: one ..., one ..."
+    readings = [_standing_in(doc, p, parts[0], read_theme(doc, p, mentions), noun) for p in parts]
     if any(r.takes not in ("named", "criterion") for r in readings):
         return [read_theme(doc, run, mentions)]
     criteria = [r for r in readings if r.takes == "criterion"]

@@ -1,0 +1,108 @@
+"""Repairs of the small parser's commonest misattachments, made on the parsed request before any
+rule reads it, so that every rule sees the same, corrected tree.
+
+``en_core_web_sm`` attaches a second object after a comma to the verb, not to the first object
+("give the toddler something to draw with, | and a cuddly toy as well": "toy" a ``conj`` of
+"give"), and a stand-in's modifier to the verb ("pass me a tool for measuring and another | for
+tightening screws": "for" a ``prep`` of "pass"). Read as parsed, the second object is lost, or the
+stand-in describes nothing. Each repair is a general shape of the tree, never a word of a
+particular request; a shape that does not match leaves the tree as it is.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from conceptbot.pipeline.goal.parse import vocabulary
+from conceptbot.pipeline.goal.themes import STANDS_IN
+
+if TYPE_CHECKING:  # spaCy is loaded with the model, on first use (pipeline/goal imports light)
+    from spacy.tokens import Doc, Token
+
+SUBJECTS = frozenset({"nsubj", "nsubjpass", "expl", "csubj"})
+OBJECTS = ("dobj", "attr")
+
+
+def _nominal(token: Token) -> bool:
+    return (
+        token.pos_ in ("NOUN", "PROPN", "PRON")
+        or token.tag_.startswith("NN")
+        or token.text.lower() in STANDS_IN
+    )
+
+
+def _places(token: Token) -> bool:
+    """Whether a phrase has a preposition of place of its own: a "conjunct" with one is a second
+    clause with the verb left out ("put the cup in the sink, and the plate in the drawer")."""
+    return any(c.dep_ == "prep" and c.text.lower() in vocabulary()["spatial"] for c in token.children)
+
+
+def _verb_conjunct_objects(doc: Doc) -> None:
+    """A noun phrase the parser made a conjunct of the verb ("give X, and a toy too") becomes a
+    conjunct of the verb's object, with its "and" and comma. Not where it has a subject or a place
+    of its own (a clause, or a gapped one), nor where the verb has no object before it."""
+    for token in doc:
+        verb = token.head
+        if token.dep_ != "conj" or not _nominal(token) or verb.pos_ not in ("VERB", "AUX"):
+            continue
+        if any(c.dep_ in SUBJECTS for c in token.children) or _places(token):
+            continue
+        if token.left_edge.text.lower() in vocabulary()["restrictors"]:
+            continue  # "the paper, and only the paper": the first object again, restricted
+        objects = [c for c in verb.children if c.dep_ in OBJECTS and c.i < token.i and _nominal(c)]
+        if not objects:
+            continue
+        first = objects[-1]
+        # the joining words between the object and the conjunct go with the conjunct's new head
+        joining = [
+            c
+            for c in verb.children
+            if first.right_edge.i < c.i < token.left_edge.i and c.dep_ in ("cc", "punct")
+        ]
+        for word in joining:
+            word.head = first
+        token.head = first
+
+
+def _stand_in_heads(doc: Doc) -> None:
+    """A stand-in the parser joined to a noun inside the first phrase's clause ("a tool to drive in
+    nails and another": "another" a conjunct of "nails") is joined to that phrase's head ("tool"),
+    which is what it stands in for."""
+    for token in doc:
+        if token.text.lower() not in STANDS_IN or token.dep_ != "conj":
+            continue
+        inner, head = token.head, token.head
+        while head.dep_ not in ("relcl", "acl") and head.head.i != head.i:
+            head = head.head
+        if head.i == inner.i or head.dep_ not in ("relcl", "acl") or not _nominal(head.head):
+            continue
+        phrase = head.head
+        for word in [c for c in inner.children if c.dep_ in ("cc", "punct") and inner.i < c.i < token.i]:
+            word.head = phrase
+        token.head = phrase
+
+
+def _stand_in_modifiers(doc: Doc) -> None:
+    """A bare stand-in ("and another") followed by a preposition the parser gave to the verb
+    ("... for tightening screws") takes the preposition: a stand-in says nothing without it."""
+    for token in doc:
+        if token.text.lower() not in STANDS_IN or token.dep_ not in ("conj", "appos", "dobj"):
+            continue
+        if any(c.i > token.i for c in token.children):
+            continue  # it has its own modifier ("one to tighten screws")
+        after = token.i + 1
+        if after >= len(doc):
+            continue
+        nxt = doc[after]
+        if nxt.dep_ == "prep" and nxt.head.pos_ in ("VERB", "AUX") and nxt.head.i < token.i:
+            if nxt.text.lower() in vocabulary()["spatial"]:
+                continue  # "and another on the shelf": where it goes
+            nxt.head = token
+
+
+def repair(doc: Doc) -> Doc:
+    """``doc`` with the repairs of the module docstring made in place (returned for chaining)."""
+    _verb_conjunct_objects(doc)
+    _stand_in_heads(doc)
+    _stand_in_modifiers(doc)
+    return doc
