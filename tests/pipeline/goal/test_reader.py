@@ -147,6 +147,20 @@ def test_a_need_leaves_the_destination_to_the_planner(reader: GoalReader) -> Non
         ("I'm hungry and thirsty.", ["I'm hungry", "I'm thirsty"]),
         ("I have a cold and a sore throat.", ["I have a cold", "I have a sore throat"]),
         ("I'm cold. My feet are sore.", ["I'm cold", "My feet are sore"]),
+        # "it" joined to the speaker's clause: the surroundings, or the thing just spoken of
+        ("I'm thirsty, and it's very dark in here.", ["I'm thirsty", "it's very dark in here"]),
+        (
+            "Oh, my shirt is torn and it's covered in mud.",
+            ["Oh my shirt is torn", "my shirt's covered in mud"],
+        ),
+        # the present perfect says how things are now; a thing's "-ing" is its state
+        ("My nose is running, and I've scraped my elbow.", ["My nose is running", "I've scraped my elbow"]),
+        # the parser reads "feet's" as a possessive: read again with "is"
+        ("My feet's cold and full of sand.", ["My feet is cold", "My feet is full of sand"]),
+        (
+            "I've got a blister on my toe and a runny nose.",
+            ["I've got a blister on my toe", "I've got a runny nose"],
+        ),
     ],
 )
 def test_a_request_stating_two_needs_has_a_need_target_for_each(
@@ -166,6 +180,7 @@ def test_a_request_stating_two_needs_has_a_need_target_for_each(
         "I burnt my hand. It hurts.",
         "My hands are covered in sand.",
         "I'm freezing. Can you help?",  # a question after the need is no need of its own
+        "I'm painting the fence and it's getting dark.",  # the speaker's doing is no need of its own
     ],
 )
 def test_one_need_with_its_reason_stays_one_need(reader: GoalReader, request_: str) -> None:
@@ -248,8 +263,10 @@ def test_the_goal_set_is_read(reader: GoalReader) -> None:
     tuned = [ok for r in (1, 2, 3, 4, 5) for ok in results[f"round {r}"]]
     assert sum(tuned) / len(tuned) >= 0.95
     assert sum(results["round 6"]) >= 140
-    # Round 7 is held out (16/26 when first measured with the reader built for its originals)
-    assert sum(results["round 7"]) >= 15
+    # Round 7 was tuned on after its blind run (16/26; 26/26 after)
+    assert sum(results["round 7"]) >= 25
+    # Round 8 is held out: 76/91 when first measured (72/91 with the reader before round 7's fixes)
+    assert sum(results["round 8"]) >= 75
 
 
 # Structures that paraphrase round 4 exposed (our own sentences and scenes).
@@ -592,3 +609,13 @@ def test_each_listed_one_stands_in_for_the_tool(reader: GoalReader, request_: st
 
 def test_a_colon_list_of_named_things_sends_them(reader: GoalReader) -> None:
     _is(reader, "I need two things: the notebook and the plum.", _DESK, _named("user", "notebook", "plum"))
+
+
+def test_a_place_that_matches_its_key_sorts_by_the_key(reader: GoalReader) -> None:
+    for request_ in (
+        "Every piece goes in the crate that matches its material.",
+        "Put each piece into the crate matching its material.",
+    ):
+        read = reader.read(request_, WORKSHOP)
+        assert {t.to for t in read.targets} == {"wood crate", "metal crate", "felt crate", "odds crate"}
+        assert {t.criterion for t in read.targets} == {"by material"}, read.to_dict()

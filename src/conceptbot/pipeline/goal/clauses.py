@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
-from conceptbot.pipeline.goal.mentions import Mention
+from conceptbot.pipeline.goal.mentions import OWN_PLACE, Mention
 from conceptbot.pipeline.goal.parse import Chunk, Clause, Place, asks_you_to, clause_verbs, vocabulary
 from conceptbot.pipeline.goal.runs import lower as _lower
 from conceptbot.pipeline.goal.runs import nominal
@@ -276,6 +276,9 @@ def _key(doc: Doc, first: int, end: int, mentions: Sequence[Mention]) -> tuple[s
             place = _mention_at(mentions, i - 1)
             if place is not None and place.kind == "place" and doc[i + 2].tag_ in ("NN", "NNS"):
                 return "by " + _lower(doc[i + 2]), [i, i + 1, i + 2]  # "into the bin for its material"
+        matched, matched_tokens = _matching_key(doc, i, end, mentions)
+        if matched:
+            return matched, matched_tokens
         size = 2 if word == "according" and i + 1 < end and _lower(doc[i + 1]) == "to" else 1
         if word not in ("by", "according") or (word == "according" and size == 1):
             continue
@@ -294,6 +297,23 @@ def _key(doc: Doc, first: int, end: int, mentions: Sequence[Mention]) -> tuple[s
         ):
             stop = j + made.index("of") + 1
             return "by material", list(range(i, stop))  # "by what they're made of"
+    return "", []
+
+
+def _matching_key(doc: Doc, i: int, end: int, mentions: Sequence[Mention]) -> tuple[str, list[int]]:
+    """ "the bin that matches its material", "the tray matching their colour", "the box which
+    corresponds to its size" at ``i`` (just after a place): "by <noun>" and its tokens; else none."""
+    place = _mention_at(mentions, i - 1) if i > 0 else None
+    if place is None or place.kind != "place" or place.end != i:
+        return "", []
+    j = i + 1 if _lower(doc[i]) in ("that", "which") else i
+    if j >= end or doc[j].lemma_.lower() not in OWN_PLACE:
+        return "", []
+    k = j + 1
+    while k < end and _lower(doc[k]) in ("to", "with", "up"):
+        k += 1
+    if k + 1 < end and _lower(doc[k]) in ("its", "their") and doc[k + 1].tag_ in ("NN", "NNS"):
+        return "by " + _lower(doc[k + 1]), list(range(i, k + 2))
     return "", []
 
 

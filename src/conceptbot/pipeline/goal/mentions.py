@@ -138,7 +138,7 @@ def _groups(doc: Doc, scene: Scene, spelled: dict[str, list[str]], used: list[bo
 
 
 #: Verbs that make a singular head each object's own place ("the tray where it belongs").
-OWN_PLACE = frozenset({"belong", "match", "go", "fit"})
+OWN_PLACE = frozenset({"belong", "match", "go", "fit", "suit", "correspond"})
 
 
 def _each_its_own(doc: Doc, token: Token) -> bool:
@@ -147,7 +147,14 @@ def _each_its_own(doc: Doc, token: Token) -> bool:
     after = doc[token.i + 1 : token.i + 3]
     if len(after) == 2 and after[0].text.lower() == "for" and after[1].text.lower() in ("its", "their"):
         return True
-    return any(c.dep_ == "relcl" and c.lemma_.lower() in OWN_PLACE for c in token.children)
+    if any(c.dep_ == "relcl" and c.lemma_.lower() in OWN_PLACE for c in token.children):
+        return True
+    # the same said after it, whatever the parser joined it to ("the bin that matches its
+    # material", its relative clause read as the subject's; "the bin matching its material")
+    at = token.i + 1
+    if at < len(doc) and doc[at].text.lower() in ("that", "which"):
+        at += 1
+    return at < len(doc) and doc[at].lemma_.lower() in OWN_PLACE and doc[at].tag_.startswith("VB")
 
 
 def _modifies(token: Token) -> bool:

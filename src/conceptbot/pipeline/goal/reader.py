@@ -39,7 +39,7 @@ from conceptbot.pipeline.goal.clauses import analyse
 from conceptbot.pipeline.goal.mentions import Mention, scene_mentions
 from conceptbot.pipeline.goal.needs import need_parts
 from conceptbot.pipeline.goal.parse import Clause, chunks, vocabulary
-from conceptbot.pipeline.goal.repair import repair
+from conceptbot.pipeline.goal.repair import parsed
 from conceptbot.pipeline.goal.themes import (
     Reading,
     conjuncts,
@@ -54,7 +54,7 @@ from conceptbot.pipeline.hazards import is_person as default_is_person
 
 if TYPE_CHECKING:  # spaCy is loaded with the model, on first use (pipeline/goal imports light)
     from spacy.language import Language
-    from spacy.tokens import Doc
+    from spacy.tokens import Doc, Token
 
 logger = logging.getLogger(__name__)
 
@@ -137,7 +137,7 @@ class GoalReader:
     def _read(self, request: str, scene: Scene) -> Goal:
         vocab = vocabulary()
         # the tokenizer leaves a final "." on a word with a symbol in it ("a PB&J."): split it off
-        doc = repair(self.nlp(re.sub(r"(?<=[^\s.!?])([.!?]+)\s*$", r" \1", request)))
+        doc = parsed(self.nlp, re.sub(r"(?<=[^\s.!?])([.!?]+)\s*$", r" \1", request))
         spelled = self._spell(scene.names)
         mentions = scene_mentions(
             doc, scene, spelled, vocab["people"], vocab["recipient_pronouns"], self.is_person
@@ -225,11 +225,25 @@ class GoalReader:
                 continue  # "cut this baguette into slices": a measure, not a dish
             if any(t.tag_ == "TO" for t in token.subtree):
                 continue  # "it's time for me to brush my teeth": what follows is an activity
+            if _had(token):
+                continue  # "I've got a cut on my finger": what the speaker has, not a dish
             phrase = tuple(t.i for t in token.subtree if not t.is_punct)
             words = dish_words(doc, phrase)
             if words and self.find_dish(words, pickable):
                 return [GoalTarget(None, "ingredients", objects_in(phrase, mentions), "", ALL)], words
         return [], None
+
+
+def _had(token: Token) -> bool:
+    """Whether a noun is what the speaker says they have ("I've got a cut", "I have a cold and a
+    cough"): the object of "have"/"get" said of "I"/"we" with no modal ("could I have" asks)."""
+    while token.dep_ == "conj" and token.head.i != token.i:
+        token = token.head
+    verb = token.head
+    if token.dep_ != "dobj" or verb.lemma_ not in ("have", "get"):
+        return False
+    speaker = any(c.dep_ == "nsubj" and c.text.lower() in ("i", "we") for c in verb.children)
+    return speaker and not any(c.tag_ == "MD" for c in verb.children)
 
 
 def _polite(doc: Doc, clause: Clause) -> bool:

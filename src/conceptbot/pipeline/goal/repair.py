@@ -11,12 +11,14 @@ particular request; a shape that does not match leaves the tree as it is.
 
 from __future__ import annotations
 
+import re
 from typing import TYPE_CHECKING
 
 from conceptbot.pipeline.goal.parse import vocabulary
 from conceptbot.pipeline.goal.themes import STANDS_IN
 
 if TYPE_CHECKING:  # spaCy is loaded with the model, on first use (pipeline/goal imports light)
+    from spacy.language import Language
     from spacy.tokens import Doc, Token
 
 SUBJECTS = frozenset({"nsubj", "nsubjpass", "expl", "csubj"})
@@ -98,6 +100,17 @@ def _stand_in_modifiers(doc: Doc) -> None:
             if nxt.text.lower() in vocabulary()["spatial"]:
                 continue  # "and another on the shelf": where it goes
             nxt.head = token
+
+
+def parsed(nlp: Language, text: str) -> Doc:
+    """``text`` parsed and repaired. A request the parser finds no verb in, where it read an "'s"
+    as a possessive ("my hair's dripping wet and full of knots"), is parsed again with "is" for it:
+    with no verb, no rule can read it, and "'s" before a description is the verb."""
+    doc = nlp(text)
+    verbless = not any(t.pos_ in ("VERB", "AUX") for t in doc)
+    if verbless and any(t.tag_ == "POS" and t.text.lower() == "'s" for t in doc):
+        doc = nlp(re.sub(r"(?i)(?<=\w)'s\b", " is", text))
+    return repair(doc)
 
 
 def repair(doc: Doc) -> Doc:
