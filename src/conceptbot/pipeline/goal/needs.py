@@ -9,10 +9,11 @@ hair") or an expletive ("there's nothing to do"), or, joined to such a clause, "
 is all knots and it's still wet", "I'm bored, and it's cold in here"); and it says a state ("I'm
 chilly", "I have a headache", "my knee is bleeding", "I've cut my finger": the present perfect says
 how things are now), not an event or the speaker's doing ("I'm working under the car"); or a second
-state of the same subject ("soaking wet and all tangled", "a cut and a headache" after "I have"). A clause about someone else ("the neighbours are drilling and
-I'm trying to take a nap") or an event ("I fell off my bike and scraped my knee") is the need's
-cause, not a need of its own: such a request stays one need. So does "I cut my finger and now I
-have a headache", whose two needs the syntax cannot tell from a cause and its effect.
+state of the same subject ("soaking wet and all tangled", "a cut and a headache" after "I have"). A
+clause about someone else ("the neighbours are drilling and I'm trying to take a nap") or an event
+("I fell off my bike and scraped my knee") is the need's cause, not a need of its own: such a
+request stays one need. So does "I cut my finger and now I have a headache", whose two needs the
+syntax cannot tell from a cause and its effect.
 """
 
 from __future__ import annotations
