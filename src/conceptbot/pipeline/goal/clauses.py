@@ -198,6 +198,15 @@ def _is_for(doc: Doc, at: int, end: int) -> int:
     return -1
 
 
+def _befalls(preposition: Token) -> bool:
+    """Whether "on" before a person says what befalls them ("my phone died on me"): the "on" of a
+    verb that moves nothing (no object, not a handing verb), not "put the towel on me"."""
+    verb = preposition.head
+    if _lower(preposition) != "on" or verb.pos_ != "VERB" or verb.lemma_ in vocabulary()["handing"]:
+        return False
+    return not any(c.dep_ == "dobj" for c in verb.children)
+
+
 def place_role(
     doc: Doc,
     mention: Mention,
@@ -219,9 +228,14 @@ def place_role(
         return tuple(frame)  # "coffee table" alone: a fragment naming a place
     if mention.kind == "person" and _lower(doc[mention.end - 1]) == "way":
         return tuple(frame)  # "send the hairbrush my way"
+    if j - 1 > first and doc[j - 1].dep_ == "preconj":
+        j -= 1  # "into either the kitchen basket or the disposal bin"
+        frame.insert(0, j)
     prev = doc[j - 1] if j - 1 >= first else None
     nxt = doc[mention.end] if mention.end < end else None
     if prev is not None and _lower(prev) in vocab["spatial"]:
+        if mention.kind == "person" and _befalls(prev):
+            return None  # "my phone is about to die on me": what befalls the person, no place
         frame.append(j - 1)
         k = j - 2
         while k >= first and _lower(doc[k]) in vocab["particles"] + ["next"]:

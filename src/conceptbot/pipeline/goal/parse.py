@@ -154,7 +154,11 @@ def chunks(doc: Doc, mentions: Sequence[Mention]) -> list[Chunk]:
             if i > start:
                 pieces.append(Chunk(start, i, after))
             start, after = i + 1, "colon" if word == ":" else "hard"
-        elif _soft(token) and i > start and not all(doc[j].text.lower() in SOFT for j in range(start, i)):
+        elif (
+            (_soft(token) or _or_places(token, mentions))
+            and i > start
+            and not all(doc[j].text.lower() in SOFT for j in range(start, i))
+        ):
             # a run of boundary words (", and then") stays at the head of the next chunk
             pieces.append(Chunk(start, i, after))
             start, after = i, "soft"
@@ -197,6 +201,25 @@ def _soft(token: Token) -> bool:
     if word == "then":
         return token.tag_ in ("RB", "CC")
     return word in SOFT and token.tag_ in ("IN", "CC") and token.dep_ in ("mark", "cc", "prep", "advmod")
+
+
+def _or_places(token: Token, mentions: Sequence[Mention]) -> bool:
+    """Whether an "or" joins two places ("into either the kitchen basket or the disposal bin"), a
+    sort over both, as "and" would: a soft boundary then, not inside a list of things."""
+    if token.text.lower() != "or" or token.tag_ != "CC":
+        return False
+    doc = token.doc
+    after = token.i + 1
+    while after < len(doc) and doc[after].tag_ in ("DT", "PRP$"):
+        after += 1
+    places = [m for m in mentions if m.kind in ("place", "both")]
+    if not (any(m.end == token.i for m in places) and any(m.start == after for m in places)):
+        return False
+    # a sort only where everything is placed ("sort everything here into ..."): "put the rhubarb
+    # in the basket or the bin" leaves one thing's place to the planner
+    vocab = vocabulary()
+    whole = {"everything", "each", "every", "all"}
+    return any(t.lemma_.lower() in vocab["sort"] or t.text.lower() in whole for t in doc[: token.i])
 
 
 def _has_place(chunk: Chunk, mentions: Sequence[Mention]) -> bool:

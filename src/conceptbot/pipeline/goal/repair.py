@@ -11,7 +11,6 @@ particular request; a shape that does not match leaves the tree as it is.
 
 from __future__ import annotations
 
-import re
 from typing import TYPE_CHECKING
 
 from conceptbot.pipeline.goal.parse import vocabulary
@@ -103,14 +102,20 @@ def _stand_in_modifiers(doc: Doc) -> None:
 
 
 def parsed(nlp: Language, text: str) -> Doc:
-    """``text`` parsed and repaired. A request the parser finds no verb in, where it read an "'s"
-    as a possessive ("my hair's dripping wet and full of knots"), is parsed again with "is" for it:
-    with no verb, no rule can read it, and "'s" before a description is the verb."""
+    """``text`` parsed and repaired. An "'s" the parser read as a possessive where it is the verb
+    ("my hair's dripping wet and full of knots", with no verb left; "my phone's about to die", its
+    "possessor" the subject) is replaced by "is" and the text parsed again: no rule reads a
+    sentence without its verb."""
     doc = nlp(text)
     verbless = not any(t.pos_ in ("VERB", "AUX") for t in doc)
-    if verbless and any(t.tag_ == "POS" and t.text.lower() == "'s" for t in doc):
-        doc = nlp(re.sub(r"(?i)(?<=\w)'s\b", " is", text))
-    return repair(doc)
+    verbs = [
+        t
+        for t in doc
+        if t.tag_ == "POS" and t.text.lower() == "'s" and (verbless or t.head.dep_ in ("nsubj", "nsubjpass"))
+    ]
+    for token in reversed(verbs):
+        text = text[: token.idx] + " is" + text[token.idx + len(token.text) :]
+    return repair(nlp(text) if verbs else doc)
 
 
 def repair(doc: Doc) -> Doc:

@@ -52,6 +52,8 @@ def desire_verb(doc: Doc, first: int, end: int, lets: bool) -> Token | None:
         thing = bool(subject) and not any(_lower(c) in vocab["personal"] for c in subject)
         if token.lemma_ == "be" and conditional and praised and thing:
             return token
+        if token.lemma_ == "sound" and praised and any(c.pos_ in ("NOUN", "PROPN") for c in subject):
+            return token  # "a fruit salad sounds great right now"
     return None
 
 
@@ -141,7 +143,7 @@ def desire_clause(
         theme = tuple(t.i for t in attr.subtree if t.i not in frame and not t.is_punct)
         return Clause(chunk, "desire", "be", verb.i, [], theme, "", False, [theme])
     subject = next((c for c in verb.children if c.dep_ == "nsubj"), None)
-    if verb.lemma_ == "be" and subject is not None:
+    if verb.lemma_ in ("be", "sound") and subject is not None:  # "X would be lovely", "X sounds great"
         theme = tuple(i for i in range(subject.left_edge.i, subject.right_edge.i + 1) if i not in frame)
         return Clause(chunk, "desire", "be", verb.i, [], theme, "", False, [theme])
     vocab = vocabulary()
