@@ -373,6 +373,8 @@ def _subject_verb(
         placed = any(_lower(c) in ("away", "out") for c in token.children) or any(
             i in place_tokens for i in range(token.i + 1, end)
         )
+        # "X should be locked up": shut away, as "locked away"
+        placed = placed or (token.lemma_ == "lock" and any(_lower(c) == "up" for c in token.children))
         if token.tag_ == "VBN" and any(a.dep_ == "auxpass" for a in auxes) and obliged and placed:
             return token  # "X should be thrown away"; not "this baguette needs to be sliced" (a need)
         if token.tag_ == "VBG" and token.dep_ == "xcomp" and token.head.lemma_ == "need":

@@ -488,6 +488,8 @@ def _items(
                 items.pop()
             if theme:
                 items.append(_Item(clause, [tuple(users)] if handed else [], theme, clause.key))
+            else:
+                pending = pending or clause.key  # "sort these by what they're made of, each one ..."
             continue
         if clause.form == "fragment" and not places and items and items[-1].places and _also(doc, clause):
             # "fetch me the ruler. Oh, and the eraser as well."; "...; the hammer too."
@@ -626,11 +628,15 @@ def _without_headers(items: list[_Item], vocab: dict) -> list[_Item]:
     fragments that no place was paired with ("Dinner's ready")."""
     placed = any(i.places for i in items)
     kept = []
+    key = ""  # "Sort these by what they're made of, each into the bin that matches": the sort's key
     for item in items:
         if not item.places and placed:
             clause = item.clause
             if clause.form == "fragment" or clause.verb in vocab["sort"]:
+                key = item.key or key
                 continue
+        if key and item.places and not item.key:
+            item.key = key
         if (not item.places and item.clause.form == "fragment") or item.condition:
             continue  # a condition no clause sent anything by
         kept.append(item)

@@ -11,6 +11,7 @@ particular request; a shape that does not match leaves the tree as it is.
 
 from __future__ import annotations
 
+from itertools import pairwise
 from typing import TYPE_CHECKING
 
 from conceptbot.pipeline.goal.parse import vocabulary
@@ -63,6 +64,22 @@ def _verb_conjunct_objects(doc: Doc) -> None:
         for word in joining:
             word.head = first
         token.head = first
+
+
+def _second_objects(doc: Doc) -> None:
+    """A verb's second object after its "and" ("give the toddler something to draw with, and a
+    soft cuddly toy as well", both read as objects of "give") becomes the first's conjunct."""
+    for verb in doc:
+        objects = [c for c in verb.children if c.dep_ == "dobj" and _nominal(c)]
+        for first, second in pairwise(objects):
+            joining = [c for c in verb.children if first.right_edge.i < c.i < second.left_edge.i]
+            if not any(c.dep_ == "cc" for c in joining) or _places(second):
+                continue
+            for word in joining:
+                if word.dep_ in ("cc", "punct"):
+                    word.head = first
+            second.dep_ = "conj"
+            second.head = first
 
 
 def _stand_in_heads(doc: Doc) -> None:
@@ -121,6 +138,7 @@ def parsed(nlp: Language, text: str) -> Doc:
 def repair(doc: Doc) -> Doc:
     """``doc`` with the repairs of the module docstring made in place (returned for chaining)."""
     _verb_conjunct_objects(doc)
+    _second_objects(doc)
     _stand_in_heads(doc)
     _stand_in_modifiers(doc)
     return doc

@@ -172,6 +172,8 @@ def criterion_text(doc: Doc, run: Sequence[int]) -> str:
     relative = len(kept) > 2 and _lower(doc[kept[0]]) in ("that", "which", "who")
     if relative and doc[kept[1]].lemma_ in ("be", "'s"):
         kept = kept[2:]
+    elif len(kept) > 1 and doc[kept[0]].lemma_ == "be" and doc[kept[0]].pos_ == "AUX":
+        kept = kept[1:]  # "anything here that's toxic": "that" went with the determiners
     if not kept:
         return ""
     text = doc[kept[0] : kept[-1] + 1].text
