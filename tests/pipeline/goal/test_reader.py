@@ -265,8 +265,11 @@ def test_the_goal_set_is_read(reader: GoalReader) -> None:
     assert sum(results["round 6"]) >= 140
     # Round 7 was tuned on after its blind run (16/26; 26/26 after)
     assert sum(results["round 7"]) >= 25
-    # Round 8 is held out: 76/91 when first measured (72/91 with the reader before round 7's fixes)
-    assert sum(results["round 8"]) >= 75
+    # Round 8 was tuned on after its blind run (76/91; 72/91 with the reader before round 7's fixes)
+    assert sum(results["round 8"]) >= 80
+    # Round 9 (spoken constructions: reasons, asides, "any chance", "as well as") was tuned on after
+    # its blind run (50/98; 49/98 with the reader before round 7's fixes)
+    assert sum(results["round 9"]) >= 58
 
 
 # Structures that paraphrase round 4 exposed (our own sentences and scenes).
@@ -619,3 +622,80 @@ def test_a_place_that_matches_its_key_sorts_by_the_key(reader: GoalReader) -> No
         read = reader.read(request_, WORKSHOP)
         assert {t.to for t in read.targets} == {"wood crate", "metal crate", "felt crate", "odds crate"}
         assert {t.criterion for t in read.targets} == {"by material"}, read.to_dict()
+
+
+_GARDEN = scene_from_dict(
+    {
+        "pickable_objects": ["trowel", "watering can", "seed packet", "apple", "bread roll"],
+        "destinations": ["user", "shed shelf", "compost bin", "potting bench"],
+    }
+)
+
+
+@pytest.mark.parametrize(
+    "request_",
+    [
+        "It's hot out here; any chance you could pass me the trowel?",
+        "Is there any chance you could pass me the trowel?",
+    ],
+)
+def test_a_politeness_frame_reads_as_the_plain_request(reader: GoalReader, request_: str) -> None:
+    _is(reader, request_, _GARDEN, _named("user", "trowel"))
+
+
+def test_as_well_as_and_plus_join_like_and(reader: GoalReader) -> None:
+    _is(
+        reader,
+        "Put the trowel on the shed shelf, plus the seed packet.",
+        _GARDEN,
+        _named("shed shelf", "trowel", "seed packet"),
+    )
+    _is(
+        reader,
+        "Could you hand me an apple, as well as something to dig with?",
+        _GARDEN,
+        _named("user", "apple"),
+        GoalTarget("user", "criterion", (), "something to dig with", 1),
+    )
+
+
+@pytest.mark.parametrize(
+    "request_",
+    [
+        "I'm sweating and shaking at the same time.",  # a need: "same time" is no dish
+        "Since it's my own garden, I'm tired of weeding it.",
+    ],
+)
+def test_a_reason_or_a_state_names_no_dish(request_: str) -> None:
+    reader = GoalReader(find_dish=_graph_knows("time", "garden", "weeding"))
+    assert reader.read(request_, _GARDEN).dish is None
+
+
+def test_a_dish_wished_for_by_sounding_good(reader: GoalReader) -> None:
+    read = GoalReader(find_dish=_graph_knows("apple crumble")).read(
+        "An apple crumble sounds great right now.", _GARDEN
+    )
+    assert read.dish is not None and "crumble" in read.dish
+    assert reader.read("That sounds great, thanks.", _GARDEN).dish is None
+
+
+def test_either_of_two_places_sorts_everything(reader: GoalReader) -> None:
+    read = reader.read("Sort everything here into either the compost bin or the potting bench.", _GARDEN)
+    assert sorted(t.to or "" for t in read.targets) == ["compost bin", "potting bench"], read.to_dict()
+    _is(
+        reader,
+        "Put the apple on the compost bin or the potting bench.",
+        _GARDEN,
+        _named("compost bin", "apple"),
+    )
+
+
+def test_on_me_after_a_verb_that_moves_nothing_is_no_place(reader: GoalReader) -> None:
+    read = reader.read("My watering can just broke on me.", _GARDEN)
+    assert read.need is not None and read.targets == (GoalTarget(None, "need"),)
+
+
+def test_a_sort_header_s_key_goes_to_the_sort(reader: GoalReader) -> None:
+    read = reader.read("Sort these by what they're made of, each one into the crate that matches.", WORKSHOP)
+    assert {t.criterion for t in read.targets} == {"by material"}, read.to_dict()
+    assert len(read.targets) == 4

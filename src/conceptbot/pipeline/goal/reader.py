@@ -225,13 +225,49 @@ class GoalReader:
                 continue  # "cut this baguette into slices": a measure, not a dish
             if any(t.tag_ == "TO" for t in token.subtree):
                 continue  # "it's time for me to brush my teeth": what follows is an activity
-            if _had(token):
+            if _had(token) or not _may_name_dish(token):
                 continue  # "I've got a cut on my finger": what the speaker has, not a dish
             phrase = tuple(t.i for t in token.subtree if not t.is_punct)
             words = dish_words(doc, phrase)
             if words and self.find_dish(words, pickable):
                 return [GoalTarget(None, "ingredients", objects_in(phrase, mentions), "", ALL)], words
         return [], None
+
+
+#: Modifiers that make a noun no dish: "at the same time", "my own hands", "whichever tray".
+NOT_DISH_MODIFIERS = frozenset({"same", "own", "whichever", "whatever", "next", "last", "right", "other"})
+#: Words opening a clause that gives the request's reason or time, not what it asks for.
+REASON_MARKS = frozenset({"since", "because", "as", "while", "after", "when", "now", "before", "until"})
+
+
+def _may_name_dish(token: Token) -> bool:
+    """Whether a noun can be the dish a request asks for: not one with a modifier that makes it no
+    dish (:data:`NOT_DISH_MODIFIERS`), nor one inside a clause giving the request's reason or time
+    ("I picked up a baguette ... to go with the soup", "fresh out of the bath, ...", "since it's
+    Sunday, ..."), nor, where the request states how the speaker is, any but what is wished "for"
+    ("I'm burning up and shivering at the same time"; "I've got a craving for pancakes")."""
+    if any(c.text.lower() in NOT_DISH_MODIFIERS for c in token.children):
+        return False
+    for ancestor in token.ancestors:
+        marks = {c.text.lower() for c in ancestor.children if c.dep_ == "mark"}
+        if ancestor.dep_ == "advcl" and (marks & REASON_MARKS or ancestor.tag_ in ("VBG", "VBN", "JJ")):
+            return False
+        if ancestor.dep_ == "relcl" or (ancestor.dep_ == "xcomp" and ancestor.tag_ == "VB"):
+            return False  # "... to go with the soup": what the thing is for
+    stated = _speaker_state(token.sent.root) and token.head.text.lower() != "for"
+    return not (need_parts(token.doc) or stated)
+
+
+def _speaker_state(root: Token) -> bool:
+    """Whether a sentence's main clause says how the speaker is ("I'm so dehydrated", "my hair's
+    soaked through")."""
+    subject = next((c for c in root.children if c.dep_ in ("nsubj", "nsubjpass")), None)
+    if subject is None:
+        return False
+    mine = subject.text.lower() in ("i", "we") or any(
+        c.dep_ == "poss" and c.text.lower() in ("my", "our") for c in subject.children
+    )
+    return mine and root.lemma_ == "be" and any(c.dep_ in ("acomp", "attr") for c in root.children)
 
 
 def _had(token: Token) -> bool:

@@ -11,6 +11,7 @@ particular request; a shape that does not match leaves the tree as it is.
 
 from __future__ import annotations
 
+import re
 from itertools import pairwise
 from typing import TYPE_CHECKING
 
@@ -118,11 +119,24 @@ def _stand_in_modifiers(doc: Doc) -> None:
             nxt.head = token
 
 
+def plain(text: str) -> str:
+    """``text`` with its politeness frames and joining phrases said the plain way (``polite_frames``
+    and ``joining_phrases`` in ``words.json``: "any chance you could pass me a drink?" is "could you
+    pass me a drink?", "the trowel, as well as the watering can" is "the trowel, and the watering
+    can"), which every rule reads; the small parser makes "chance" the request's object."""
+    vocab = vocabulary()
+    frames = sorted(vocab["polite_frames"] + vocab["joining_phrases"], key=lambda f: -len(f[0]))
+    for frame, plain in frames:  # the longest first: "is there any chance you could" before its tail
+        text = re.sub(rf"(?i)\b{re.escape(frame)}\b", plain, text)
+    return text
+
+
 def parsed(nlp: Language, text: str) -> Doc:
     """``text`` parsed and repaired. An "'s" the parser read as a possessive where it is the verb
     ("my hair's dripping wet and full of knots", with no verb left; "my phone's about to die", its
     "possessor" the subject) is replaced by "is" and the text parsed again: no rule reads a
     sentence without its verb."""
+    text = plain(text)
     doc = nlp(text)
     verbless = not any(t.pos_ in ("VERB", "AUX") for t in doc)
     verbs = [

@@ -79,7 +79,16 @@ def _stripped(doc: Doc, run: Sequence[int]) -> list[int]:
     """The run without its leading determiners, quantifiers and restrictors ("only the", "all of
     the", "everything"), nor a "here" after them."""
     vocab = vocabulary()
-    lead = {*vocab["determiners"], *vocab["quantifiers"], *vocab["restrictors"], "one", "of", "here", "there"}
+    lead = {
+        *vocab["determiners"],
+        *vocab["quantifiers"],
+        *vocab["restrictors"],
+        "one",
+        "of",
+        "here",
+        "there",
+        "then",
+    }
     lead -= {"something"}
     out = list(run)
     for phrase in vocab["only_phrases"]:  # "nothing but the paper": only the paper
@@ -153,7 +162,7 @@ def count_of(doc: Doc, run: Sequence[int]) -> Count:
     ahead = [w for i, w in zip(run, words, strict=True) if head_at is None or i <= head_at.i]
     if any(w in vocab["quantifiers"] for w in ahead):
         return ALL  # "all the toys"; not "a game we can both play"
-    start = next((w for w in words if w not in vocab["restrictors"]), "")
+    start = next((w for w in words if w not in vocab["restrictors"] and w != "then"), "")  # "then a toy"
     if start in vocab["one"]:
         return 1
     head = _head(doc, _stripped(doc, run))
