@@ -269,7 +269,7 @@ def test_the_goal_set_is_read(reader: GoalReader) -> None:
     assert sum(results["round 8"]) >= 80
     # Round 9 (spoken constructions: reasons, asides, "any chance", "as well as") was tuned on after
     # its blind run (50/98; 49/98 with the reader before round 7's fixes)
-    assert sum(results["round 9"]) >= 58
+    assert sum(results["round 9"]) >= 60
 
 
 # Structures that paraphrase round 4 exposed (our own sentences and scenes).
@@ -699,3 +699,13 @@ def test_a_sort_header_s_key_goes_to_the_sort(reader: GoalReader) -> None:
     read = reader.read("Sort these by what they're made of, each one into the crate that matches.", WORKSHOP)
     assert {t.criterion for t in read.targets} == {"by material"}, read.to_dict()
     assert len(read.targets) == 4
+
+
+def test_both_before_two_indefinites_asks_for_one_of_each(reader: GoalReader) -> None:
+    _is(
+        reader,
+        "Could you hand me both something to nibble on and a cushion?",
+        _DESK,
+        GoalTarget("user", "criterion", (), "something to nibble on", 1),
+        GoalTarget("user", "criterion", (), "cushion", 1),
+    )

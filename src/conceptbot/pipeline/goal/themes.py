@@ -160,6 +160,8 @@ def count_of(doc: Doc, run: Sequence[int]) -> Count:
             return 1
     head_at = _head(doc, _stripped(doc, run))
     ahead = [w for i, w in zip(run, words, strict=True) if head_at is None or i <= head_at.i]
+    if ahead[:1] == ["both"] and len(ahead) > 1 and ahead[1] in vocab["one"]:
+        ahead = ahead[1:]  # "both something to write with and ...": the list's "both", one of each
     if any(w in vocab["quantifiers"] for w in ahead):
         return ALL  # "all the toys"; not "a game we can both play"
     start = next((w for w in words if w not in vocab["restrictors"] and w != "then"), "")  # "then a toy"
