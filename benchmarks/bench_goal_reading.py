@@ -148,7 +148,10 @@ def main() -> None:
 
 
 def _report(tally: dict[tuple[str, str], list[int]]) -> None:
-    groups = sorted({g for _, g in tally}, key=lambda g: (g != "original", g))
+    # "original" first, then the rounds by number ("round 10" after "round 9")
+    groups = sorted(
+        {g for _, g in tally}, key=lambda g: (g != "original", int(g.split()[-1]) if g[-1].isdigit() else 0)
+    )
     print(f"{'':20} | {'goal reader':^27} | {'TargetFinder':^27}")
     print(f"{'':20} | {'exact':^15} {'structure':>11} | {'exact':^15} {'structure':>11}")
 

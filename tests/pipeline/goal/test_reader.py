@@ -270,6 +270,9 @@ def test_the_goal_set_is_read(reader: GoalReader) -> None:
     # Round 9 (spoken constructions: reasons, asides, "any chance", "as well as") was tuned on after
     # its blind run (50/98; 49/98 with the reader before round 7's fixes)
     assert sum(results["round 9"]) >= 60
+    # Round 10 (terse commands and indirect requests) was tuned on after its blind run (55/98; 55/98
+    # with last session's reader too)
+    assert sum(results["round 10"]) >= 58  # 66/98 with the graph's dish checks
 
 
 # Structures that paraphrase round 4 exposed (our own sentences and scenes).
@@ -709,3 +712,38 @@ def test_both_before_two_indefinites_asks_for_one_of_each(reader: GoalReader) ->
         GoalTarget("user", "criterion", (), "something to nibble on", 1),
         GoalTarget("user", "criterion", (), "cushion", 1),
     )
+
+
+@pytest.mark.parametrize(
+    "request_",
+    [
+        "I was wondering if you could pass me the trowel.",
+        "Do you think you could pass me the trowel?",
+        "I was hoping you could pass me the trowel.",
+        "Would it be possible to pass me the trowel?",
+    ],
+)
+def test_an_indirect_request_reads_as_the_plain_one(reader: GoalReader, request_: str) -> None:
+    _is(reader, request_, _GARDEN, _named("user", "trowel"))
+
+
+def test_a_thing_handed_to_no_one_named_goes_to_the_speaker(reader: GoalReader) -> None:
+    _is(reader, "Could you bring the trowel over?", _GARDEN, _named("user", "trowel"))
+
+
+def test_a_terse_bare_noun_asks_for_one(reader: GoalReader) -> None:
+    _is(
+        reader,
+        "Snack and a cushion, please.",
+        _DESK,
+        GoalTarget("user", "criterion", (), "snack", 1),
+        GoalTarget("user", "criterion", (), "cushion", 1),
+    )
+
+
+def test_a_polite_fragment_naming_a_dish_asks_for_the_dish() -> None:
+    reader = GoalReader(is_dish=lambda words: "crumble" in words)
+    read = reader.read("Apple crumble, please!", _GARDEN)
+    assert read.dish is not None and "crumble" in read.dish
+    assert reader.read("Something for my sore hands, please.", _GARDEN).dish is None
+    assert GoalReader().read("Apple crumble, please!", _GARDEN).dish is None  # no graph: a thing

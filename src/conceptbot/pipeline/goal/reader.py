@@ -179,6 +179,12 @@ class GoalReader:
             if clause.form == "imperative" and clause.verb in vocab["making"] and personal:
                 wished, making = clause.theme, True  # "make me a PB&J"
             elif clause.form == "fragment" and not clause.places and _polite(doc, clause) and clause.theme:
+                dish = dish_words(doc, clause.theme)
+                named = objects_in(clause.theme, mentions)
+                thing = _names_itself(doc, clause.theme, mentions) or _described(doc, clause.theme)
+                thing = thing or doc[clause.theme[0]].text.lower() in vocab["one"]  # "something for ..."
+                if dish and not named and not thing and self.is_dish is not None and self.is_dish(dish):
+                    return [GoalTarget(None, "ingredients", (), "", ALL)], dish  # "Pancakes, please!"
                 return _all_to(users, read_themes(doc, clause.theme, mentions)), None  # "A drink, please."
             elif clause.form == "desire" and (
                 clause.verb in vocab["making"] or clause.verb in ("want", "need", "be")
@@ -539,7 +545,9 @@ def _items(
             if clause.verb in vocab["stack"]["verbs"] or stack:
                 continue
             if clause.theme:
-                items.append(_Item(clause, [], clause.theme, clause.key))
+                # "could you bring the ruler over?": handed with no one named, to the speaker
+                handed = clause.verb in vocab["handing"] and users
+                items.append(_Item(clause, [tuple(users)] if handed else [], clause.theme, clause.key))
             continue
         if clause.form == "fragment" and places and not clause.theme:
             if (

@@ -173,7 +173,10 @@ def count_of(doc: Doc, run: Sequence[int]) -> Count:
     mass = {*vocab["mass"], *MATERIALS}
     if head.lemma_.lower() in mass or _lower(head) in mass:
         return ALL
-    return 1 if start in ("the", "this", "that", "my", "your", "his", "her", "our", "their") else ALL
+    if start in ("the", "this", "that", "my", "your", "his", "her", "our", "their"):
+        return 1
+    # a bare singular count noun, said tersely ("toy for the dog", "drink for my boy"): one of them
+    return 1 if start == _lower(head) and head.tag_ == "NN" else ALL
 
 
 def criterion_text(doc: Doc, run: Sequence[int]) -> str:
