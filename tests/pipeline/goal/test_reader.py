@@ -273,6 +273,10 @@ def test_the_goal_set_is_read(reader: GoalReader) -> None:
     # Round 10 (terse commands and indirect requests) was tuned on after its blind run (55/98; 55/98
     # with last session's reader too)
     assert sum(results["round 10"]) >= 58  # 66/98 with the graph's dish checks
+    # Round 11 (five voices: a busy parent, an older person, a teenager, a learner of English,
+    # someone thinking aloud) is held out: 55/98 when first measured (54/98 with the reader of the
+    # session before rounds 7-10 were tuned on)
+    assert sum(results["round 11"]) >= 54
 
 
 # Structures that paraphrase round 4 exposed (our own sentences and scenes).
