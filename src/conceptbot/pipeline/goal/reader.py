@@ -1,6 +1,8 @@
 """The goal reader: a request and a scene in, a :class:`~conceptbot.pipeline.goal.types.Goal` out.
 
-Clauses (:mod:`conceptbot.pipeline.goal.parse`) become targets:
+The request is first said plainly and parsed, and the parse repaired where the small parser
+misattaches (:mod:`conceptbot.pipeline.goal.repair`). Clauses
+(:mod:`conceptbot.pipeline.goal.parse`) then become targets:
 
 * A clause with destinations sends its theme there; a plural head ("into the recycling bins") or a
   destination-only continuation ("into the paper bin | and the plastic bin") makes a **sort**: each

@@ -126,8 +126,8 @@ def plain(text: str) -> str:
     can"), which every rule reads; the small parser makes "chance" the request's object."""
     vocab = vocabulary()
     frames = sorted(vocab["polite_frames"] + vocab["joining_phrases"], key=lambda f: -len(f[0]))
-    for frame, plain in frames:  # the longest first: "is there any chance you could" before its tail
-        text = re.sub(rf"(?i)\b{re.escape(frame)}\b", plain, text)
+    for frame, said in frames:  # the longest first: "is there any chance you could" before its tail
+        text = re.sub(rf"(?i)\b{re.escape(frame)}\b", said, text)
     return text
 
 
