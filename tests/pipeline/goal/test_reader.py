@@ -644,6 +644,10 @@ _GARDEN = scene_from_dict(
     [
         "It's hot out here; any chance you could pass me the trowel?",
         "Is there any chance you could pass me the trowel?",
+        "I was wondering if you could pass me the trowel.",
+        "Do you think you could pass me the trowel?",
+        "I was hoping you could pass me the trowel.",
+        "Would it be possible to pass me the trowel?",
     ],
 )
 def test_a_politeness_frame_reads_as_the_plain_request(reader: GoalReader, request_: str) -> None:
@@ -716,19 +720,6 @@ def test_both_before_two_indefinites_asks_for_one_of_each(reader: GoalReader) ->
         GoalTarget("user", "criterion", (), "something to nibble on", 1),
         GoalTarget("user", "criterion", (), "cushion", 1),
     )
-
-
-@pytest.mark.parametrize(
-    "request_",
-    [
-        "I was wondering if you could pass me the trowel.",
-        "Do you think you could pass me the trowel?",
-        "I was hoping you could pass me the trowel.",
-        "Would it be possible to pass me the trowel?",
-    ],
-)
-def test_an_indirect_request_reads_as_the_plain_one(reader: GoalReader, request_: str) -> None:
-    _is(reader, request_, _GARDEN, _named("user", "trowel"))
 
 
 def test_a_thing_handed_to_no_one_named_goes_to_the_speaker(reader: GoalReader) -> None:

@@ -674,15 +674,11 @@ def _without_headers(items: list[_Item], vocab: dict) -> list[_Item]:
     fragments that no place was paired with ("Dinner's ready")."""
     placed = any(i.places for i in items)
     kept = []
-    key = ""  # "Sort these by what they're made of, each into the bin that matches": the sort's key
     for item in items:
         if not item.places and placed:
             clause = item.clause
             if clause.form == "fragment" or clause.verb in vocab["sort"]:
-                key = item.key or key
                 continue
-        if key and item.places and not item.key:
-            item.key = key
         if (not item.places and item.clause.form == "fragment") or item.condition:
             continue  # a condition no clause sent anything by
         kept.append(item)
