@@ -226,6 +226,7 @@ class GoalReader:
         its words in the request, its ingredients to a place the planner chooses."""
         assert self.find_dish is not None
         pickable = [o.name for o in scene.objects if o.pickable]
+        needs = bool(need_parts(doc))  # once per request, not per noun
         for token in doc:
             if not token.tag_.startswith("NN") or token.dep_ not in ("dobj", "pobj", "attr", "conj", "appos"):
                 continue
@@ -233,7 +234,7 @@ class GoalReader:
                 continue  # "cut this baguette into slices": a measure, not a dish
             if any(t.tag_ == "TO" for t in token.subtree):
                 continue  # "it's time for me to brush my teeth": what follows is an activity
-            if _had(token) or not _may_name_dish(token):
+            if _had(token) or not _may_name_dish(token, needs):
                 continue  # "I've got a cut on my finger": what the speaker has, not a dish
             phrase = tuple(t.i for t in token.subtree if not t.is_punct)
             words = dish_words(doc, phrase)
@@ -248,12 +249,13 @@ NOT_DISH_MODIFIERS = frozenset({"same", "own", "whichever", "whatever", "next", 
 REASON_MARKS = frozenset({"since", "because", "as", "while", "after", "when", "now", "before", "until"})
 
 
-def _may_name_dish(token: Token) -> bool:
+def _may_name_dish(token: Token, needs: bool) -> bool:
     """Whether a noun can be the dish a request asks for: not one with a modifier that makes it no
     dish (:data:`NOT_DISH_MODIFIERS`), nor one inside a clause giving the request's reason or time
     ("I picked up a baguette ... to go with the soup", "fresh out of the bath, ...", "since it's
     Sunday, ..."), nor, where the request states how the speaker is, any but what is wished "for"
-    ("I'm burning up and shivering at the same time"; "I've got a craving for pancakes")."""
+    ("I'm burning up and shivering at the same time"; "I've got a craving for pancakes"), nor any
+    where it states two needs (``needs``: :func:`need_parts` of the request found some)."""
     if any(c.text.lower() in NOT_DISH_MODIFIERS for c in token.children):
         return False
     for ancestor in token.ancestors:
@@ -263,7 +265,7 @@ def _may_name_dish(token: Token) -> bool:
         if ancestor.dep_ == "relcl" or (ancestor.dep_ == "xcomp" and ancestor.tag_ == "VB"):
             return False  # "... to go with the soup": what the thing is for
     stated = _speaker_state(token.sent.root) and token.head.text.lower() != "for"
-    return not (need_parts(token.doc) or stated)
+    return not (needs or stated)
 
 
 def _speaker_state(root: Token) -> bool:
