@@ -162,6 +162,7 @@ def _conceptbot(config: str, settings: Settings, options: SystemOptions, parts: 
         options.planner,
         coverage=options.coverage,
         level=options.level,
+        reading=options.reading,
         # A model calibrated with `conceptbot calibrate --conformal` asks by its own thresholds.
         calibration_dir=settings.calibration_dir,
     )

@@ -101,7 +101,8 @@ def test_the_goal_planner_with_ope_and_saycan_validate() -> None:
     prior, safe = [-1.0, -1.0], [-0.05, -3.0]
     # Named object, handed to a child: OPE's Risk Index rates it, then the risk question.
     llm = FakeLLM([risk_reply(4, [("child", 3)])], scores=[prior, safe])
-    goal = ConceptBot(llm, None, "nokg", planner="goal").plan("Give the child the scissors", scene).to_dict()
+    bot = ConceptBot(llm, None, "nokg", planner="goal", reading="words")  # OPE gets the scripted reply
+    goal = bot.plan("Give the child the scissors", scene).to_dict()
     _validator().validate(goal)
     assert goal["refused"] and goal["trace"]["risk"][0]["why"] == "judged dangerous"
     assert list(goal["trace"]) == [

@@ -36,7 +36,9 @@ class HashLLM:
         return self
 
     def chat(self, request: ChatRequest) -> ChatResponse:
-        raise AssertionError("the goal planner without OPE only scores")
+        # The goal planner without OPE chats once: the request said plainly (pipeline/goal/aided.py).
+        assert "Plain:" in request.messages[-1].content, "without OPE it only restates and scores"
+        return ChatResponse(("I would like a hotpot.",), Usage(), self.backend, self.model)
 
     def score(self, request: ScoreRequest) -> ScoreResponse:
         prompt = request.prompt or json.dumps([[m.role, m.content] for m in request.messages or ()])

@@ -235,7 +235,7 @@ def test_a_goal_planner_run_streams_its_targets_decisions_and_risk_checks(make_c
     def goal_bot(config: str, backend: str) -> ConceptBot:
         # OPE rates the scissors 4/5 for the child; the risk question itself leans safe.
         llm = FakeLLM([risk_reply(4, [])], scores=[[-1.0, -1.0], [-0.5, -1.5]])
-        return ConceptBot(llm, None, "nokg", planner="goal")
+        return ConceptBot(llm, None, "nokg", planner="goal", reading="words")  # OPE takes the reply
 
     client = make_client(worker=make_worker(goal_bot, can_simulate=False))
     events = events_of(client, client.post("/api/runs", json=RUN).json()["id"])

@@ -231,12 +231,22 @@ def _steps(console: Console, result: Plan) -> None:
             console.print(line("  ", ("rejected LLM output:", "yellow"), f" {rejected}"))
 
 
+#: What the goal's ``reading`` says, for the plan's print-out.
+READINGS = {
+    "both": "the request's own words read the same",
+    "plain": "read from the plain form (the request's own words read otherwise)",
+    "words": "read from the request's own words (the plain form read otherwise)",
+}
+
+
 def _goal(console: Console, trace: PlanTrace) -> None:
     """The goal planner's targets, per-object decisions and risk checks (absent for the step planner)."""
     goal = trace.goal
     if not goal:
         return
     console.print(line("\n", ("Goal", "bold"), " (stack)" if goal.stack else ""))
+    if goal.reading:
+        console.print(line(f"  said plainly by the model: {goal.plain!r}; {READINGS[goal.reading]}"))
     for target in goal.targets:
         how = {"named": "named in the request", "speaker": "the speaker", "scored": "scored"}[target.how]
         named = f"; objects named: {', '.join(target.named)}" if target.named else ""

@@ -32,6 +32,9 @@ ASK_ALL = 1.0
 """The coverage at which every calibrated decision is a question (a set of every answer always
 holds the right one, so it needs no fit): the most a person's answers can do for a plan."""
 LEVELS = ("plan", "decision")
+#: How the goal planner reads a request: ``restated`` (the rules on its words and on the model's
+#: plain form of it, the better kept; ``pipeline/goal/aided.py``) or ``words`` (the rules alone).
+READINGS = ("restated", "words")
 """What the conformal coverage holds for: ``plan`` (every calibrated decision of a plan at once, the
 default) or ``decision`` (each decision on its own)."""
 """ConceptBot's planners: ``auto`` (the goal planner), ``goal``, ``steps`` (the paper's)."""
@@ -93,6 +96,8 @@ class SystemOptions:
             (one of :data:`COVERAGES`, or :data:`ASK_ALL`: ask about every one); higher asks more.
         level: What the coverage holds for (:data:`LEVELS`): ``plan``, all of a plan's calibrated
             decisions together, or ``decision``, each one (asks less, is wrong more often).
+        reading: How the goal planner reads the request (:data:`READINGS`): ``restated`` (one more
+            model call of a few seconds) or ``words`` (the rules alone, as before 2026-12-02).
 
     Raises:
         ConfigError: A value of the wrong type, out of range or not one of the choices.
@@ -105,6 +110,7 @@ class SystemOptions:
     planner: str = "auto"
     coverage: float = 0.9
     level: str = "plan"
+    reading: str = "restated"
 
     def __post_init__(self) -> None:
         if self.theta is not None:
@@ -121,6 +127,7 @@ class SystemOptions:
         _choice("planner", self.planner, PLANNERS)
         _choice("coverage", self.coverage, (*COVERAGES, ASK_ALL))
         _choice("level", self.level, LEVELS)
+        _choice("reading", self.reading, READINGS)
         if isinstance(self.n, bool) or not isinstance(self.n, int) or self.n < 1:
             raise ConfigError(f"n must be a whole number of completions >= 1, got {self.n!r}")
         if self.fallback is not None and not isinstance(self.fallback, bool):

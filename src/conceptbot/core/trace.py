@@ -228,14 +228,27 @@ class GoalTrace:
     Attributes:
         targets: The targets, in the request's order (none for a stack).
         stack: Whether the request piles the objects up.
+        plain: The model's plain form of the request ("Give me something to write with."), where
+            the request was said plainly before it was read; else "".
+        reading: Which reading the targets are: ``words`` (the rules on the request's own words),
+            ``plain`` (on the plain form), ``both`` (the two agree), "" (only the words were read).
+        other: Where the two readings differ, the one not taken (goal-set JSON: stack, dish, need,
+            targets), else None.
     """
 
     targets: tuple[TargetTrace, ...]
     stack: bool
+    plain: str = ""
+    reading: str = ""
+    other: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON form (also the web page's ``goal`` event)."""
-        return {"targets": [t.to_dict() for t in self.targets], "stack": self.stack}
+        """JSON form (also the web page's ``goal`` event); the readings only where the request was
+        said plainly."""
+        found: dict[str, Any] = {"targets": [t.to_dict() for t in self.targets], "stack": self.stack}
+        if self.reading:
+            found.update(plain=self.plain, reading=self.reading, other=self.other)
+        return found
 
 
 @dataclass(frozen=True)

@@ -37,6 +37,7 @@ from conceptbot.models.cache_db import CacheStore
 from conceptbot.models.llm import LLM
 from conceptbot.pipeline import modes, prompts
 from conceptbot.pipeline.goal import GoalFinder, GoalReader
+from conceptbot.pipeline.goal.restate import Restater
 from conceptbot.pipeline.goal_planner import conformal
 from conceptbot.pipeline.goal_planner.combine import combination
 from conceptbot.pipeline.goal_planner.decide import Decider, FactFinder
@@ -92,6 +93,11 @@ class ConceptBot:
         planner: ``goal``, ``steps`` or ``auto`` (``goal``); ``goal`` falls back to ``steps`` for
             ``ope`` and when the backend cannot score options.
         thresholds: The goal planner's decision thresholds.
+        coverage: The goal planner's conformal coverage (see ``SystemOptions``).
+        level: What the coverage holds for (``plan`` or ``decision``).
+        reading: ``restated``: the goal planner reads the request's words and the model's plain
+            form of it and keeps the better reading; ``words``: the rules alone.
+        calibration_dir: Where ``conceptbot calibrate --conformal`` wrote a model's thresholds.
     """
 
     def __init__(
@@ -108,6 +114,7 @@ class ConceptBot:
         coverage: float = 0.9,
         level: str = "plan",
         calibration_dir: Path | None = None,
+        reading: str = "restated",
     ) -> None:
         if config not in SWITCHES:
             raise ValueError(f"config must be one of {CONFIGS}")
@@ -152,6 +159,9 @@ class ConceptBot:
                 reader,
                 TargetFinder(self._llm_for("goal"), is_person, food=facts),
                 facts.dish_concept if retriever is not None else None,
+                # The model says the request plainly and the rules read that too: they read plain
+                # commands well and talk badly (docs/notes/2026-12-02-restated-reading.md).
+                Restater(self._llm_for("restate")) if reading == "restated" else None,
             ),
             decider,
             self.ope if self.switches.ope else None,

@@ -4,8 +4,9 @@ import pytest
 
 from conceptbot.core.scene import scene_from_dict
 from conceptbot.models.fake import FakeLLM
-from conceptbot.pipeline.goal import Goal, GoalTarget, to_targets
+from conceptbot.pipeline.goal import Goal, GoalFinder, GoalReader, GoalTarget, to_targets
 from conceptbot.pipeline.goal.adapter import ScoredChooser
+from conceptbot.pipeline.goal.restate import Restater
 from conceptbot.pipeline.goal_planner.targets import ALL, TargetFinder
 from conceptbot.pipeline.hazards import is_person
 from tests.pipeline.goal.scenes import PANTRY, SHELLS, WORKSHOP
@@ -138,3 +139,28 @@ def test_several_kinds_of_thing_each_carry_what_they_are_for() -> None:
         Goal(targets=(GoalTarget("user", "criterion", (), "something to write with", 1),)), SHELLS
     )
     assert one.part == ""
+
+
+POLITE = "Oh, before I forget, would you be a dear and pop the conch shell in the shoe box?"
+
+
+def test_the_goal_finder_reads_the_model_s_plain_form_and_says_which_reading_it_took() -> None:
+    finder = GoalFinder(
+        GoalReader(),
+        TargetFinder(FakeLLM(), is_person),
+        restater=Restater(FakeLLM(["Put the conch shell in the shoe box."])),
+    )
+    read = finder.read(POLITE, SHELLS)
+    assert (read.reading, read.plain) == ("plain", "Put the conch shell in the shoe box.")
+    assert [(t.name, t.named, t.count) for t in read.targets] == [("shoe box", ["conch shell"], 1)]
+    # The words' own reading, kept in the trace: "dear" read as something wanted.
+    assert read.other is not None and len(read.other["targets"]) == 2
+    assert read.usage.calls == 1
+
+
+def test_without_a_restater_the_goal_finder_reads_the_words_alone() -> None:
+    read = GoalFinder(GoalReader(), TargetFinder(FakeLLM(), is_person)).read(
+        "Put the conch shell in the shoe box.", SHELLS
+    )
+    assert (read.reading, read.plain, read.other) == ("", "", None)
+    assert [(t.name, t.named) for t in read.targets] == [("shoe box", ["conch shell"])]

@@ -14,7 +14,14 @@ from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.conceptbot import ConceptBot
 from conceptbot.pipeline.goal_planner.decide import Decider, FactFinder
 from conceptbot.pipeline.goal_planner.planner import GoalPlanner, is_person
-from conceptbot.pipeline.goal_planner.targets import ALL, Target, TargetFinder, is_stacking, mentions
+from conceptbot.pipeline.goal_planner.targets import (
+    ALL,
+    Target,
+    TargetFinder,
+    TargetsRead,
+    is_stacking,
+    mentions,
+)
 from conceptbot.pipeline.ope import ObjectProperties, OPEResult
 from conceptbot.pipeline.retrieval import RelationRetriever
 from tests.pipeline.fakes import DictGraph, risk_reply
@@ -411,8 +418,8 @@ class FixedTargets:
     def __init__(self, targets: list[Target]) -> None:
         self.targets = targets
 
-    def read(self, request: str, scene) -> tuple[bool, list[Target], Usage]:
-        return False, list(self.targets), Usage(calls=0)
+    def read(self, request: str, scene) -> TargetsRead:
+        return TargetsRead(False, list(self.targets), Usage(calls=0))
 
 
 def test_the_rest_takes_every_object_no_other_target_took_without_being_asked_about() -> None:
@@ -444,8 +451,8 @@ class _FixedTargets:
     def __init__(self, targets: list[Target]) -> None:
         self.targets = targets
 
-    def read(self, request: str, scene: Scene) -> tuple[bool, list[Target], Usage]:
-        return False, list(self.targets), Usage(calls=0)
+    def read(self, request: str, scene: Scene) -> TargetsRead:
+        return TargetsRead(False, list(self.targets), Usage(calls=0))
 
 
 def test_two_targets_for_one_place_each_take_their_own_objects() -> None:

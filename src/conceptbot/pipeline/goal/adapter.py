@@ -38,7 +38,9 @@ from dataclasses import replace
 
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
+from conceptbot.pipeline.goal.aided import Policy, Reading, read_twice
 from conceptbot.pipeline.goal.reader import GoalReader
+from conceptbot.pipeline.goal.restate import Restater
 from conceptbot.pipeline.goal.types import ALL as GOAL_ALL
 from conceptbot.pipeline.goal.types import Goal, GoalTarget
 from conceptbot.pipeline.goal_planner.targets import (
@@ -47,6 +49,7 @@ from conceptbot.pipeline.goal_planner.targets import (
     CONTENT_FREE_REQUEST,
     Target,
     TargetFinder,
+    TargetsRead,
 )
 
 #: Chooses the destinations of a target whose goal names none: ``(destination, score)`` pairs, best
@@ -198,6 +201,9 @@ class GoalFinder:
         dish_concept: The graph's concept for the dish the request names in its own words ("a
             hollandaise sauce" -> "hollandaise"), so that its definition can be found; None: the
             words, lower case.
+        restater: Says the request plainly first, and the rules read both (:mod:`.aided`, with
+            ``policy``); None: the rules read the words alone.
+        policy: Which reading wins where the two differ (:data:`~conceptbot.pipeline.goal.aided.POLICIES`).
     """
 
     def __init__(
@@ -205,22 +211,45 @@ class GoalFinder:
         reader: GoalReader,
         finder: TargetFinder,
         dish_concept: Callable[[str, Sequence[str]], str | None] | None = None,
+        restater: Restater | None = None,
+        policy: Policy = "grounded",
     ) -> None:
         self.reader = reader
         self.finder = finder
         self.dish_concept = dish_concept
+        self.restater = restater
+        self.policy = policy
 
-    def read(self, request: str, scene: Scene) -> tuple[bool, list[Target], Usage]:
+    def read(self, request: str, scene: Scene) -> TargetsRead:
         """Whether the request asks for a pile, its targets, and the model calls made."""
         started = time.perf_counter()
-        goal = read_plainly(self.reader, request, scene)
+        reading = Reading(Goal(), Goal())
+        if self.restater is None:
+            goal = read_plainly(self.reader, request, scene)
+        else:
+            reading = read_twice(
+                lambda text, seen: read_plainly(self.reader, text, seen),
+                self.restater,
+                request,
+                scene,
+                self.policy,
+            )
+            goal = reading.goal
         if goal.dish:
             found = self.dish_concept
             concept = found(goal.dish, scene.pickable) if found is not None else None
             goal = replace(goal, dish=concept or goal.dish.lower())
         chooser = ScoredChooser(self.finder, request, goal.dish or "")
         targets = to_targets(goal, scene, choose=chooser)
-        return goal.stack, targets, chooser.usage.with_latency(time.perf_counter() - started)
+        usage = (chooser.usage + reading.usage).with_latency(time.perf_counter() - started)
+        if self.restater is None:
+            return TargetsRead(goal.stack, targets, usage)
+        other = None
+        if reading.doubtful:
+            other = (
+                reading.words if reading.source == "plain" else reading.restated or reading.words
+            ).to_dict()
+        return TargetsRead(goal.stack, targets, usage, reading.plain, reading.source, other)
 
 
 def _plain(name: str) -> str:

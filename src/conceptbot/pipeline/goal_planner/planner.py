@@ -59,7 +59,7 @@ from conceptbot.pipeline.affordance import Gripper, affordance
 from conceptbot.pipeline.goal_planner.asking import clarify, is_sort, move_words
 from conceptbot.pipeline.goal_planner.conformal import Calibration, shipped
 from conceptbot.pipeline.goal_planner.decide import Decider, Judgement
-from conceptbot.pipeline.goal_planner.targets import ALL, Target, mentions
+from conceptbot.pipeline.goal_planner.targets import ALL, Target, TargetsRead, mentions
 from conceptbot.pipeline.hazards import HazardCheck, is_person, is_vulnerable
 from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
 from conceptbot.pipeline.ope_answers import RiskIndex
@@ -71,7 +71,7 @@ METHOD = "decide"
 class TargetReader(Protocol):
     """Reads a request's goal for the planner (``GoalFinder``, or the word rules' ``TargetFinder``)."""
 
-    def read(self, request: str, scene: Scene) -> tuple[bool, list[Target], Usage]:
+    def read(self, request: str, scene: Scene) -> TargetsRead:
         """Whether the request asks for a pile, its targets (none for a pile), and the model calls."""
         ...
 
@@ -249,8 +249,9 @@ class GoalPlanner:
         usage: dict[str, Usage] = {}
         observer.progress("Goal: where the request sends things")
         # A pile has no destination of its own (the objects are the destinations): no targets.
-        stack, targets, usage["goal"] = self.targets.read(request, scene)
-        goal = GoalTrace(tuple(target_trace(t) for t in targets), stack)
+        read = self.targets.read(request, scene)
+        stack, targets, usage["goal"] = read.stack, read.targets, read.usage
+        goal = GoalTrace(tuple(target_trace(t) for t in targets), stack, read.plain, read.reading, read.other)
         observer.event("goal", goal)
         ranked, decisions, usage["decide"] = self._decide(request, scene, targets, stack, observer)
         # How the backend scored this plan's questions, for the steps: kept per plan (the planner

@@ -190,6 +190,28 @@ class Target:
         }
 
 
+@dataclass(frozen=True)
+class TargetsRead:
+    """A request's goal as the goal planner takes it (what a ``TargetReader`` returns).
+
+    Attributes:
+        stack: The request asks for a pile (no targets then).
+        targets: Where things go, in the request's order.
+        usage: The model calls made to read it.
+        plain: The model's plain form of the request, where it was said plainly (else "").
+        reading: Which reading the targets are: ``words`` (the rules on the request's words),
+            ``plain`` (on the plain form), ``both`` (the two agree), or "" (only the words read).
+        other: The reading not taken where the two differ, as goal-set JSON (else None).
+    """
+
+    stack: bool
+    targets: list[Target]
+    usage: Usage
+    plain: str = ""
+    reading: str = ""
+    other: dict | None = None
+
+
 class TargetFinder:
     """Targets, counts and named objects for a request (see the module docstring).
 
@@ -233,12 +255,12 @@ class TargetFinder:
         yes, no = scored.logprobs
         return yes - no, scored.usage
 
-    def read(self, request: str, scene: Scene) -> tuple[bool, list[Target], Usage]:
+    def read(self, request: str, scene: Scene) -> TargetsRead:
         """Whether the request asks for a pile, and (unless it does) its targets (:meth:`find`)."""
         if is_stacking(request):
-            return True, [], Usage(calls=0)
+            return TargetsRead(True, [], Usage(calls=0))
         targets, usage = self.find(request, scene)
-        return False, targets, usage
+        return TargetsRead(False, targets, usage)
 
     def find(self, request: str, scene: Scene) -> tuple[list[Target], Usage]:
         """The targets, in the order the request names them (scored ones best first)."""

@@ -181,6 +181,11 @@ function showGoal(goal) {
     `${t.dish ? ", a dish the graph knows: " + t.dish : ""}${t.rest ? ", the rest" : ""}` +
     `${t.part ? ", " + t.part : ""})`)));
   if (goal.stack) $("targets").append(el("li", {}, "stack the objects"));
+  // Where the model said the request plainly first (pipeline/goal/aided.py), which reading won.
+  const readings = {both: "its own words read the same", plain: "read from this plain form",
+                    words: "read from its own words; this plain form read otherwise"};
+  if (goal.reading) $("targets").append(el("li", {class: "plain"},
+    `said plainly by the model: “${goal.plain}” (${readings[goal.reading]})`));
 }
 
 function showDecisions(decisions) {

@@ -1,0 +1,157 @@
+"""How often the goal is read right when the model first says the request plainly
+(``pipeline/goal/restate.py``), against the rules reading the request's own words, on rounds of
+the goal set (``benchmarks/data/goal_set.json``).
+
+For each request it records the rules' reading of the words, the model's plain form and the rules'
+reading of that, each compared with the gold (exact match, :func:`conceptbot.pipeline.goal.same_goal`),
+and prints per round: each reading's accuracy, how often the two agree and how often they are right
+when they do, how often the gold is one of the two (what a question choosing between them can reach),
+and each of :mod:`conceptbot.pipeline.goal.aided`'s policies.
+
+The rows go to ``--out`` (JSON lines) as they are read; a second run skips rows already there and
+read with the same prompt (its hash is part of each row's key), so a long run resumes. The model's
+calls go through the answer cache.
+
+    .venv/bin/python benchmarks/bench_restated_reading.py --rounds 9 10 --out results/restate/dev.jsonl
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from bench_goal_reading import GOAL_SET, graph_reader
+from conceptbot.bench.grading import load_dev_scene
+from conceptbot.core.config import load_settings
+from conceptbot.models.registry import open_llm
+from conceptbot.pipeline import prompts
+from conceptbot.pipeline.goal import Goal, GoalReader, same_goal
+from conceptbot.pipeline.goal.aided import POLICIES, choose
+from conceptbot.pipeline.goal.restate import Restater
+
+
+def _key(row: dict[str, Any]) -> str:
+    return f"{row['task']}|{row.get('round', 0)}|{row['request']}|{PROMPT}"
+
+
+def _prompt_version() -> str:
+    """The restating prompt's hash: rows read with another prompt are read again."""
+    text = prompts.render("restate_system") + prompts.fill("restate_user", request="")
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:12]
+
+
+PROMPT = _prompt_version()
+
+
+def read_rows(rows: Sequence[dict[str, Any]], out: Path, reader: GoalReader, restater: Restater) -> None:
+    """Read each row not yet in ``out`` and append its record."""
+    done = set()
+    if out.exists():
+        done = {json.loads(line)["key"] for line in out.read_text(encoding="utf-8").splitlines() if line}
+    todo = [r for r in rows if _key(r) not in done]
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with out.open("a", encoding="utf-8") as sink:
+        for i, row in enumerate(todo, 1):
+            scene = load_dev_scene(row["scene"])
+            gold = Goal.from_dict(row["goal"])
+            started = time.perf_counter()
+            words = reader.read(row["request"], scene)
+            said = restater.restate(row["request"])
+            plain = reader.read(said.text, scene) if said.text else None
+            record = {
+                "key": _key(row),
+                "task": row["task"],
+                "round": row.get("round", 0),
+                "request": row["request"],
+                "plain": said.text,
+                "problem": said.problem,
+                "words_goal": words.to_dict(),
+                "plain_goal": plain.to_dict() if plain else None,
+                "gold": row["goal"],
+                "words_ok": same_goal(words, gold).ok,
+                "plain_ok": plain is not None and same_goal(plain, gold).ok,
+                "agree": plain is not None and same_goal(words, plain).ok,
+                "seconds": round(time.perf_counter() - started, 2),
+                "model_calls": said.usage.calls,
+            }
+            sink.write(json.dumps(record) + "\n")
+            sink.flush()
+            print(f"\r{i}/{len(todo)} read", end="", file=sys.stderr, flush=True)
+    if todo:
+        print(file=sys.stderr)
+
+
+def report(records: Sequence[dict[str, Any]]) -> None:
+    """Print the figures per round."""
+    rounds = sorted({r["round"] for r in records})
+    names = list(POLICIES)
+    print(f"{'round':>6} {'n':>4} {'words':>7} {'plain':>7} {'agree':>7} {'ok|agr':>7} {'either':>7} "
+          + " ".join(f"{n:>9}" for n in names))  # fmt: skip
+
+    def line(label: str, rows: list[dict[str, Any]]) -> None:
+        n = len(rows)
+        agree = [r for r in rows if r["agree"]]
+        cells = [
+            sum(r["words_ok"] for r in rows) / n,
+            sum(r["plain_ok"] for r in rows) / n,
+            len(agree) / n,
+            (sum(r["words_ok"] for r in agree) / len(agree)) if agree else 0.0,
+            sum(r["words_ok"] or r["plain_ok"] for r in rows) / n,
+        ]
+        for name in names:
+            cells.append(sum(_policy_ok(r, name) for r in rows) / n)
+        print(f"{label:>6} {n:>4} " + " ".join(f"{100 * c:6.1f}%" for c in cells[:5]) + " "
+              + " ".join(f"{100 * c:8.1f}%" for c in cells[5:]))  # fmt: skip
+
+    for number in rounds:
+        line(str(number) if number else "orig", [r for r in records if r["round"] == number])
+    line("all", list(records))
+
+
+def _policy_ok(record: dict[str, Any], policy: str) -> bool:
+    words = Goal.from_dict(record["words_goal"])
+    plain = Goal.from_dict(record["plain_goal"]) if record["plain_goal"] else None
+    chosen = choose(words, plain, policy, record["request"], record["plain"]).goal
+    return same_goal(chosen, Goal.from_dict(record["gold"])).ok
+
+
+def main() -> None:
+    """Read the chosen rounds and print the figures (and, with --failures, the misread rows)."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rounds", nargs="+", type=int, required=True, help="0 for the originals")
+    parser.add_argument("--out", type=Path, required=True, help="JSON lines, resumed")
+    parser.add_argument("--no-graph", action="store_true", help="read without the graph's dish checks")
+    parser.add_argument("--failures", choices=["words", "plain", "both", "none"], default="none")
+    parser.add_argument("--limit", type=int, default=0, help="read only the first N rows of each round")
+    args = parser.parse_args()
+    rows = json.loads(GOAL_SET.read_text(encoding="utf-8"))["requests"]
+    chosen: list[dict[str, Any]] = []
+    for number in args.rounds:
+        these = [r for r in rows if r.get("round", 0) == number]
+        chosen += these[: args.limit] if args.limit else these
+    reader = GoalReader() if args.no_graph else graph_reader()
+    restater = Restater(open_llm(load_settings(), module="restate"))
+    read_rows(chosen, args.out, reader, restater)
+    keys = {_key(r) for r in chosen}
+    records = [json.loads(x) for x in args.out.read_text(encoding="utf-8").splitlines() if x]
+    records = [r for r in records if r["key"] in keys]
+    report(records)
+    for record in records:
+        wrong = (args.failures in ("words", "both") and not record["words_ok"]) or (
+            args.failures in ("plain", "both") and not record["plain_ok"]
+        )
+        if wrong:
+            print(f"\n{record['task']} [{record['round']}] {record['request']}\n  plain: {record['plain']}"
+                  f"\n  words {'ok' if record['words_ok'] else 'WRONG'}: {json.dumps(record['words_goal'])}"
+                  f"\n  plain {'ok' if record['plain_ok'] else 'WRONG'}: {json.dumps(record['plain_goal'])}"
+                  f"\n  gold: {json.dumps(record['gold'])}")  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,165 @@
+"""Reading a request twice: the rules on its own words, and the rules on the model's plain form of it.
+
+:class:`AidedReader` reads the words with :class:`~conceptbot.pipeline.goal.reader.GoalReader`, has
+:class:`~conceptbot.pipeline.goal.restate.Restater` say the request plainly, reads that too, and
+:func:`choose` decides between the two readings by a policy (:data:`POLICIES`, measured on the goal
+set by ``benchmarks/bench_restated_reading.py``). Where the two disagree the reading is in doubt;
+:class:`Reading` keeps both, so the planner can ask which was meant.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import Literal
+
+from conceptbot.core.scene import Scene
+from conceptbot.core.usage import Usage
+from conceptbot.pipeline.goal.compare import same_goal, words
+from conceptbot.pipeline.goal.reader import GoalReader
+from conceptbot.pipeline.goal.restate import Restater
+from conceptbot.pipeline.goal.types import Goal
+
+Policy = Literal["words", "plain", "grounded"]
+#: The policies :func:`choose` knows, for the benchmark's table.
+POLICIES: tuple[Policy, ...] = ("words", "plain", "grounded")
+#: Targets whose place may be left open by any reading: the planner chooses it.
+OPEN = frozenset({"need", "ingredients"})
+
+
+@dataclass(frozen=True)
+class Reading:
+    """A request's goal, read from its words and from the model's plain form.
+
+    Attributes:
+        goal: The reading chosen.
+        words: The rules' reading of the request's own words.
+        plain: The model's plain form ("" when there is none).
+        restated: The rules' reading of the plain form, or None.
+        source: Which reading ``goal`` is: ``words``, ``plain`` or ``both`` (they agree).
+        usage: The model's calls.
+    """
+
+    goal: Goal
+    words: Goal
+    plain: str = ""
+    restated: Goal | None = None
+    source: Literal["words", "plain", "both"] = "words"
+    usage: Usage = field(default_factory=lambda: Usage(calls=0))
+
+    @property
+    def doubtful(self) -> bool:
+        """The two readings differ: which one the person meant is a question."""
+        return self.restated is not None and self.source != "both"
+
+
+def choose(own: Goal, restated: Goal | None, policy: Policy, request: str = "", plain: str = "") -> Reading:
+    """The reading ``policy`` picks from the words' (``own``) and the plain form's (``restated``,
+    read from the text ``plain``), without text or usage. ``words`` and ``plain`` always take that
+    one; ``grounded`` (which needs ``request`` and ``plain``), in this order:
+
+    1. Where the two differ only in a criterion's wording: the person's own words.
+    2. Where both read needs only: the words (the model drops one of two statements).
+    3. Where one reads a need and the other a command that is not :func:`ungrounded`: the command
+       ("It'd be lovely if the teddy bear were back in the toy chest" is a wish the rules take for
+       a statement; "Heat up the leftovers" said as "make the leftovers hot" is not a need).
+       Where the command is ungrounded, the need ("Give me the splinter" for "I've got a splinter").
+    4. Where the plain form's targets are some of the words' and the words are not ungrounded: the
+       words (the model left one out).
+    5. Otherwise the reading with fewer signs of being made up (:func:`ungrounded`, and a criterion
+       the plain form dropped where the words keep one for the same place: "put everything in the
+       basket" for "all the clothing"), the plain form on a tie: the model reads talk better than
+       the rules where both stay within the request.
+    """
+    if restated is None:
+        return Reading(own, own)
+    if same_goal(own, restated).ok:
+        return Reading(own, own, restated=restated, source="both")
+    taken = Reading(restated, own, restated=restated, source="plain")
+    kept = Reading(own, own, restated=restated, source="words")
+    if policy != "grounded":
+        return taken if policy == "plain" else kept
+    if same_goal(_shape(own), _shape(restated)).ok:
+        return kept
+    mine, theirs = ungrounded(own, request, request), ungrounded(restated, request, plain)
+    own_need, plain_need = _needs(own), _needs(restated)
+    if own_need and plain_need:
+        return kept
+    if own_need or plain_need:
+        command_ok = not (theirs if own_need else mine)
+        return (taken if own_need else kept) if command_ok else (kept if own_need else taken)
+    if set(restated.targets) < set(own.targets) and not mine:
+        return kept
+    criteria = {t.to for t in own.targets if t.takes == "criterion" and t.criterion}
+    theirs += [
+        f"dropped the criterion for {t.to}" for t in restated.targets if t.takes == "all" and t.to in criteria
+    ]
+    return taken if len(theirs) <= len(mine) else kept
+
+
+def ungrounded(goal: Goal, request: str, text: str) -> list[str]:
+    """What in ``goal``, read from ``text``, the request does not bear out:
+
+    * a target of things with no place (the place the plain form named is not the scene's: "put
+      the splinter in the trash");
+    * a criterion or dish with words the request does not have ("the toast in the toaster");
+    * one thing that the text calls "the" and the scene does not have: the rules found no such
+      object, so the model made a thing of the statement ("Give me the jam" for "I've got jam all
+      over my fingers");
+    * the same criterion twice ("Give me a game. Put it on the table.").
+    """
+    said = set(words(request))
+    lowered = " ".join(text.lower().split())
+    found = [f"no place for {t.criterion or ', '.join(t.named) or t.takes}" for t in goal.targets
+             if t.to is None and t.takes not in OPEN]  # fmt: skip
+    found += [f"not said: {t.criterion}" for t in goal.targets
+              if t.takes != "need" and set(words(t.criterion)) - said]  # fmt: skip
+    definite = [t for t in goal.targets if t.takes == "criterion" and t.count == 1]
+    found += [f"no {t.criterion} here" for t in definite if f"the {t.criterion.lower()}" in lowered]
+    criteria = [t.criterion for t in goal.targets if t.takes == "criterion" and t.criterion]
+    found += [
+        f"twice: {c}" for c in sorted(set(criteria)) if criteria.count(c) > 1 and not c.startswith("by ")
+    ]
+    if goal.dish and set(words(goal.dish)) - said:
+        found.append(f"not said: {goal.dish}")
+    return found
+
+
+def _needs(goal: Goal) -> bool:
+    """The goal is needs only."""
+    return bool(goal.targets) and all(t.takes == "need" for t in goal.targets)
+
+
+def _shape(goal: Goal) -> Goal:
+    """The goal without its criteria's words."""
+    return replace(goal, targets=tuple(replace(t, criterion="") for t in goal.targets))
+
+
+class AidedReader:
+    """Reads a request's goal from its words and from the model's plain form (see the module).
+
+    Args:
+        reader: The rules.
+        restater: The model's plain form.
+        policy: Which reading wins where they differ.
+    """
+
+    def __init__(self, reader: GoalReader, restater: Restater, policy: Policy = "grounded") -> None:
+        self.reader = reader
+        self.restater = restater
+        self.policy = policy
+
+    def read(self, request: str, scene: Scene) -> Reading:
+        """Both readings of ``request`` and the one chosen."""
+        return read_twice(self.reader.read, self.restater, request, scene, self.policy)
+
+
+def read_twice(
+    read: Callable[[str, Scene], Goal], restater: Restater, request: str, scene: Scene, policy: Policy
+) -> Reading:
+    """``read`` on the request's words and on ``restater``'s plain form, and ``policy``'s choice."""
+    own = read(request, scene)
+    said = restater.restate(request)
+    restated = read(said.text, scene) if said.text else None
+    chosen = choose(own, restated, policy, request, said.text)
+    return replace(chosen, plain=said.text, usage=said.usage)
