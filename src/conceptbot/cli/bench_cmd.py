@@ -19,7 +19,7 @@ from conceptbot.cli.bench_options import (
     workers_option,
 )
 from conceptbot.cli.context import AppContext, pass_app
-from conceptbot.cli.params import FiniteFloatRange
+from conceptbot.cli.params import FiniteFloatRange, reading_option
 from conceptbot.core.system import SystemOptions
 from conceptbot.models.registry import scoring_method
 from conceptbot.systems import SYSTEMS, build_system
@@ -67,6 +67,7 @@ def bench() -> None:
 )
 @click.option("--seed", default=0, show_default=True, type=int, help="Base seed (trial i uses seed + i).")
 @workers_option
+@reading_option
 @click.option(
     "--out",
     type=click.Path(dir_okay=False, path_type=Path),
@@ -84,6 +85,7 @@ def run_cmd(
     temperature: float,
     seed: int,
     workers: int,
+    reading: str,
     out: Path | None,
 ) -> None:
     """Plan and grade every task of the split with each configuration; results go to --out."""
@@ -100,7 +102,7 @@ def run_cmd(
     jobs = [Job(t, c, i) for t in tasks for c in configs for i in range(trials)]
 
     def system(config: str):
-        return build_system(settings, config, SystemOptions(n=5))  # SayCan ignores the options
+        return build_system(settings, config, SystemOptions(n=5, reading=reading))  # SayCan ignores them
 
     todo = len(pending(jobs, out, backend, model, RESULT_KEY))
     scoring = scoring_method(settings) if todo else ""

@@ -1,11 +1,14 @@
-"""Option types shared by the commands."""
+"""Option types and options shared by the commands."""
 
 from __future__ import annotations
 
 import math
-from typing import Any
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 import click
+
+F = TypeVar("F", bound=Callable[..., object])
 
 
 class FiniteFloatRange(click.FloatRange):
@@ -23,3 +26,15 @@ class FiniteFloatRange(click.FloatRange):
         if not math.isfinite(number):
             self.fail(f"{number} is not a finite number.", param, ctx)
         return number
+
+
+def reading_option(command: F) -> F:
+    """Add ``--reading``: how the goal planner reads a request (``SystemOptions.reading``)."""
+    return click.option(
+        "--reading",
+        type=click.Choice(["restated", "words"]),
+        default="restated",
+        show_default=True,
+        help="How the goal planner reads the request: restated (the model says it plainly first and "
+        "the better of the two readings is kept; one more model call) or words (the rules alone).",
+    )(command)

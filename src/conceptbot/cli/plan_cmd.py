@@ -10,7 +10,7 @@ from rich.console import Console
 from rich.table import Table
 
 from conceptbot.cli.context import AppContext, pass_app
-from conceptbot.cli.params import FiniteFloatRange
+from conceptbot.cli.params import FiniteFloatRange, reading_option
 from conceptbot.cli.progress import ON_STDERR
 from conceptbot.cli.richtext import line, plain
 from conceptbot.core.limits import check_request
@@ -75,6 +75,7 @@ from conceptbot.systems import SYSTEMS, build_system
     help="How often a decision's prediction set must hold the right answer (higher asks more; "
     "1: ask about every calibrated decision).",
 )
+@reading_option
 @pass_app
 def plan(
     app: AppContext,
@@ -89,12 +90,13 @@ def plan(
     as_json: bool,
     ask: bool | None,
     coverage: str,
+    reading: str,
 ) -> None:
     """Plan REQUEST in a scene; print properties, relations, reasoning, step scores and the plan."""
     request = check_request(request)  # first: bad input is the first error; the system takes it as checked
     scene = resolve_scene(scene_ref)
     options = SystemOptions(
-        theta=theta, planner_method=method, n=n, fallback=fallback, coverage=float(coverage)
+        theta=theta, planner_method=method, n=n, fallback=fallback, coverage=float(coverage), reading=reading
     )  # SayCan has none
     bot = build_system(app.settings, config, options)
     interactive = sys.stdin.isatty() and sys.stderr.isatty() and not as_json

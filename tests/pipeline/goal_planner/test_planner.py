@@ -400,6 +400,18 @@ def test_a_stack_puts_fragile_things_on_top_and_wide_things_low() -> None:
     ]
 
 
+def test_conceptbot_reads_the_model_s_plain_form_and_traces_both_readings() -> None:
+    llm = FakeLLM(["Put the glue on the table."], scores=[PRIOR, UNSAFE])
+    bot = ConceptBot(llm, RelationRetriever(DictGraph(), FakeEmbedder(), theta=0.1), "urp", planner="goal")
+    plan = bot.plan("Oh, before I forget, would you be a dear and pop the glue on the table?", SCENE)
+    goal = plan.to_dict()["trace"]["goal"]
+    assert (goal["plain"], goal["reading"]) == ("Put the glue on the table.", "plain")
+    assert [(t["to"], t["named"]) for t in goal["targets"]] == [("table", ["glue"])]
+    # The words' own reading, not taken: "dear" as a thing wanted, besides the glue.
+    assert len(goal["other"]["targets"]) == 2
+    assert "Plain:" in llm.requests[0].messages[-1].content
+
+
 def test_conceptbot_uses_the_goal_planner_when_asked() -> None:
     llm = FakeLLM(scores=[PRIOR, UNSAFE])
     bot = ConceptBot(llm, RelationRetriever(DictGraph(), FakeEmbedder(), theta=0.1), "urp", planner="goal")
