@@ -13,6 +13,10 @@ read with the same prompt (its hash is part of each row's key), so a long run re
 calls go through the answer cache.
 
     .venv/bin/python benchmarks/bench_restated_reading.py --rounds 9 10 --out results/restate/dev.jsonl
+
+``--changed test|dev`` instead lists the split's tasks whose goal the restated reading changes (with
+the graph's dish checks, and without them, as the no-graph ablation reads), so that only those are
+planned again: it reads no gold and tunes nothing.
 """
 
 from __future__ import annotations
@@ -27,12 +31,12 @@ from pathlib import Path
 from typing import Any
 
 from bench_goal_reading import GOAL_SET, graph_reader
-from conceptbot.bench.grading import load_dev_scene
+from conceptbot.bench.grading import load_dev_scene, load_tasks, task_scene
 from conceptbot.core.config import load_settings
 from conceptbot.models.registry import open_llm
 from conceptbot.pipeline import prompts
 from conceptbot.pipeline.goal import Goal, GoalReader, same_goal
-from conceptbot.pipeline.goal.aided import POLICIES, choose
+from conceptbot.pipeline.goal.aided import POLICIES, AidedReader, choose
 from conceptbot.pipeline.goal.restate import Restater
 
 
@@ -121,15 +125,32 @@ def _policy_ok(record: dict[str, Any], policy: str) -> bool:
     return same_goal(chosen, Goal.from_dict(record["gold"])).ok
 
 
+def changed(split: str, restater: Restater) -> None:
+    """Print, per reader (graph, no graph), the tasks of ``split`` whose goal reads differently."""
+    readers = {"graph": graph_reader(), "no graph": GoalReader()}
+    for task in load_tasks(split=split):
+        scene = task_scene(task)
+        for name, reader in readers.items():
+            reading = AidedReader(reader, restater).read(task.request, scene)
+            if not same_goal(reading.goal, reading.words).ok:
+                print(f"{name}\t{task.id}\t{task.request}\t{reading.plain}")
+
+
 def main() -> None:
     """Read the chosen rounds and print the figures (and, with --failures, the misread rows)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rounds", nargs="+", type=int, required=True, help="0 for the originals")
-    parser.add_argument("--out", type=Path, required=True, help="JSON lines, resumed")
+    parser.add_argument("--rounds", nargs="+", type=int, default=[], help="0 for the originals")
+    parser.add_argument("--out", type=Path, help="JSON lines, resumed")
+    parser.add_argument("--changed", choices=["test", "dev"], help="list the tasks whose reading changes")
     parser.add_argument("--no-graph", action="store_true", help="read without the graph's dish checks")
     parser.add_argument("--failures", choices=["words", "plain", "both", "none"], default="none")
     parser.add_argument("--limit", type=int, default=0, help="read only the first N rows of each round")
     args = parser.parse_args()
+    if args.changed:
+        changed(args.changed, Restater(open_llm(load_settings(), module="restate")))
+        return
+    if not args.rounds or args.out is None:
+        parser.error("--rounds and --out are needed (or --changed)")
     rows = json.loads(GOAL_SET.read_text(encoding="utf-8"))["requests"]
     chosen: list[dict[str, Any]] = []
     for number in args.rounds:

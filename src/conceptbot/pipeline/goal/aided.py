@@ -64,8 +64,8 @@ def choose(own: Goal, restated: Goal | None, policy: Policy, request: str = "", 
        ("It'd be lovely if the teddy bear were back in the toy chest" is a wish the rules take for
        a statement; "Heat up the leftovers" said as "make the leftovers hot" is not a need).
        Where the command is ungrounded, the need ("Give me the splinter" for "I've got a splinter").
-    4. Where the plain form's targets are some of the words' and the words are not ungrounded: the
-       words (the model left one out).
+    4. Where the words are not ungrounded and the plain form's targets are some of theirs (the
+       model left one out), or it sends an object the words name to another place: the words.
     5. Otherwise the reading with fewer signs of being made up (:func:`ungrounded`, and a criterion
        the plain form dropped where the words keep one for the same place: "put everything in the
        basket" for "all the clothing"), the plain form on a tie: the model reads talk better than
@@ -89,6 +89,8 @@ def choose(own: Goal, restated: Goal | None, policy: Policy, request: str = "", 
         command_ok = not (theirs if own_need else mine)
         return (taken if own_need else kept) if command_ok else (kept if own_need else taken)
     if set(restated.targets) < set(own.targets) and not mine:
+        return kept
+    if _moved_elsewhere(own, restated) and not mine:
         return kept
     criteria = {t.to for t in own.targets if t.takes == "criterion" and t.criterion}
     theirs += [
@@ -123,6 +125,14 @@ def ungrounded(goal: Goal, request: str, text: str) -> list[str]:
     if goal.dish and set(words(goal.dish)) - said:
         found.append(f"not said: {goal.dish}")
     return found
+
+
+def _moved_elsewhere(own: Goal, restated: Goal) -> bool:
+    """The plain form sends an object the words name to another of the scene's places ("give me
+    the honey jar" said as "put the honey jar in the cutting board"): the model mixed up which
+    place goes with which."""
+    placed = {n: t.to for t in own.targets if t.to for n in t.named}
+    return any(t.to and placed.get(n, t.to) != t.to for t in restated.targets for n in t.named)
 
 
 def _needs(goal: Goal) -> bool:
