@@ -2,8 +2,8 @@ from __future__ import annotations
 
 from conceptbot.core.errors import BackendRequestError
 from conceptbot.models.fake import FakeLLM
-from conceptbot.pipeline.goal import GoalReader, GoalTarget
-from conceptbot.pipeline.goal.aided import AidedReader
+from conceptbot.pipeline.goal import Goal, GoalReader, GoalTarget
+from conceptbot.pipeline.goal.aided import AidedReader, choose
 from conceptbot.pipeline.goal.restate import Restater
 from tests.pipeline.goal.scenes import SHELLS
 
@@ -36,3 +36,44 @@ def test_without_a_plain_form_the_words_are_read_alone() -> None:
     reading = _aided(BackendRequestError("timed out")).read("Put the conch shell in the shoe box.", SHELLS)
     assert reading.restated is None and reading.source == "words" and not reading.doubtful
     assert reading.goal.targets == (GoalTarget("shoe box", "named", ("conch shell",), "", 1),)
+
+
+NEED = Goal(need="I've got a splinter in my finger", targets=(GoalTarget(None, "need"),))
+
+
+def test_a_need_stays_where_the_plain_command_makes_a_thing_of_it() -> None:
+    request = "I've got a splinter in my finger."
+    made_up = Goal(targets=(GoalTarget("user", "criterion", (), "splinter", 1),))
+    assert choose(NEED, made_up, "grounded", request, "Give me the splinter.").source == "words"
+    trashed = Goal(targets=(GoalTarget(None, "criterion", (), "splinter in the trash", 1),))
+    assert choose(NEED, trashed, "grounded", request, "Put the splinter in the trash.").source == "words"
+
+
+def test_a_grounded_command_wins_over_a_need_the_rules_fell_back_to() -> None:
+    request = "It'd be lovely if the conch shell were back in the shoe box."
+    command = Goal(targets=(GoalTarget("shoe box", "named", ("conch shell",), "", 1),))
+    plain = "Put the conch shell in the shoe box."
+    assert choose(NEED, command, "grounded", request, plain).source == "plain"
+
+
+def test_the_words_stay_where_the_plain_form_drops_or_moves_what_they_place() -> None:
+    request = "Put the conch shell in the shoe box and pass me the sand dollar."
+    own = Goal(
+        targets=(
+            GoalTarget("shoe box", "named", ("conch shell",), "", 1),
+            GoalTarget("user", "named", ("sand dollar",), "", 1),
+        )
+    )
+    dropped = Goal(targets=own.targets[:1])
+    assert choose(own, dropped, "grounded", request, "Put the conch shell in the shoe box.").source == "words"
+    moved = Goal(targets=(GoalTarget("shoe box", "named", ("conch shell", "sand dollar"), "", 2),))
+    plain = "Put the conch shell in the shoe box. Put the sand dollar in the shoe box."
+    assert choose(own, moved, "grounded", request, plain).source == "words"
+
+
+def test_only_a_criterion_s_wording_differing_keeps_the_person_s_words() -> None:
+    request = "have you got something I could dry them with?"
+    own = Goal(targets=(GoalTarget("user", "criterion", (), "something I could dry them with", 1),))
+    other = Goal(targets=(GoalTarget("user", "criterion", (), "something to dry my hands with", 1),))
+    said = "Give me something to dry my hands with."
+    assert choose(own, other, "grounded", request, said).source == "words"
