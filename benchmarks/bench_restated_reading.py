@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import hashlib
+import importlib.util
 import json
 import sys
 import time
@@ -30,7 +31,6 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from bench_goal_reading import GOAL_SET, graph_reader
 from conceptbot.bench.grading import load_dev_scene, load_tasks, task_scene
 from conceptbot.core.config import load_settings
 from conceptbot.models.registry import open_llm
@@ -38,6 +38,20 @@ from conceptbot.pipeline import prompts
 from conceptbot.pipeline.goal import Goal, GoalReader, same_goal
 from conceptbot.pipeline.goal.aided import POLICIES, AidedReader, choose
 from conceptbot.pipeline.goal.restate import Restater
+
+
+def _sibling(name: str) -> Any:
+    """A sibling benchmark script as a module (the scripts are not a package)."""
+    spec = importlib.util.spec_from_file_location(name, Path(__file__).with_name(f"{name}.py"))
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+_GOAL_BENCH = _sibling("bench_goal_reading")
+GOAL_SET: Path = _GOAL_BENCH.GOAL_SET
+graph_reader = _GOAL_BENCH.graph_reader
 
 
 def _key(row: dict[str, Any]) -> str:

@@ -249,7 +249,9 @@ class GoalFinder:
             other = (
                 reading.words if reading.source == "plain" else reading.restated or reading.words
             ).to_dict()
-        return TargetsRead(goal.stack, targets, usage, reading.plain, reading.source, other)
+        # No plain form (the model failed or said nothing): the words alone were read, as without one.
+        source = reading.source if reading.restated is not None else ""
+        return TargetsRead(goal.stack, targets, usage, reading.plain, source, other)
 
 
 def _plain(name: str) -> str:
