@@ -28,7 +28,6 @@ from __future__ import annotations
 import argparse
 import json
 from collections.abc import Sequence
-from dataclasses import replace
 from pathlib import Path
 
 from conceptbot.bench.grading import load_dev_scene
@@ -39,6 +38,7 @@ from conceptbot.models.fake import FakeLLM
 from conceptbot.models.registry import open_embedder
 from conceptbot.pipeline.goal import ALL as GOAL_ALL
 from conceptbot.pipeline.goal import Goal, GoalReader, GoalTarget, same_goal
+from conceptbot.pipeline.goal.compare import structure
 from conceptbot.pipeline.goal_planner.decide import FactFinder
 from conceptbot.pipeline.goal_planner.targets import ALL, Target, TargetFinder, is_stacking
 from conceptbot.pipeline.hazards import is_person
@@ -99,11 +99,6 @@ def graph_reader() -> GoalReader:
     return GoalReader(is_dish=facts.may_be_dish, find_dish=facts.dish_concept)
 
 
-def _structure(goal: Goal) -> Goal:
-    """The goal without its criteria's words."""
-    return replace(goal, targets=tuple(replace(t, criterion="") for t in goal.targets))
-
-
 def main() -> None:
     """Print the figures and the failures."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -129,7 +124,7 @@ def main() -> None:
         }
         for who, read in reads.items():
             match = same_goal(read, gold)
-            shape = same_goal(_structure(read), _structure(gold))
+            shape = same_goal(structure(read), structure(gold))
             counts = tally.setdefault((who, group), [0, 0, 0])
             counts[0] += match.ok
             counts[1] += shape.ok

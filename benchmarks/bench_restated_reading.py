@@ -141,11 +141,14 @@ def _policy_ok(record: dict[str, Any], policy: str) -> bool:
 
 def changed(split: str, restater: Restater) -> None:
     """Print, per reader (graph, no graph), the tasks of ``split`` whose goal reads differently."""
-    readers = {"graph": graph_reader(), "no graph": GoalReader()}
+    readers = {
+        "graph": AidedReader(graph_reader(), restater),
+        "no graph": AidedReader(GoalReader(), restater),
+    }
     for task in load_tasks(split=split):
         scene = task_scene(task)
         for name, reader in readers.items():
-            reading = AidedReader(reader, restater).read(task.request, scene)
+            reading = reader.read(task.request, scene)
             if not same_goal(reading.goal, reading.words).ok:
                 print(f"{name}\t{task.id}\t{task.request}\t{reading.plain}")
 

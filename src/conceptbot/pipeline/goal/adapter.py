@@ -223,9 +223,9 @@ class GoalFinder:
     def read(self, request: str, scene: Scene) -> TargetsRead:
         """Whether the request asks for a pile, its targets, and the model calls made."""
         started = time.perf_counter()
-        reading = Reading(Goal(), Goal())
         if self.restater is None:
-            goal = read_plainly(self.reader, request, scene)
+            own = read_plainly(self.reader, request, scene)
+            reading = Reading(own, own)
         else:
             reading = read_twice(
                 lambda text, seen: read_plainly(self.reader, text, seen),
@@ -234,7 +234,7 @@ class GoalFinder:
                 scene,
                 self.policy,
             )
-            goal = reading.goal
+        goal = reading.goal
         if goal.dish:
             found = self.dish_concept
             concept = found(goal.dish, scene.pickable) if found is not None else None
@@ -242,15 +242,10 @@ class GoalFinder:
         chooser = ScoredChooser(self.finder, request, goal.dish or "")
         targets = to_targets(goal, scene, choose=chooser)
         usage = (chooser.usage + reading.usage).with_latency(time.perf_counter() - started)
-        if self.restater is None:
-            return TargetsRead(goal.stack, targets, usage)
-        other = None
-        if reading.doubtful:
-            other = (
-                reading.words if reading.source == "plain" else reading.restated or reading.words
-            ).to_dict()
-        # No plain form (the model failed or said nothing): the words alone were read, as without one.
+        # No plain form (no restater, or the model failed or said nothing): the words alone were
+        # read, and the trace says no reading.
         source = reading.source if reading.restated is not None else ""
+        other = reading.other.to_dict() if reading.other is not None else None
         return TargetsRead(goal.stack, targets, usage, reading.plain, source, other)
 
 

@@ -15,7 +15,7 @@ from typing import Literal
 
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
-from conceptbot.pipeline.goal.compare import same_goal, words
+from conceptbot.pipeline.goal.compare import same_goal, structure, words
 from conceptbot.pipeline.goal.reader import GoalReader
 from conceptbot.pipeline.goal.restate import Restater
 from conceptbot.pipeline.goal.types import Goal
@@ -52,6 +52,13 @@ class Reading:
         """The two readings differ: which one the person meant is a question."""
         return self.restated is not None and self.source != "both"
 
+    @property
+    def other(self) -> Goal | None:
+        """The reading not taken where the two differ, else None."""
+        if not self.doubtful:
+            return None
+        return self.words if self.source == "plain" else self.restated
+
 
 def choose(own: Goal, restated: Goal | None, policy: Policy, request: str = "", plain: str = "") -> Reading:
     """The reading ``policy`` picks from the words' (``own``) and the plain form's (``restated``,
@@ -79,7 +86,7 @@ def choose(own: Goal, restated: Goal | None, policy: Policy, request: str = "", 
     kept = Reading(own, own, restated=restated, source="words")
     if policy != "grounded":
         return taken if policy == "plain" else kept
-    if same_goal(_shape(own), _shape(restated)).ok:
+    if same_goal(structure(own), structure(restated)).ok:
         return kept
     mine, theirs = ungrounded(own, request, request), ungrounded(restated, request, plain)
     own_need, plain_need = _needs(own), _needs(restated)
@@ -138,11 +145,6 @@ def _moved_elsewhere(own: Goal, restated: Goal) -> bool:
 def _needs(goal: Goal) -> bool:
     """The goal is needs only."""
     return bool(goal.targets) and all(t.takes == "need" for t in goal.targets)
-
-
-def _shape(goal: Goal) -> Goal:
-    """The goal without its criteria's words."""
-    return replace(goal, targets=tuple(replace(t, criterion="") for t in goal.targets))
 
 
 class AidedReader:

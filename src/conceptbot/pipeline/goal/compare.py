@@ -12,7 +12,7 @@ change a criterion's meaning ("whole", "several", "not", "empty"); those are kep
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 from conceptbot.pipeline.goal.types import Goal, GoalTarget
@@ -107,3 +107,8 @@ def same_goal(read: Goal, gold: Goal) -> GoalMatch:
         parts = [f"extra {_show(t)}" for t in extra] + [f"missing {_show(t)}" for t in missing]
         return GoalMatch(False, "; ".join(parts))
     return GoalMatch(True)
+
+
+def structure(goal: Goal) -> Goal:
+    """The goal without its criteria's words (what "structure" compares in the goal bench)."""
+    return replace(goal, targets=tuple(replace(t, criterion="") for t in goal.targets))
