@@ -16,11 +16,13 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 from typing import Any
 
 from conceptbot.bench.conformal_fit import labelled
-from conceptbot.bench.grading import gold_reply, grade, load_tasks, task_scene
+from conceptbot.bench.grading import gold_reading, gold_reply, grade, load_tasks, task_scene
+from conceptbot.core.plan import Plan
 from conceptbot.core.config import load_settings
 from conceptbot.core.system import ASK_ALL, COVERAGES, LEVELS, SystemOptions
 from conceptbot.core.trace import ClarifyingQuestion
@@ -33,16 +35,24 @@ BINS = 10
 
 
 def measure(
-    split: str, system_name: str, coverage: float, level: str = "plan", ids: frozenset[str] = frozenset()
+    split: str,
+    system_name: str,
+    coverage: float,
+    level: str = "plan",
+    ids: frozenset[str] = frozenset(),
+    readings: bool = True,
 ) -> dict[str, Any]:
     """One row: the split's tasks (``ids``: only those) planned with and without the gold answers;
-    with ``ids``, each task's outcome too (``per_task``)."""
+    with ``ids``, each task's outcome too (``per_task``). ``readings`` False: the person does not
+    answer which reading of a request was meant, and such questions are not counted (the plan acts
+    on the reading chosen, as before those questions were asked)."""
     system = build_system(load_settings(), system_name, SystemOptions(coverage=coverage, level=level))
     tasks = [t for t in load_tasks(split=split) if not ids or t.id in ids]
     per_task = []
-    solo = helped = asked_tasks = questions = options = covered = calibrated = 0
+    solo = helped = asked_tasks = questions = options = covered = calibrated = reading_questions = 0
     plans_calibrated = plans_covered = 0
-    for task in tasks:
+    for done, task in enumerate(tasks):
+        print(f"\r{split} {system_name} {coverage}: {done}/{len(tasks)}", end="", file=sys.stderr, flush=True)
         scene = task_scene(task)
         alone = system.plan(task.request, scene)
         solo += grade(task, alone.actions, alone.refused).ok
@@ -53,10 +63,23 @@ def measure(
             plans_calibrated += 1
             plans_covered += all(found)
 
-        def person(question: ClarifyingQuestion, task=task) -> str:
-            return gold_reply(task, question)
+        def person(question: ClarifyingQuestion, task=task, scene=scene) -> str:
+            if question.kind != "reading":
+                return gold_reply(task, question)
+            if not readings:
+                return ""  # not an answer: the reading chosen stands
+
+            def plan_as(reading: str) -> Plan:
+                def fixed(q: ClarifyingQuestion) -> str:
+                    return reading if q.kind == "reading" else gold_reply(task, q)
+
+                return system.plan(task.request, scene, ask=fixed)
+
+            return gold_reading(task, question, plan_as)
 
         answered = system.plan(task.request, scene, ask=person) if alone.questions else alone
+        counted = [q for q in answered.questions if readings or q.kind != "reading"]
+        reading_questions += sum(q.kind == "reading" for q in counted)
         helped += grade(task, answered.actions, answered.refused).ok
         if ids:
             per_task.append(
@@ -64,12 +87,13 @@ def measure(
                     "task": task.id,
                     "alone": grade(task, alone.actions, alone.refused).ok,
                     "asked": grade(task, answered.actions, answered.refused).ok,
-                    "questions": [f"{q.text} -> {q.answer}" for q in answered.questions],
+                    "questions": [f"{q.text} -> {q.answer}" for q in counted],
                 }
             )
-        questions += len(answered.questions)
-        options += sum(len(q.objects) for q in answered.questions)
-        asked_tasks += bool(answered.questions)
+        questions += len(counted)
+        options += sum(len(q.objects) for q in counted)
+        asked_tasks += bool(counted)
+    print(file=sys.stderr)
     n = len(tasks)
     return {
         "split": split,
@@ -82,6 +106,8 @@ def measure(
         "help_rate": round(100 * asked_tasks / n, 1),
         "questions_per_task": round(questions / n, 3),
         "objects_per_question": round(options / questions, 2) if questions else None,
+        "reading_questions": reading_questions,
+        "reading_asked": readings,
         # At the calibrated level: plan (every calibrated decision of a task covered) or decision.
         "empirical_coverage": (
             round(plans_covered / plans_calibrated, 4)
@@ -173,6 +199,9 @@ def main() -> None:
     parser.add_argument("--systems", default="conceptbot,nokg")
     parser.add_argument("--level", choices=LEVELS, default="plan", help="what the coverage holds for")
     parser.add_argument("--write", action="store_true", help=f"add the rows to {OUT}")
+    parser.add_argument(
+        "--no-readings", action="store_true", help="the person does not say which reading was meant"
+    )
     parser.add_argument("--tasks", default="", help="only these task ids (comma-separated; not written)")
     parser.add_argument(
         "--reliability", action="store_true", help="only the reliability of the probabilities (no questions)"
@@ -201,7 +230,12 @@ def main() -> None:
         return
     # ASK_ALL: every calibrated decision asked, the most the answers can do (the ceiling).
     coverages = (*COVERAGES, ASK_ALL)
-    rows = [measure(args.split, s, c, args.level, ids) for s in args.systems.split(",") for c in coverages]
+    readings = not args.no_readings
+    rows = [
+        measure(args.split, s, c, args.level, ids, readings)
+        for s in args.systems.split(",")
+        for c in coverages
+    ]
     columns = ("cover", "alone", "asked", "help", "q/task", "obj/q", "emp.cov", "dec.cov", "n task")
     print(f"{'system':10} {'level':8} " + " ".join(f"{c:>7}" for c in columns))
     for r in rows:
@@ -219,7 +253,7 @@ def main() -> None:
         document = json.loads(OUT.read_text()) if OUT.exists() else {"asking": []}
 
         def key(r: dict[str, Any]) -> tuple[Any, ...]:
-            return r["split"], r["system"], r.get("level", "decision"), r["coverage"]
+            return r["split"], r["system"], r.get("level", "decision"), r["coverage"], r.get("reading_asked", False)
 
         done = {key(r) for r in rows}
         kept = [r for r in document["asking"] if key(r) not in done] + rows
@@ -239,18 +273,15 @@ def plot(rows: list[dict[str, Any]]) -> None:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6, 4))
-    for split, system, level in sorted({(r["split"], r["system"], r.get("level", "decision")) for r in rows}):
-        line = sorted(
-            (
-                r
-                for r in rows
-                if (r["split"], r["system"], r.get("level", "decision")) == (split, system, level)
-            ),
-            key=lambda r: r["coverage"],
-        )
+    def group(r: dict[str, Any]) -> tuple[str, str, str, bool]:
+        return r["split"], r["system"], r.get("level", "decision"), bool(r.get("reading_asked", False))
+
+    for split, system, level, readings in sorted({group(r) for r in rows}):
+        line = sorted((r for r in rows if group(r) == (split, system, level, readings)), key=lambda r: r["coverage"])
         xs = [0.0] + [r["help_rate"] for r in line]
         ys = [line[0]["success_without_questions"]] + [r["success"] for r in line]
-        ax.plot(xs, ys, marker="o", label=f"{split}: {system}, {level} level")
+        asked = ", reading asked" if readings else ""
+        ax.plot(xs, ys, marker="o", label=f"{split}: {system}, {level} level{asked}")
         for r in line:
             ax.annotate(str(r["coverage"]), (r["help_rate"], r["success"]), fontsize=7)
     ax.scatter([40], [90], marker="*", s=120, color="red", label="issue 35's target (test, 0.9)")

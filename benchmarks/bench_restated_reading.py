@@ -17,6 +17,14 @@ calls go through the answer cache.
 ``--changed test|dev`` instead lists the split's tasks whose goal the restated reading changes (with
 the graph's dish checks, and without them, as the no-graph ablation reads), so that only those are
 planned again: it reads no gold and tunes nothing.
+
+``--fit-odds`` counts, per step of the grounded choice (:data:`conceptbot.pipeline.goal.aided.STEPS`),
+how often the reading kept and the reading dropped are the gold, on the records of the tuning rounds
+(0, 8, 9 and 10; round 11 is held out), and prints them beside the held-out round's counts; with
+``--write`` they go to ``src/conceptbot/pipeline/goal/reading_odds.json``, which the goal planner
+reads to decide whether to ask which reading was meant. No model is run.
+
+    .venv/bin/python benchmarks/bench_restated_reading.py --fit-odds --out results/restate/goal-set.jsonl
 """
 
 from __future__ import annotations
@@ -139,6 +147,65 @@ def _policy_ok(record: dict[str, Any], policy: str) -> bool:
     return same_goal(chosen, Goal.from_dict(record["gold"])).ok
 
 
+ODDS = Path("src/conceptbot/pipeline/goal/reading_odds.json")
+#: The goal-set rounds the odds are counted on; the last round is held out to check them.
+TUNING_ROUNDS = (0, 8, 9, 10)
+HELD_OUT = 11
+
+
+def step_counts(records: Sequence[dict[str, Any]]) -> dict[str, list[int]]:
+    """Per step of the grounded choice: [rows, the reading kept is the gold, the reading dropped is]."""
+    counts: dict[str, list[int]] = {}
+    for record in records:
+        words = Goal.from_dict(record["words_goal"])
+        plain = Goal.from_dict(record["plain_goal"]) if record["plain_goal"] else None
+        gold = Goal.from_dict(record["gold"])
+        chosen = choose(words, plain, "grounded", record["request"], record["plain"])
+        row = counts.setdefault(chosen.step or "words only", [0, 0, 0])
+        row[0] += 1
+        row[1] += same_goal(chosen.goal, gold).ok
+        row[2] += chosen.other is not None and same_goal(chosen.other, gold).ok
+    return counts
+
+
+def fit_odds(records: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """The odds per step from the tuning rounds' records, add-one smoothed over the three outcomes
+    (kept right, dropped right, neither): a step seen on few rows stays near a third each, so the
+    planner asks there."""
+    counts = step_counts([r for r in records if r["round"] in TUNING_ROUNDS])
+    steps = {
+        step: {
+            "rows": n,
+            "taken": round((kept + 1) / (n + 3), 4),
+            "other": round((dropped + 1) / (n + 3), 4),
+        }
+        for step, (n, kept, dropped) in sorted(counts.items())
+        if step not in ("agree", "words only")  # nothing to ask there: one reading
+    }
+    return {
+        "_doc": (
+            "Per step of the grounded choice between the two readings of a request "
+            "(conceptbot.pipeline.goal.aided.STEPS): P(the reading kept is the one meant) and P(the "
+            "reading dropped is), add-one smoothed, counted on the goal set's tuning rounds by "
+            "benchmarks/bench_restated_reading.py --fit-odds --write. Read by "
+            "conceptbot.pipeline.goal.doubt. Refit for another model or prompt."
+        ),
+        "fitted_on": f"goal set rounds {', '.join(map(str, TUNING_ROUNDS))}: "
+        f"{sum(r['round'] in TUNING_ROUNDS for r in records)} rows, restate prompt {PROMPT}",
+        "steps": steps,
+    }
+
+
+def show_odds(records: Sequence[dict[str, Any]], fitted: dict[str, Any]) -> None:
+    """The fitted odds beside the held-out round's counts."""
+    held = step_counts([r for r in records if r["round"] == HELD_OUT])
+    print(f"{'step':12} {'rows':>5} {'P(kept)':>8} {'P(other)':>8}   round {HELD_OUT}: rows kept other")
+    for step, found in fitted["steps"].items():
+        n, kept, dropped = held.get(step, [0, 0, 0])
+        print(f"{step:12} {found['rows']:>5} {found['taken']:>8} {found['other']:>8}   "
+              f"{n:>14} {kept:>4} {dropped:>5}")  # fmt: skip
+
+
 def changed(split: str, restater: Restater) -> None:
     """Print, per reader (graph, no graph), the tasks of ``split`` whose goal reads differently."""
     readers = {
@@ -162,7 +229,20 @@ def main() -> None:
     parser.add_argument("--no-graph", action="store_true", help="read without the graph's dish checks")
     parser.add_argument("--failures", choices=["words", "plain", "both", "none"], default="none")
     parser.add_argument("--limit", type=int, default=0, help="read only the first N rows of each round")
+    parser.add_argument("--fit-odds", action="store_true", help="count each choice step's odds from --out")
+    parser.add_argument("--write", action="store_true", help=f"with --fit-odds: write {ODDS}")
     args = parser.parse_args()
+    if args.fit_odds:
+        if args.out is None or not args.out.exists():
+            parser.error("--fit-odds reads the records of --out (a file this script wrote)")
+        records = [json.loads(x) for x in args.out.read_text(encoding="utf-8").splitlines() if x]
+        records = [r for r in records if r["key"].endswith(f"|{PROMPT}")]
+        fitted = fit_odds(records)
+        show_odds(records, fitted)
+        if args.write:
+            ODDS.write_text(json.dumps(fitted, indent=2) + "\n", encoding="utf-8")
+            print(f"wrote {ODDS}")
+        return
     if args.changed:
         changed(args.changed, Restater(open_llm(load_settings(), module="restate")))
         return

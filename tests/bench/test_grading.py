@@ -663,3 +663,21 @@ def test_the_simulated_person_replies_to_both_kinds_of_question() -> None:
     assert gold_reply(task, missed) == "vase"
     alone = ClarifyingQuestion("Which one ...?", "glass bin", ("cork",), (0.6,), "one")
     assert gold_reply(task, alone) == "none"
+
+
+def test_the_simulated_person_names_the_reading_whose_plan_does_what_they_want() -> None:
+    from conceptbot.bench.grading import Task, gold_reading
+    from conceptbot.core.plan import Done, PickAndPlace, Plan
+    from conceptbot.core.trace import ClarifyingQuestion
+
+    gold = {"type": "assign", "assign": {"apple": ["user"], "coke": ["user"]}}
+    task = Task("t-5", "ambiguous", "an apple and a coke", "kitchen", gold, "")
+    moves = {"apple only": ["apple"], "both": ["apple", "coke"], "neither": []}
+
+    def plan_as(reading: str) -> Plan:
+        return Plan((*(PickAndPlace(o, "user") for o in moves[reading]), Done()))
+
+    question = ClarifyingQuestion("Did you mean ...?", "", ("apple only", "both"), (0.6, 0.3), "reading")
+    assert gold_reading(task, question, plan_as) == "both"
+    neither = ClarifyingQuestion("Did you mean ...?", "", ("neither", "apple only"), (0.6, 0.3), "reading")
+    assert gold_reading(task, neither, plan_as) == "neither"  # no reading passes: the one acted on

@@ -68,7 +68,7 @@ Splits (``load_tasks(split=...)``, ``conceptbot bench run --split``)
 from __future__ import annotations
 
 import json
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
 from importlib.resources import files
@@ -81,6 +81,7 @@ from conceptbot.core.plan import (
     Done,
     InvalidActionError,
     PickAndPlace,
+    Plan,
     check_action,
     format_action,
     parse_action,
@@ -736,6 +737,20 @@ def gold_answer(task: Task, obj: str, destination: str) -> str:
             allowed += group["objects"].get(obj, [])
         return "yes" if destination in allowed else "no"
     return "no"
+
+
+def gold_reading(task: Task, question: ClarifyingQuestion, plan_as: Callable[[str], Plan]) -> str:
+    """The reply of a person who wants the gold to a ``reading`` question (which of two readings of
+    the request was meant): the first reading, in the question's order, under which the plan passes
+    (``plan_as(reading)`` plans with that answer, the other questions answered from the gold), else
+    the reading the plan acts on (the first). The task format says what should happen, not how the
+    request reads, so what each reading would do stands in for the person's meaning; a wrong reading
+    whose plan happens to pass is taken too."""
+    for reading in question.objects:
+        plan = plan_as(reading)
+        if grade(task, plan.actions, plan.refused).ok:
+            return reading
+    return question.objects[0]
 
 
 def gold_reply(task: Task, question: ClarifyingQuestion) -> str:

@@ -198,7 +198,7 @@ def show(result: Plan, console: Console) -> None:
             f"answered {question.answer}" if question.answer else "not asked: acted on the likelier answers"
         )
         odds = ", ".join(f"{p:.2f}" for p in question.p_yes)
-        label = "P(the one)" if question.kind == "one" else "P(yes)"
+        label = {"one": "P(the one)", "reading": "P(meant)"}.get(question.kind, "P(yes)")
         console.print(line(("Question:", "bold"), f" {question.text} ({label} {odds}; {answer})"))
     table = Table("module", "time (s)", "tokens in", "tokens out", "LLM calls", "cost (USD)", title="Usage")
     for module, usage in result.usage.items():

@@ -306,7 +306,7 @@ class JudgementTrace:
 
 
 NONE = "none"  # the answer that sends none of a ``choose`` or ``one`` question's objects
-KINDS = ("confirm", "choose", "one")
+KINDS = ("confirm", "choose", "one", "reading")
 
 
 @dataclass(frozen=True)
@@ -321,12 +321,14 @@ class ClarifyingQuestion:
         text: The question in plain words ("Should I put the lemon in or on the bowl?", "Which one
             should I give to the user: the coke, the 7up or the water bottle? One, or none.").
         target: Where the objects would go.
-        objects: The objects it is about, most uncertain (``one``: most likely) first.
+        objects: The objects it is about, most uncertain (``one``: most likely) first; for
+            ``reading``, the two readings in words, the one the plan acts on first.
         p_yes: Each object's calibrated probability (4 decimals), in the order of ``objects``: P(yes)
-            for ``confirm`` and ``choose``, P(it is the one) for ``one``.
+            for ``confirm`` and ``choose``, P(it is the one) for ``one``, P(it is what was meant)
+            for ``reading``.
         kind: One of :data:`KINDS`.
         answer: The person's answer as read (``yes``/``no``; for ``choose`` the chosen objects joined
-            by ", ", for ``one`` the object; or ``none``); None where nobody was asked (the plan then
+            by ", ", for ``one`` the object, for ``reading`` the reading; or ``none``); None where nobody was asked (the plan then
             acts on the likelier answers).
         others: For ``one``: the target's other candidates, which the person may name instead of
             the listed ones (the set missed what they meant: "none of those, the reading glasses").
@@ -357,7 +359,8 @@ class ClarifyingQuestion:
     def read(self, reply: object) -> tuple[str, ...] | None:
         """The objects a reply sends to the target (empty: none), or None for a reply that is not an
         answer. ``confirm``: yes or no. ``choose``: ``none``, or options separated by commas (in any
-        case, each at most once). ``one``: one option or one of :attr:`others`, or ``none``."""
+        case, each at most once). ``one``: one option or one of :attr:`others`, or ``none``.
+        ``reading``: one of the readings, whole (a reading may hold commas), or ``none``."""
         if not isinstance(reply, str):
             return None
         said = " ".join(reply.strip().lower().split())
@@ -365,6 +368,9 @@ class ClarifyingQuestion:
             return {"yes": self.objects, "no": ()}.get(said)
         if said == NONE:
             return ()
+        if self.kind == "reading":
+            whole = {" ".join(o.lower().split()): o for o in self.objects}
+            return (whole[said],) if said in whole else None
         names = {o.lower(): o for o in (*self.objects, *self.others)}
         parts = [" ".join(p.split()) for p in said.split(",")]
         chosen = [names.get(p) for p in parts]

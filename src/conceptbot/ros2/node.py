@@ -285,6 +285,7 @@ class ConceptBotNode(Node):
                 "confirm": "yes or no",
                 "choose": f"some of {', '.join(question.options)}, or none",
                 "one": f"one of {', '.join((*question.options, *question.others))}, or none",
+                "reading": f"one of {' / '.join(question.options)}, or none",
             }[question.kind]
             self.get_logger().warning(f"answer for {request_id!r} dropped: {answer!r:.80} is not {how}")
             return
@@ -308,6 +309,7 @@ class ConceptBotNode(Node):
                         "confirm": '"yes" or "no"',
                         "choose": '"<objects that go, comma-separated>" or "none"',
                         "one": '"<the object>" or "none"',
+                        "reading": '"<the reading meant, as listed>" or "none"',
                     }[question.kind]
                     how = f'{{"id": "{running.request.id}", "answer": {said}}}'
                     raise NoAnswerError(

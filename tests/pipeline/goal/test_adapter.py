@@ -6,6 +6,7 @@ from conceptbot.core.scene import scene_from_dict
 from conceptbot.models.fake import FakeLLM
 from conceptbot.pipeline.goal import Goal, GoalFinder, GoalReader, GoalTarget, to_targets
 from conceptbot.pipeline.goal.adapter import ScoredChooser
+from conceptbot.pipeline.goal.doubt import odds
 from conceptbot.pipeline.goal.restate import Restater
 from conceptbot.pipeline.goal_planner.targets import ALL, TargetFinder
 from conceptbot.pipeline.hazards import is_person
@@ -145,9 +146,10 @@ POLITE = "Oh, before I forget, would you be a dear and pop the conch shell in th
 
 
 def test_the_goal_finder_reads_the_model_s_plain_form_and_says_which_reading_it_took() -> None:
+    scorer = FakeLLM(scores=[[-1.0, -1.0]] * 20)  # the other reading's open place, when it is made
     finder = GoalFinder(
         GoalReader(),
-        TargetFinder(FakeLLM(), is_person),
+        TargetFinder(scorer, is_person),
         restater=Restater(FakeLLM(["Put the conch shell in the shoe box."])),
     )
     read = finder.read(POLITE, SHELLS)
@@ -156,6 +158,27 @@ def test_the_goal_finder_reads_the_model_s_plain_form_and_says_which_reading_it_
     # The words' own reading, kept in the trace: "dear" read as something wanted.
     assert read.other is not None and len(read.other["targets"]) == 2
     assert read.usage.calls == 1
+    # Which was meant is a question: both readings in words, the odds of the step that chose.
+    doubt = read.doubt
+    assert doubt is not None and doubt.taken == "put the conch shell in or on the shoe box"
+    assert doubt.other != doubt.taken and (doubt.p_taken, doubt.p_other) == (
+        odds(doubt.step).taken,
+        odds(doubt.step).other,
+    )
+    assert not scorer.score_requests  # the other reading is made only when asked for
+    other = doubt.alternative()
+    assert other.reading == "words" and len(other.targets) >= 2 and scorer.score_requests
+    assert other.other == Goal(targets=(GoalTarget("shoe box", "named", ("conch shell",), count=1),)).to_dict()
+
+
+def test_readings_that_agree_are_no_doubt() -> None:
+    finder = GoalFinder(
+        GoalReader(),
+        TargetFinder(FakeLLM(), is_person),
+        restater=Restater(FakeLLM(["Put the conch shell in the shoe box."])),
+    )
+    read = finder.read("Put the conch shell in the shoe box.", SHELLS)
+    assert (read.reading, read.doubt) == ("both", None)
 
 
 def test_without_a_restater_the_goal_finder_reads_the_words_alone() -> None:

@@ -7,9 +7,9 @@ import math
 import pytest
 
 from conceptbot.core.trace import ClarifyingQuestion, DecisionTrace
-from conceptbot.pipeline.goal_planner.asking import ANSWERED, MAX_OPTIONS, clarify
+from conceptbot.pipeline.goal_planner.asking import ANSWERED, MAX_OPTIONS, clarify, reading_question
 from conceptbot.pipeline.goal_planner.decide import Judgement
-from conceptbot.pipeline.goal_planner.targets import ALL, Target
+from conceptbot.pipeline.goal_planner.targets import ALL, ReadingDoubt, Target, TargetsRead
 from conceptbot.pipeline.tracing import judgement_trace, target_trace
 
 QHAT = 0.6956  # the shipped 0.9 threshold: an answer stays in the set at P >= 0.3044
@@ -261,3 +261,23 @@ def test_each_targets_share_of_the_confidence_is_reported_and_multiplies_to_it()
         [paper, glass], ranked, traces, QHAT, ask=lambda q: "no" if q.target == "paper bin" else ""
     )
     assert asked.factors(moves) == pytest.approx({0: 0.95, 1: 0.6 * 0.98})
+
+
+def _doubt(p_taken: float, p_other: float, taken: str = "give the user the tea") -> ReadingDoubt:
+    def alternative() -> TargetsRead:
+        raise AssertionError("not made by the question")
+
+    return ReadingDoubt(taken, "give the user the tea and the cake", p_taken, p_other, "fewer", alternative)
+
+
+def test_a_reading_is_asked_about_unless_its_set_is_the_reading_taken_alone() -> None:
+    floor = 1 - 0.9066  # the shipped plan-level 0.9 threshold
+    question = reading_question(_doubt(0.65, 0.15), 0.9066)
+    assert question is not None and question.kind == "reading"
+    assert question.objects == ("give the user the tea", "give the user the tea and the cake")
+    assert question.p_yes == (0.65, 0.15)
+    assert reading_question(_doubt(0.66, floor - 0.01), 0.9066) is None
+    assert reading_question(_doubt(0.66, 0.04), 1.0) is not None  # coverage 1: every doubt is asked
+    assert reading_question(_doubt(0.05, 0.04), 0.9066) is not None  # neither likely: asked, not guessed
+    same = _doubt(0.5, 0.5, taken="give the user the tea and the cake")
+    assert reading_question(same, 0.9066) is None  # the person could not tell the two apart

@@ -16,6 +16,7 @@ from conceptbot.pipeline.goal_planner.decide import Decider, FactFinder
 from conceptbot.pipeline.goal_planner.planner import GoalPlanner, is_person
 from conceptbot.pipeline.goal_planner.targets import (
     ALL,
+    ReadingDoubt,
     Target,
     TargetFinder,
     TargetsRead,
@@ -545,3 +546,82 @@ def test_a_decision_with_a_non_finite_score_moves_nothing(bad: float) -> None:
     ranked = {0: [Judgement("glue", "glue", 0.5, bad), Judgement("chips", "chips", 0.9, 3.0)]}
     moves = planner._choose([target], ranked, set(), ["glue", "chips"])
     assert moves == [("chips", "table")]
+
+
+class _TwoReadings:
+    """A target reader whose request reads two ways: the chips alone (taken), or the chips and the
+    glue (the other reading), with the given odds."""
+
+    def __init__(self, p_taken: float, p_other: float) -> None:
+        self.p_taken, self.p_other = p_taken, p_other
+        self.alternatives = 0
+
+    def read(self, request: str, scene: Scene) -> TargetsRead:
+        def alternative() -> TargetsRead:
+            self.alternatives += 1
+            both = [Target("user", 1, "named", ["chips"]), Target("user", 1, "named", ["glue"])]
+            return TargetsRead(False, both, Usage(calls=1), "p", "words", {"targets": []})
+
+        doubt = ReadingDoubt(
+            "give the user the chips",
+            "give the user the chips and give the user the glue",
+            self.p_taken,
+            self.p_other,
+            "fewer",
+            alternative,
+        )
+        taken = [Target("user", 1, "named", ["chips"])]
+        return TargetsRead(False, taken, Usage(calls=0), "p", "plain", {"targets": []}, doubt)
+
+
+def test_where_the_request_reads_two_ways_the_person_is_asked_which_and_the_answer_is_planned() -> None:
+    reader = _TwoReadings(0.6, 0.3)
+    llm = FakeLLM(scores=[PRIOR, SAFE, PRIOR, SAFE])  # the risk question of each move
+    asked: list = []
+
+    def person(question) -> str:
+        asked.append(question)
+        return question.objects[1]
+
+    result = GoalPlanner(reader, Decider(llm, FactFinder(None))).plan("chips, glue", SCENE, ask=person)
+    assert [q.kind for q in asked] == ["reading"]
+    assert asked[0].text == (
+        "Did you mean: give the user the chips, or give the user the chips and give the user the glue?"
+        " One of them, or none."
+    )
+    assert format_actions(result.actions) == [
+        "pick_and_place(chips, user)",
+        "pick_and_place(glue, user)",
+        "done()",
+    ]
+    assert result.trace.goal.reading == "words" and reader.alternatives == 1
+    assert result.questions[0].answer == asked[0].objects[1]
+    assert result.usage["goal"].calls == 1  # the other reading's calls are counted
+
+
+def test_a_reading_question_unanswered_acts_on_the_reading_taken_with_its_odds() -> None:
+    reader = _TwoReadings(0.6, 0.3)
+    llm = FakeLLM(scores=[PRIOR, SAFE])
+    result = GoalPlanner(reader, Decider(llm, FactFinder(None))).plan("chips", SCENE)
+    assert format_actions(result.actions) == ["pick_and_place(chips, user)", "done()"]
+    assert [(q.kind, q.answer, q.p_yes) for q in result.questions] == [("reading", None, (0.6, 0.3))]
+    assert reader.alternatives == 0  # the other reading is not made unless it is meant
+
+
+def test_neither_reading_meant_is_a_refusal_and_nothing_is_decided() -> None:
+    llm = FakeLLM(scores=[])
+    planner = GoalPlanner(_TwoReadings(0.6, 0.3), Decider(llm, FactFinder(None)))
+    result = planner.plan("chips", SCENE, ask=lambda q: "none")
+    assert result.refused and format_actions(result.actions) == ["done()"]
+    assert "neither reading" in (result.reason or "") and result.questions[0].answer == "none"
+    assert result.confidence is None and not llm.score_requests
+
+
+def test_a_reading_whose_other_is_unlikely_is_not_asked_about() -> None:
+    # At 0.9 a reading stays in the set at P >= 1 - 0.9066: 0.04 does not.
+    llm = FakeLLM(scores=[PRIOR, SAFE])
+    asked: list = []
+    planner = GoalPlanner(_TwoReadings(0.67, 0.04), Decider(llm, FactFinder(None)))
+    result = planner.plan("chips", SCENE, ask=lambda q: asked.append(q) or "none")
+    assert not asked and not result.questions
+    assert format_actions(result.actions) == ["pick_and_place(chips, user)", "done()"]

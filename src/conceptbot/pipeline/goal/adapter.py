@@ -39,6 +39,7 @@ from dataclasses import replace
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline.goal.aided import Policy, Reading, read_twice
+from conceptbot.pipeline.goal.doubt import describe, odds
 from conceptbot.pipeline.goal.reader import GoalReader
 from conceptbot.pipeline.goal.restate import Restater
 from conceptbot.pipeline.goal.types import ALL as GOAL_ALL
@@ -47,6 +48,7 @@ from conceptbot.pipeline.goal_planner.targets import (
     ALL,
     CONTENT_FREE_DISH,
     CONTENT_FREE_REQUEST,
+    ReadingDoubt,
     Target,
     TargetFinder,
     TargetsRead,
@@ -234,19 +236,36 @@ class GoalFinder:
                 scene,
                 self.policy,
             )
-        goal = reading.goal
+        read = self._targets(request, scene, reading.goal, reading.usage, started)
+        # No plain form (no restater, or the model failed or said nothing): the words alone were
+        # read, and the trace says no reading.
+        source = reading.source if reading.restated is not None else ""
+        other = reading.other
+        if other is None:
+            return replace(read, plain=reading.plain, reading=source)
+        flipped = "words" if reading.source == "plain" else "plain"
+        found = odds(reading.step)
+
+        def alternative() -> TargetsRead:
+            # The other reading: its targets, and the reading it was chosen over as its other.
+            again = self._targets(request, scene, other, Usage(calls=0), time.perf_counter())
+            return replace(again, plain=reading.plain, reading=flipped, other=reading.goal.to_dict())
+
+        doubt = ReadingDoubt(
+            describe(reading.goal), describe(other), found.taken, found.other, reading.step, alternative
+        )
+        return replace(read, plain=reading.plain, reading=source, other=other.to_dict(), doubt=doubt)
+
+    def _targets(self, request: str, scene: Scene, goal: Goal, usage: Usage, started: float) -> TargetsRead:
+        """A goal's targets, its dish as the graph's concept and open places chosen by scoring."""
         if goal.dish:
             found = self.dish_concept
             concept = found(goal.dish, scene.pickable) if found is not None else None
             goal = replace(goal, dish=concept or goal.dish.lower())
         chooser = ScoredChooser(self.finder, request, goal.dish or "")
         targets = to_targets(goal, scene, choose=chooser)
-        usage = (chooser.usage + reading.usage).with_latency(time.perf_counter() - started)
-        # No plain form (no restater, or the model failed or said nothing): the words alone were
-        # read, and the trace says no reading.
-        source = reading.source if reading.restated is not None else ""
-        other = reading.other.to_dict() if reading.other is not None else None
-        return TargetsRead(goal.stack, targets, usage, reading.plain, source, other)
+        usage = (chooser.usage + usage).with_latency(time.perf_counter() - started)
+        return TargetsRead(goal.stack, targets, usage)
 
 
 def _plain(name: str) -> str:

@@ -21,6 +21,8 @@ from conceptbot.pipeline.goal.restate import Restater
 from conceptbot.pipeline.goal.types import Goal
 
 Policy = Literal["words", "plain", "grounded"]
+#: The steps of the grounded choice, in :func:`choose`'s order ("agree": the two readings are one).
+STEPS = ("agree", "wording", "needs", "command", "need", "dropped", "moved", "fewer", "words fewer")
 #: The policies :func:`choose` knows, for the benchmark's table.
 POLICIES: tuple[Policy, ...] = ("words", "plain", "grounded")
 #: Targets whose place may be left open by any reading: the planner chooses it.
@@ -38,6 +40,8 @@ class Reading:
         restated: The rules' reading of the plain form, or None.
         source: Which reading ``goal`` is: ``words``, ``plain`` or ``both`` (they agree).
         usage: The model's calls.
+        step: Which of :func:`choose`'s steps decided (one of :data:`STEPS`; "" where only one
+            reading was made or a fixed policy chose): how sure the choice is depends on it.
     """
 
     goal: Goal
@@ -46,6 +50,7 @@ class Reading:
     restated: Goal | None = None
     source: Literal["words", "plain", "both"] = "words"
     usage: Usage = field(default_factory=lambda: Usage(calls=0))
+    step: str = ""
 
     @property
     def doubtful(self) -> bool:
@@ -81,29 +86,31 @@ def choose(own: Goal, restated: Goal | None, policy: Policy, request: str = "", 
     if restated is None:
         return Reading(own, own)
     if same_goal(own, restated).ok:
-        return Reading(own, own, restated=restated, source="both")
+        return Reading(own, own, restated=restated, source="both", step="agree")
     taken = Reading(restated, own, restated=restated, source="plain")
     kept = Reading(own, own, restated=restated, source="words")
     if policy != "grounded":
         return taken if policy == "plain" else kept
     if same_goal(structure(own), structure(restated)).ok:
-        return kept
+        return replace(kept, step="wording")
     mine, theirs = ungrounded(own, request, request), ungrounded(restated, request, plain)
     own_need, plain_need = _needs(own), _needs(restated)
     if own_need and plain_need:
-        return kept
+        return replace(kept, step="needs")
     if own_need or plain_need:
         command_ok = not (theirs if own_need else mine)
-        return (taken if own_need else kept) if command_ok else (kept if own_need else taken)
+        if command_ok:
+            return replace(taken if own_need else kept, step="command")
+        return replace(kept if own_need else taken, step="need")
     if set(restated.targets) < set(own.targets) and not mine:
-        return kept
+        return replace(kept, step="dropped")
     if _moved_elsewhere(own, restated) and not mine:
-        return kept
+        return replace(kept, step="moved")
     criteria = {t.to for t in own.targets if t.takes == "criterion" and t.criterion}
     theirs += [
         f"dropped the criterion for {t.to}" for t in restated.targets if t.takes == "all" and t.to in criteria
     ]
-    return taken if len(theirs) <= len(mine) else kept
+    return replace(taken, step="fewer") if len(theirs) <= len(mine) else replace(kept, step="words fewer")
 
 
 def ungrounded(goal: Goal, request: str, text: str) -> list[str]:

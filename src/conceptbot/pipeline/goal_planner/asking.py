@@ -11,6 +11,13 @@ decision get conformal prediction sets (:mod:`.conformal`):
   water? One of them, another, or none."); the person may name another of the target's candidates,
   since a set can miss what they meant.
 
+- which of two readings of the request was meant, where the rules read its words and the model's
+  plain form of it differently (:class:`~conceptbot.pipeline.goal_planner.targets.ReadingDoubt`):
+  the set holds each reading at least ``1 - qhat`` likely by the odds of the step that chose
+  (:mod:`conceptbot.pipeline.goal.doubt`); unless it is the reading taken alone, the person is
+  asked before anything is decided ("Did you mean: give the user one "fruit" and one "soda", or
+  give the user one "fruit"?"). Neither is a refusal.
+
 The target with the most uncertain decision is asked first, at most :data:`MAX_QUESTIONS` per
 plan. Asked (``ask`` given), the answer replaces the decisions; not asked, the plan acts on each
 likelier answer and lists the question. The plan's confidence (:meth:`Clarified.confidence`) is read
@@ -28,7 +35,7 @@ from conceptbot.core.system import Ask
 from conceptbot.core.trace import ClarifyingQuestion, DecisionTrace, JudgementTrace
 from conceptbot.pipeline.goal_planner.conformal import DecisionSet, decision_set
 from conceptbot.pipeline.goal_planner.decide import Judgement
-from conceptbot.pipeline.goal_planner.targets import ALL, Target
+from conceptbot.pipeline.goal_planner.targets import ALL, ReadingDoubt, Target
 from conceptbot.pipeline.hazards import is_person
 
 MAX_QUESTIONS = 3  # per plan, one per target (a sort may have more unsure bins)
@@ -244,6 +251,22 @@ def clarify(
         {number: ranked[number] for number in candidates if number not in settled},
         bool(sets or candidates),
         tuple(sorted(settled)),
+    )
+
+
+def reading_question(doubt: ReadingDoubt, qhat: float) -> ClarifyingQuestion | None:
+    """The question of which reading was meant, or None where the set is the reading taken alone
+    (the reading dropped is less than ``1 - qhat`` likely, and the one taken is not) or the two
+    read the same in words (the person could not tell them apart)."""
+    floor = 1.0 - qhat
+    if doubt.taken == doubt.other or (doubt.p_taken >= floor and doubt.p_other < floor):
+        return None
+    return ClarifyingQuestion(
+        f"Did you mean: {doubt.taken}, or {doubt.other}? One of them, or none.",
+        "",
+        (doubt.taken, doubt.other),
+        (_shown(doubt.p_taken), _shown(doubt.p_other)),
+        kind="reading",
     )
 
 

@@ -56,7 +56,7 @@ from conceptbot.core.trace import (
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.affordance import Gripper, affordance
-from conceptbot.pipeline.goal_planner.asking import clarify, is_sort, move_words
+from conceptbot.pipeline.goal_planner.asking import clarify, is_sort, move_words, reading_question
 from conceptbot.pipeline.goal_planner.conformal import Calibration, shipped
 from conceptbot.pipeline.goal_planner.decide import Decider, Judgement
 from conceptbot.pipeline.goal_planner.targets import ALL, Target, TargetsRead, mentions
@@ -142,6 +142,11 @@ class GoalPlanResult:
     properties: dict[str, ObjectProperties] = field(default_factory=dict)
     questions: tuple[ClarifyingQuestion, ...] = ()
     confidence: float | None = None
+
+
+def _times(confidence: float | None, meant: float | None) -> float | None:
+    """The plan's confidence times the odds of its reading (None stays None: no calibrated decision)."""
+    return None if confidence is None or meant is None else confidence * meant
 
 
 def _softmax(judgements: list[Judgement], order: dict[str, float]) -> list[float]:
@@ -250,15 +255,22 @@ class GoalPlanner:
         observer.progress("Goal: where the request sends things")
         # A pile has no destination of its own (the objects are the destinations): no targets.
         read = self.targets.read(request, scene)
+        qhat = self.calibration.threshold(self.coverage)
+        # Where the request reads two ways, which was meant comes first: it changes the targets.
+        read, about_reading, meant = self._reading(read, qhat, ask)
         stack, targets, usage["goal"] = read.stack, read.targets, read.usage
         goal = GoalTrace(tuple(target_trace(t) for t in targets), stack, read.plain, read.reading, read.other)
         observer.event("goal", goal)
+        if meant is None:
+            # The person meant neither reading: nothing is decided or moved (fail closed).
+            trace = PlanTrace(goal=goal, decisions=())
+            why = "the person meant neither reading of the request; say it another way"
+            return GoalPlanResult([Done()], [], True, why, trace, usage, {}, about_reading, None)
         ranked, decisions, usage["decide"] = self._decide(request, scene, targets, stack, observer)
         # How the backend scored this plan's questions, for the steps: kept per plan (the planner
         # object is shared between threads), the last question's method as before.
         asked = [j.scoring for js in ranked.values() for j in js if j.scoring]
         # Where a calibrated decision is unsure, a question (asked if someone answers): asking.py.
-        qhat = self.calibration.threshold(self.coverage)
         clarified = clarify(targets, ranked, decisions, qhat, ask, self.calibration.which_one)
         ranked, decisions = clarified.ranked, clarified.decisions
         observer.event("decisions", DecisionsEvent(tuple(decisions)))
@@ -330,10 +342,32 @@ class GoalPlanner:
             trace,
             usage,
             properties,
-            clarified.questions,
-            # From the final moves: what the plan does after the risk checks (asking.py).
-            clarified.confidence(moves),
+            (*about_reading, *clarified.questions),
+            # From the final moves: what the plan does after the risk checks (asking.py), and the
+            # odds that the reading acted on is the one meant (1 once the person said so).
+            _times(clarified.confidence(moves), meant),
         )
+
+    def _reading(
+        self, read: TargetsRead, qhat: float, ask: Ask | None
+    ) -> tuple[TargetsRead, tuple[ClarifyingQuestion, ...], float | None]:
+        """The reading to plan, the question about it (none, or one), and the probability that it
+        is the one meant (None: the person meant neither). Asked only where the calibration holds
+        for more than yes/no decisions (a plan-level one): the decision level's does not cover it."""
+        doubt = read.doubt
+        question = reading_question(doubt, qhat) if doubt and self.calibration.which_one else None
+        if question is None:
+            return read, (), doubt.p_taken if doubt else 1.0
+        chosen = question.read(ask(question)) if ask is not None else None
+        if chosen is None:  # not asked, or no answer: the reading taken, with its odds
+            return read, (question,), doubt.p_taken
+        answered = (replace(question, answer=question.normalised(chosen)),)
+        if not chosen:
+            return read, answered, None
+        if chosen[0] == question.objects[0]:
+            return read, answered, 1.0
+        other = doubt.alternative()
+        return replace(other, usage=read.usage + other.usage), answered, 1.0
 
     def _decide(
         self, request: str, scene: Scene, targets: list[Target], stack: bool, observer: Observer

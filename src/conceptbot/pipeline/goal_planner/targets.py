@@ -191,6 +191,28 @@ class Target:
 
 
 @dataclass(frozen=True)
+class ReadingDoubt:
+    """Where the request reads two ways: both readings in words, how likely each is the one meant,
+    and the other reading's targets, made when asked for (scoring an open place is a model call).
+
+    Attributes:
+        taken: The reading the targets are, in words.
+        other: The reading not taken, in words.
+        p_taken: P(the reading taken is the one meant), from the step of the choice that kept it.
+        p_other: P(the reading not taken is).
+        step: The step of the choice (:data:`conceptbot.pipeline.goal.aided.STEPS`).
+        alternative: Reads the request as the other reading.
+    """
+
+    taken: str
+    other: str
+    p_taken: float
+    p_other: float
+    step: str
+    alternative: Callable[[], TargetsRead]
+
+
+@dataclass(frozen=True)
 class TargetsRead:
     """A request's goal as the goal planner takes it (what a ``TargetReader`` returns).
 
@@ -202,6 +224,7 @@ class TargetsRead:
         reading: Which reading the targets are: ``words`` (the rules on the request's words),
             ``plain`` (on the plain form), ``both`` (the two agree), or "" (only the words read).
         other: The reading not taken where the two differ, as goal-set JSON (else None).
+        doubt: Where the two differ: what the planner needs to ask which was meant (else None).
     """
 
     stack: bool
@@ -210,6 +233,7 @@ class TargetsRead:
     plain: str = ""
     reading: str = ""
     other: dict | None = None
+    doubt: ReadingDoubt | None = None
 
 
 class TargetFinder:

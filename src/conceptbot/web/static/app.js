@@ -233,12 +233,12 @@ function showQuestion(id, question) {
   if (listed) {
     // One box per object: checkboxes for "which of these go", radio buttons for "which one";
     // the ticked ones go to the target, none ticked is "none".
-    const type = question.kind === "one" ? "radio" : "checkbox";
+    const type = question.kind === "choose" ? "checkbox" : "radio";
     // A which-one question's others follow, marked: the person may pick what the set missed.
     const others = question.others || [];
     $("choose-options").replaceChildren(...[...question.options, ...others].map((name, i) => el("li", i < question.options.length ? {} : { class: "other" },
       el("input", { type, name: "choose", id: `choose-${i}`, value: name }), el("label", { for: `choose-${i}` }, ` ${i === question.options.length ? "or another: " : ""}${name}`))));
-    $("answer-chosen").textContent = question.kind === "one" ? "This one" : "These go";
+    $("answer-chosen").textContent = { one: "This one", reading: "This is what I meant" }[question.kind] || "These go";
     $("answer-none").onclick = send("none");
     $("answer-chosen").onclick = () => {
       const ticked = [...$("choose-options").querySelectorAll("input:checked")].map((b) => b.value);

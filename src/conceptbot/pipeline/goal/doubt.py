@@ -1,0 +1,114 @@
+"""How sure the choice between two readings of a request is, and the readings in words for a question.
+
+Where the rules read the request's words and its plain form differently (:class:`.aided.Reading`),
+:func:`.aided.choose` keeps one by a step (:data:`.aided.STEPS`). How often each step keeps the right
+reading, and how often the reading it dropped was the right one, was counted on the goal set's tuning
+rounds (``benchmarks/bench_restated_reading.py --fit-odds --write``; round 11 is held out to check
+them) and ships as ``reading_odds.json``. The goal planner asks which reading was meant where the
+dropped one is too likely to rule out at its coverage (:mod:`conceptbot.pipeline.goal_planner.asking`).
+
+:func:`describe` says what a reading would do, in words a person can choose between ('give the user
+one "fruit" and one "soda"').
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from functools import cache
+from importlib.resources import files
+from typing import Any
+
+from conceptbot.core.errors import ConfigError
+from conceptbot.pipeline.goal.types import ALL, Goal, GoalTarget
+from conceptbot.pipeline.hazards import is_person
+
+ODDS_FILE = "reading_odds.json"
+#: A step with no count (a new step, a fixed policy): either reading as likely, so the person is asked.
+UNKNOWN = (0.5, 0.5)
+NUMBERS = ("one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten")
+
+
+@dataclass(frozen=True)
+class Odds:
+    """How often a step of the choice kept the right reading, and how often it dropped the right one.
+
+    Attributes:
+        taken: P(the reading kept is the one meant).
+        other: P(the reading dropped is the one meant); the rest is neither.
+        rows: How many goal-set rows the counts come from.
+    """
+
+    taken: float
+    other: float
+    rows: int = 0
+
+
+@cache
+def _odds_data() -> dict[str, Any]:
+    where = f"reading odds file {ODDS_FILE}"
+    try:
+        data = json.loads(files("conceptbot.pipeline.goal").joinpath(ODDS_FILE).read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ConfigError(f"{where} is missing from the package") from None
+    except (OSError, ValueError) as exc:
+        raise ConfigError(f"{where} is not valid JSON: {exc}") from None
+    if not isinstance(data, dict) or not isinstance(data.get("steps"), dict):
+        raise ConfigError(f"{where}: needs a 'steps' object")
+    return data
+
+
+def odds(step: str) -> Odds:
+    """The shipped odds of ``step`` (:data:`UNKNOWN` for a step without counts). A value that is not
+    a probability reads as :data:`UNKNOWN` too: the person is asked rather than a guess made."""
+    found = _odds_data()["steps"].get(step)
+    if not isinstance(found, dict):
+        return Odds(*UNKNOWN)
+    taken, other = found.get("taken"), found.get("other")
+    if not all(isinstance(p, (int, float)) and 0.0 <= p <= 1.0 for p in (taken, other)):  # NaN fails
+        return Odds(*UNKNOWN)
+    return Odds(float(taken), float(other), int(found.get("rows", 0)))
+
+
+def _things(target: GoalTarget, dish: str | None) -> str:
+    """Which objects a target takes, in words."""
+    if target.takes == "named":
+        names = [f"the {n}" for n in target.named]
+        return names[0] if len(names) == 1 else " and ".join((", ".join(names[:-1]), names[-1]))
+    if target.takes == "ingredients":
+        return f'the ingredients of "{dish}"' if dish else "the ingredients"
+    if target.takes == "need":
+        return f'something for "{target.criterion}"' if target.criterion else "what the need calls for"
+    if target.takes == "remainder":
+        return "the rest"
+    if target.takes == "all" or not target.criterion:
+        return "everything"
+    if target.count == ALL:
+        return f'everything that is "{target.criterion}"'
+    count = int(target.count)
+    number = NUMBERS[count - 1] if count <= len(NUMBERS) else str(count)
+    return f'{number} "{target.criterion}"'
+
+
+def _move(target: GoalTarget, dish: str | None, need: str | None) -> str:
+    """One target as a move in words."""
+    things = _things(target, dish)
+    if target.takes == "need" and not target.criterion and need:
+        things = f'something for "{need}"'
+    if target.to is None:
+        return f"give {things}" if target.takes == "need" else f"put {things} where it fits"
+    if is_person(target.to):
+        return f"give the {target.to} {things}"
+    return f"put {things} in or on the {target.to}"
+
+
+def describe(goal: Goal) -> str:
+    """What a reading of a request would do, in words ('give the user one "fruit" and put the rest in
+    or on the box'); "do nothing" for a goal with no targets. No commas between moves, so an answer
+    naming it reads whole."""
+    if goal.stack:
+        return "stack the objects on each other"
+    moves = [_move(t, goal.dish, goal.need) for t in goal.targets]
+    if not moves:
+        return "do nothing"
+    return " and ".join(moves) if len(moves) <= 2 else "; ".join(moves[:-1]) + " and " + moves[-1]
