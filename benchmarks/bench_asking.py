@@ -21,9 +21,9 @@ from pathlib import Path
 from typing import Any
 
 from conceptbot.bench.conformal_fit import labelled
-from conceptbot.bench.grading import gold_reading, gold_reply, grade, load_tasks, task_scene
-from conceptbot.core.plan import Plan
+from conceptbot.bench.grading import Task, gold_reading, gold_reply, grade, load_tasks, task_scene
 from conceptbot.core.config import load_settings
+from conceptbot.core.plan import Plan
 from conceptbot.core.system import ASK_ALL, COVERAGES, LEVELS, SystemOptions
 from conceptbot.core.trace import ClarifyingQuestion
 from conceptbot.systems import build_system
@@ -70,8 +70,8 @@ def measure(
                 return ""  # not an answer: the reading chosen stands
 
             def plan_as(reading: str) -> Plan:
-                def fixed(q: ClarifyingQuestion) -> str:
-                    return reading if q.kind == "reading" else gold_reply(task, q)
+                def fixed(other: ClarifyingQuestion, task: Task = task) -> str:
+                    return reading if other.kind == "reading" else gold_reply(task, other)
 
                 return system.plan(task.request, scene, ask=fixed)
 
@@ -253,7 +253,8 @@ def main() -> None:
         document = json.loads(OUT.read_text()) if OUT.exists() else {"asking": []}
 
         def key(r: dict[str, Any]) -> tuple[Any, ...]:
-            return r["split"], r["system"], r.get("level", "decision"), r["coverage"], r.get("reading_asked", False)
+            level = r.get("level", "decision")
+            return r["split"], r["system"], level, r["coverage"], r.get("reading_asked", False)
 
         done = {key(r) for r in rows}
         kept = [r for r in document["asking"] if key(r) not in done] + rows
@@ -273,11 +274,14 @@ def plot(rows: list[dict[str, Any]]) -> None:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6, 4))
+
     def group(r: dict[str, Any]) -> tuple[str, str, str, bool]:
         return r["split"], r["system"], r.get("level", "decision"), bool(r.get("reading_asked", False))
 
     for split, system, level, readings in sorted({group(r) for r in rows}):
-        line = sorted((r for r in rows if group(r) == (split, system, level, readings)), key=lambda r: r["coverage"])
+        line = sorted(
+            (r for r in rows if group(r) == (split, system, level, readings)), key=lambda r: r["coverage"]
+        )
         xs = [0.0] + [r["help_rate"] for r in line]
         ys = [line[0]["success_without_questions"]] + [r["success"] for r in line]
         asked = ", reading asked" if readings else ""

@@ -97,7 +97,8 @@ class SystemOptions:
         level: What the coverage holds for (:data:`LEVELS`): ``plan``, all of a plan's calibrated
             decisions together, or ``decision``, each one (asks less, is wrong more often).
         reading: How the goal planner reads the request (:data:`READINGS`): ``restated`` (one more
-            model call, a median of 1.0 s on the embedded model) or ``words`` (the rules alone, as before 2026-12-02).
+            model call, a median of 1.0 s on the embedded model) or ``words`` (the rules alone, as
+            before 2026-12-02).
 
     Raises:
         ConfigError: A value of the wrong type, out of range or not one of the choices.

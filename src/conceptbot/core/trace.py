@@ -328,8 +328,8 @@ class ClarifyingQuestion:
             for ``reading``.
         kind: One of :data:`KINDS`.
         answer: The person's answer as read (``yes``/``no``; for ``choose`` the chosen objects joined
-            by ", ", for ``one`` the object, for ``reading`` the reading; or ``none``); None where nobody was asked (the plan then
-            acts on the likelier answers).
+            by ", ", for ``one`` the object, for ``reading`` the reading; or ``none``); None where
+            nobody was asked (the plan then acts on the likelier answers).
         others: For ``one``: the target's other candidates, which the person may name instead of
             the listed ones (the set missed what they meant: "none of those, the reading glasses").
     """

@@ -168,7 +168,8 @@ def test_the_goal_finder_reads_the_model_s_plain_form_and_says_which_reading_it_
     assert not scorer.score_requests  # the other reading is made only when asked for
     other = doubt.alternative()
     assert other.reading == "words" and len(other.targets) >= 2 and scorer.score_requests
-    assert other.other == Goal(targets=(GoalTarget("shoe box", "named", ("conch shell",), count=1),)).to_dict()
+    taken = Goal(targets=(GoalTarget("shoe box", "named", ("conch shell",), count=1),))
+    assert other.other == taken.to_dict()
 
 
 def test_readings_that_agree_are_no_doubt() -> None:

@@ -20,7 +20,8 @@ def test_a_reading_in_words_says_what_each_target_would_do() -> None:
         )
     )
     assert describe(goal) == (
-        'give the user one "fruit"; give the user two "soda" and put everything that is "poisonous" in or on the box'
+        'give the user one "fruit"; give the user two "soda"'
+        ' and put everything that is "poisonous" in or on the box'
     )
     assert describe(Goal(targets=(GoalTarget("tray", "named", ("cup", "jug", "pan"), count=3),))) == (
         "put the cup, the jug and the pan in or on the tray"
@@ -28,7 +29,9 @@ def test_a_reading_in_words_says_what_each_target_would_do() -> None:
     need = Goal(need="my hands are cold", targets=(GoalTarget(None, "need"),))
     assert describe(need) == 'give something for "my hands are cold"'
     dish = Goal(dish="guacamole", targets=(GoalTarget("bowl", "ingredients"), GoalTarget("bin", "remainder")))
-    assert describe(dish) == 'put the ingredients of "guacamole" in or on the bowl and put the rest in or on the bin'
+    assert describe(dish) == (
+        'put the ingredients of "guacamole" in or on the bowl and put the rest in or on the bin'
+    )
     assert describe(Goal(stack=True)) == "stack the objects on each other"
     assert describe(Goal()) == "do nothing"
 
