@@ -128,3 +128,22 @@ def test_a_which_one_question_takes_another_candidate_by_name(
     assert out.exit_code == 0, out.output
     assert "  1. lemon\n  2. lime\n  or another: orange, cup\n" in out.output
     assert system.answers == ["orange"] and "Give a number or a name" in out.output
+
+
+def test_a_reading_question_lists_the_two_readings_and_takes_a_number(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    readings = ('give the user one "fruit"', 'give the user one "fruit" and give the user one "soda"')
+    question = ClarifyingQuestion(
+        f"Did you mean: {readings[0]}, or {readings[1]}? One of them, or none.",
+        "",
+        readings,
+        (0.65, 0.15),
+        kind="reading",
+    )
+    system = Unsure(question)
+    monkeypatch.setattr(plan_cmd, "build_system", lambda settings, config, options: system)
+    out = _plan(tmp_path, "--ask", answer="fruit\n2\n")  # part of a reading is not an answer
+    assert out.exit_code == 0, out.output
+    assert f"  1. {readings[0]}\n  2. {readings[1]}\n" in out.output
+    assert system.answers == [readings[1]] and "P(meant) 0.65, 0.15" in out.output
