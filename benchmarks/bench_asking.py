@@ -10,6 +10,10 @@ decisions' prediction sets against the gold. Rows go to ``results/asking.json`` 
 
 ``--tasks id,id`` measures those tasks only and prints each one's outcome (alone, asked, the
 questions); such rows are not written (they are not the split's figures).
+
+With ``--write`` each task's outcome is also kept, as it is measured, in
+``results/asking-tasks.jsonl``: the evidence behind the rows (which tasks fail, what was asked), and
+what ``--write --resume`` continues from after a stop.
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -31,7 +36,45 @@ from conceptbot.systems import build_system
 OUT = Path("results/asking.json")
 FIGURE = Path("results/asking.png")
 RELIABILITY = Path("results/asking-reliability.png")
+# Each task's outcome, one JSON line per task as it is measured (``--write``): the rows' evidence,
+# and what ``--resume`` continues from after a stop.
+TASKS = Path("results/asking-tasks.jsonl")
 BINS = 10
+
+
+def outcome(system: Any, task: Task, readings: bool = True) -> dict[str, Any]:
+    """One task planned without and with the simulated person: both grades, whether each calibrated
+    decision's prediction set held the gold (``found``), and the questions asked with their answers.
+    ``readings`` False: the person does not answer which reading of a request was meant, and such
+    questions are not counted (the plan acts on the reading chosen, as before those were asked)."""
+    scene = task_scene(task)
+    alone = system.plan(task.request, scene)
+
+    def person(question: ClarifyingQuestion) -> str:
+        if question.kind != "reading":
+            return gold_reply(task, question)
+        if not readings:
+            return ""  # not an answer: the reading chosen stands
+
+        def plan_as(reading: str) -> Plan:
+            def fixed(other: ClarifyingQuestion) -> str:
+                return reading if other.kind == "reading" else gold_reply(task, other)
+
+            return system.plan(task.request, scene, ask=fixed)
+
+        return gold_reading(task, question, plan_as)
+
+    answered = system.plan(task.request, scene, ask=person) if alone.questions else alone
+    counted = [q for q in answered.questions if readings or q.kind != "reading"]
+    return {
+        "task": task.id,
+        "alone": grade(task, alone.actions, alone.refused).ok,
+        "asked": grade(task, answered.actions, answered.refused).ok,
+        "found": [decision.covered for decision in labelled(task, alone)],
+        "questions": [
+            {"kind": q.kind, "text": q.text, "answer": q.answer, "objects": len(q.objects)} for q in counted
+        ],
+    }
 
 
 def measure(
@@ -41,84 +84,74 @@ def measure(
     level: str = "plan",
     ids: frozenset[str] = frozenset(),
     readings: bool = True,
+    known: dict[str, dict[str, Any]] | None = None,
+    keep: Callable[[dict[str, Any]], None] | None = None,
 ) -> dict[str, Any]:
-    """One row: the split's tasks (``ids``: only those) planned with and without the gold answers;
-    with ``ids``, each task's outcome too (``per_task``). ``readings`` False: the person does not
-    answer which reading of a request was meant, and such questions are not counted (the plan acts
-    on the reading chosen, as before those questions were asked)."""
+    """One row: the split's tasks (``ids``: only those) planned with and without the gold answers
+    (:func:`outcome`); with ``ids``, each task's outcome too (``per_task``). ``known`` holds outcomes
+    of an earlier run by task id, taken instead of planning the task again (``--resume``); ``keep``
+    gets each new outcome as it is found."""
     system = build_system(load_settings(), system_name, SystemOptions(coverage=coverage, level=level))
     tasks = [t for t in load_tasks(split=split) if not ids or t.id in ids]
-    per_task = []
-    solo = helped = asked_tasks = questions = options = covered = calibrated = reading_questions = 0
-    plans_calibrated = plans_covered = 0
+    found = []
     for done, task in enumerate(tasks):
         print(f"\r{split} {system_name} {coverage}: {done}/{len(tasks)}", end="", file=sys.stderr, flush=True)
-        scene = task_scene(task)
-        alone = system.plan(task.request, scene)
-        solo += grade(task, alone.actions, alone.refused).ok
-        found = [decision.covered for decision in labelled(task, alone)]
-        calibrated += len(found)
-        covered += sum(found)
-        if found:
-            plans_calibrated += 1
-            plans_covered += all(found)
-
-        def person(question: ClarifyingQuestion, task=task, scene=scene) -> str:
-            if question.kind != "reading":
-                return gold_reply(task, question)
-            if not readings:
-                return ""  # not an answer: the reading chosen stands
-
-            def plan_as(reading: str) -> Plan:
-                def fixed(other: ClarifyingQuestion, task: Task = task) -> str:
-                    return reading if other.kind == "reading" else gold_reply(task, other)
-
-                return system.plan(task.request, scene, ask=fixed)
-
-            return gold_reading(task, question, plan_as)
-
-        answered = system.plan(task.request, scene, ask=person) if alone.questions else alone
-        counted = [q for q in answered.questions if readings or q.kind != "reading"]
-        reading_questions += sum(q.kind == "reading" for q in counted)
-        helped += grade(task, answered.actions, answered.refused).ok
-        if ids:
-            per_task.append(
-                {
-                    "task": task.id,
-                    "alone": grade(task, alone.actions, alone.refused).ok,
-                    "asked": grade(task, answered.actions, answered.refused).ok,
-                    "questions": [f"{q.text} -> {q.answer}" for q in counted],
-                }
-            )
-        questions += len(counted)
-        options += sum(len(q.objects) for q in counted)
-        asked_tasks += bool(counted)
+        if known and task.id in known:
+            found.append(known[task.id])
+            continue
+        found.append(outcome(system, task, readings))
+        if keep:
+            keep(found[-1])
     print(file=sys.stderr)
-    n = len(tasks)
     return {
         "split": split,
         "system": system_name,
         "level": level,
         "coverage": coverage,
-        "tasks": n,
-        "success_without_questions": round(100 * solo / n, 1),
-        "success": round(100 * helped / n, 1),
-        "help_rate": round(100 * asked_tasks / n, 1),
-        "questions_per_task": round(questions / n, 3),
-        "objects_per_question": round(options / questions, 2) if questions else None,
-        "reading_questions": reading_questions,
+        **summary(found, level),
         "reading_asked": readings,
+        **({"per_task": found} if ids else {}),
+    }
+
+
+def summary(found: list[dict[str, Any]], level: str = "plan") -> dict[str, Any]:
+    """The row's figures from its tasks' outcomes."""
+    n = len(found)
+    questions = [q for o in found for q in o["questions"]]
+    decisions = [covered for o in found for covered in o["found"]]
+    plans = [all(o["found"]) for o in found if o["found"]]
+    return {
+        "tasks": n,
+        "success_without_questions": round(100 * sum(o["alone"] for o in found) / n, 1),
+        "success": round(100 * sum(o["asked"] for o in found) / n, 1),
+        "help_rate": round(100 * sum(bool(o["questions"]) for o in found) / n, 1),
+        "questions_per_task": round(len(questions) / n, 3),
+        "objects_per_question": (
+            round(sum(q["objects"] for q in questions) / len(questions), 2) if questions else None
+        ),
+        "reading_questions": sum(q["kind"] == "reading" for q in questions),
         # At the calibrated level: plan (every calibrated decision of a task covered) or decision.
         "empirical_coverage": (
-            round(plans_covered / plans_calibrated, 4)
-            if level == "plan" and plans_calibrated
-            else (round(covered / calibrated, 4) if calibrated else None)
+            round(sum(plans) / len(plans), 4)
+            if level == "plan" and plans
+            else (round(sum(decisions) / len(decisions), 4) if decisions else None)
         ),
-        "tasks_with_calibrated_decisions": plans_calibrated,
-        "calibrated_decisions": calibrated,
-        "decision_coverage": round(covered / calibrated, 4) if calibrated else None,
-        **({"per_task": per_task} if ids else {}),
+        "tasks_with_calibrated_decisions": len(plans),
+        "calibrated_decisions": len(decisions),
+        "decision_coverage": round(sum(decisions) / len(decisions), 4) if decisions else None,
     }
+
+
+def _key(r: dict[str, Any]) -> tuple[Any, ...]:
+    """What a row (or a task's outcome) was measured as."""
+    return r["split"], r["system"], r.get("level", "decision"), r["coverage"], r.get("reading_asked", False)
+
+
+def _outcomes(resume: bool) -> list[dict[str, Any]]:
+    """The per-task outcomes kept in :data:`TASKS` (none unless ``resume``)."""
+    if not resume or not TASKS.exists():
+        return []
+    return [json.loads(line) for line in TASKS.read_text(encoding="utf-8").splitlines() if line.strip()]
 
 
 def _in_bin(pairs: list[tuple[float, float]], k: int, bins: int = BINS) -> list[tuple[float, float]]:
@@ -204,12 +237,20 @@ def main() -> None:
     )
     parser.add_argument("--tasks", default="", help="only these task ids (comma-separated; not written)")
     parser.add_argument(
+        "--resume",
+        action="store_true",
+        help=f"take the tasks already measured from {TASKS} (same split, system, level, coverage) "
+        "instead of planning them again",
+    )
+    parser.add_argument(
         "--reliability", action="store_true", help="only the reliability of the probabilities (no questions)"
     )
     args = parser.parse_args()
     ids = frozenset(t for t in args.tasks.split(",") if t)
     if ids and args.write:
         parser.error("--tasks measures a subset: its rows are not the split's, so --write is refused")
+    if args.resume and not args.write:
+        parser.error("--resume continues a written run: give --write too")
     if args.reliability:
         found = reliability(args.split, args.systems.split(",")[0])
         shown = {k: v for k, v in found.items() if not k.startswith("_")}
@@ -231,11 +272,25 @@ def main() -> None:
     # ASK_ALL: every calibrated decision asked, the most the answers can do (the ceiling).
     coverages = (*COVERAGES, ASK_ALL)
     readings = not args.no_readings
-    rows = [
-        measure(args.split, s, c, args.level, ids, readings)
-        for s in args.systems.split(",")
-        for c in coverages
-    ]
+    keys = [(args.split, s, args.level, c, readings) for s in args.systems.split(",") for c in coverages]
+    earlier = _outcomes(args.resume)
+    if args.write:
+        # Without --resume, this run's keys start afresh; other keys' outcomes stay.
+        kept = earlier if args.resume else [o for o in _outcomes(True) if _key(o) not in keys]
+        TASKS.write_text("".join(json.dumps(o) + "\n" for o in kept), encoding="utf-8")
+    rows = []
+    for key in keys:
+        split, system_name, level, coverage, _ = key
+        known = {o["task"]: o for o in earlier if _key(o) == key}
+        fields = dict(zip(("split", "system", "level", "coverage", "reading_asked"), key, strict=True))
+
+        def keep(found: dict[str, Any], fields: dict[str, Any] = fields) -> None:
+            with TASKS.open("a", encoding="utf-8") as out:
+                out.write(json.dumps({**fields, **found}) + "\n")
+
+        rows.append(
+            measure(split, system_name, coverage, level, ids, readings, known, keep if args.write else None)
+        )
     columns = ("cover", "alone", "asked", "help", "q/task", "obj/q", "emp.cov", "dec.cov", "n task")
     print(f"{'system':10} {'level':8} " + " ".join(f"{c:>7}" for c in columns))
     for r in rows:
@@ -245,19 +300,14 @@ def main() -> None:
             f"{r['objects_per_question']!s:>7} {r['empirical_coverage']!s:>7} {r['decision_coverage']!s:>7} "
             f"{r['tasks_with_calibrated_decisions']:>7}"
         )
-        for outcome in r.get("per_task", []):
-            print(f"    {outcome['task']}: alone {outcome['alone']}, asked {outcome['asked']}")
-            for question in outcome["questions"]:
-                print(f"        {question}")
+        for found in r.get("per_task", []):
+            print(f"    {found['task']}: alone {found['alone']}, asked {found['asked']}")
+            for question in found["questions"]:
+                print(f"        {question['text']} -> {question['answer']}")
     if args.write:
         document = json.loads(OUT.read_text()) if OUT.exists() else {"asking": []}
-
-        def key(r: dict[str, Any]) -> tuple[Any, ...]:
-            level = r.get("level", "decision")
-            return r["split"], r["system"], level, r["coverage"], r.get("reading_asked", False)
-
-        done = {key(r) for r in rows}
-        kept = [r for r in document["asking"] if key(r) not in done] + rows
+        done = {_key(r) for r in rows}
+        kept = [r for r in document["asking"] if _key(r) not in done] + rows
         OUT.write_text(json.dumps({**document, "asking": kept}, indent=2) + "\n", encoding="utf-8")
         print(f"wrote {OUT}")
         plot(kept)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import importlib.util
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -20,15 +21,60 @@ def test_a_benchmark_script_imports(script: Path) -> None:
     assert callable(getattr(module, "main", None)), f"{script.name} has no main()"
 
 
-def test_the_asking_benchmark_measures_calibration_error() -> None:
+def _asking() -> Any:
+    """benchmarks/bench_asking.py as a module (it runs only under __main__)."""
     spec = importlib.util.spec_from_file_location(
         "benchmark_asking", BENCHMARKS[0].parent / "bench_asking.py"
     )
     assert spec is not None and spec.loader is not None
     asking = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(asking)
+    return asking
+
+
+def test_the_asking_benchmark_measures_calibration_error() -> None:
+    asking = _asking()
     honest = [(0.25, 0.0), (0.25, 0.0), (0.25, 0.0), (0.25, 1.0)]  # 25% said, 25% happened
     assert asking.expected_calibration_error(honest) == pytest.approx(0.0)
     sure_and_wrong = [(0.95, 0.0)] * 3 + [(0.05, 1.0)]
     assert asking.expected_calibration_error(sure_and_wrong) == pytest.approx(0.95)
     assert asking.expected_calibration_error([(1.0, 1.0)]) == 0.0  # 1.0 falls in the last bin
+
+
+def test_the_asking_benchmark_sums_its_tasks_outcomes() -> None:
+    asking = _asking()
+    reading = {"kind": "reading", "text": "Did you mean: a, or b?", "answer": "b", "objects": 2}
+    one = {"kind": "one", "text": "Which one?", "answer": "lime", "objects": 3}
+    found = [
+        {"task": "t1", "alone": False, "asked": True, "found": [True, False], "questions": [reading, one]},
+        {"task": "t2", "alone": True, "asked": True, "found": [True], "questions": []},
+        {"task": "t3", "alone": False, "asked": False, "found": [], "questions": []},
+        {"task": "t4", "alone": False, "asked": False, "found": [True, True], "questions": [one]},
+    ]
+    row = asking.summary(found)
+    assert (row["success_without_questions"], row["success"], row["help_rate"]) == (25.0, 50.0, 50.0)
+    assert row["questions_per_task"] == 0.75 and row["objects_per_question"] == pytest.approx(8 / 3, abs=0.01)
+    assert row["reading_questions"] == 1
+    assert row["tasks_with_calibrated_decisions"] == 3 and row["empirical_coverage"] == pytest.approx(0.6667)
+    assert row["decision_coverage"] == 0.8  # 4 of the 5 decisions' sets held the gold
+    assert asking.summary(found, "decision")["empirical_coverage"] == 0.8
+
+
+def test_the_asking_benchmark_resumes_from_kept_outcomes(monkeypatch: pytest.MonkeyPatch) -> None:
+    asking = _asking()
+    tasks = [type("T", (), {"id": i})() for i in ("t1", "t2")]
+    monkeypatch.setattr(asking, "load_tasks", lambda split: tasks)
+    monkeypatch.setattr(asking, "build_system", lambda *a: object())
+    monkeypatch.setattr(asking, "load_settings", lambda: None)
+    planned: list[str] = []
+
+    def outcome(system: object, task: object, readings: bool = True) -> dict[str, object]:
+        planned.append(task.id)  # type: ignore[attr-defined]
+        return {"task": task.id, "alone": True, "asked": True, "found": [], "questions": []}  # type: ignore[attr-defined]
+
+    monkeypatch.setattr(asking, "outcome", outcome)
+    kept: list[dict[str, object]] = []
+    earlier = {"t1": {"task": "t1", "alone": False, "asked": False, "found": [True], "questions": []}}
+    row = asking.measure("test", "conceptbot", 0.9, known=earlier, keep=kept.append)
+    assert planned == ["t2"] and [o["task"] for o in kept] == ["t2"]  # t1 is taken, not planned again
+    assert row["success"] == 50.0 and row["tasks"] == 2

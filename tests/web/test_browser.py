@@ -96,6 +96,29 @@ def picking_worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: Any
     choosing_worker(spec, emit, out_dir, ask, ONE)
 
 
+READINGS = ('give the user one "fruit"', 'give the user one "fruit", and one "soda"')
+READING = ClarifyingQuestion(
+    f"Did you mean: {READINGS[0]}, or {READINGS[1]}? One of them, or none.",
+    "",
+    READINGS,
+    (0.6, 0.3),
+    kind="reading",
+)
+
+
+def reading_worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: Any = None) -> None:
+    """A run whose request reads two ways: which reading was meant, then the plan by that one."""
+    chosen = READING.read(ask(READING)) if ask is not None else ()
+    plan = {
+        (READINGS[0],): ["pick_and_place(apple, user)"],
+        (READINGS[1],): ["pick_and_place(apple, user)", "pick_and_place(7up, user)"],
+    }
+    emit(
+        "plan",
+        {"plan": [*plan.get(chosen or (), []), "done()"], "refused": False, "reason": None, "usage": {}},
+    )
+
+
 @pytest.fixture
 def server(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str]:
     worker = getattr(request, "param", None) or make_worker(lambda config, backend: scripted_bot(), False)
@@ -259,6 +282,24 @@ def test_the_person_may_pick_another_than_those_listed(server: str, browser) -> 
     browser.find_elements(By.CSS_SELECTOR, "#choose-options input")[3].click()
     browser.find_element(By.ID, "answer-chosen").click()
     assert _planned(browser) == ["pick_and_place(orange, user)", "done()"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("server", [reading_worker], indirect=True)
+def test_the_page_asks_which_reading_was_meant(server: str, browser) -> None:
+    from selenium.webdriver.common.by import By
+
+    _ask(server, browser, "choose-box")
+    assert browser.find_element(By.ID, "question-text").text == READING.text
+    boxes = browser.find_elements(By.CSS_SELECTOR, "#choose-options input")
+    assert [b.get_attribute("type") for b in boxes] == ["radio"] * 2  # one reading, no "another"
+    labels = [li.text.strip() for li in browser.find_elements(By.CSS_SELECTOR, "#choose-options li")]
+    assert labels == list(READINGS)
+    assert browser.find_element(By.ID, "answer-chosen").text == "This is what I meant"
+    boxes[1].click()  # the reading with a comma in it is sent whole
+    browser.save_screenshot(str(SHOTS / "web-6-reading.png"))
+    browser.find_element(By.ID, "answer-chosen").click()
+    assert _planned(browser) == ["pick_and_place(apple, user)", "pick_and_place(7up, user)", "done()"]
 
 
 @pytest.mark.slow
