@@ -29,8 +29,9 @@ from conceptbot.bench.conformal_fit import labelled
 from conceptbot.bench.grading import Task, gold_reading, gold_reply, grade, load_tasks, task_scene
 from conceptbot.core.config import load_settings
 from conceptbot.core.plan import Plan
-from conceptbot.core.system import ASK_ALL, COVERAGES, LEVELS, SystemOptions
+from conceptbot.core.system import ASK_ALL, COVERAGES, LEVELS, WHICH_ONE, SystemOptions
 from conceptbot.core.trace import ClarifyingQuestion
+from conceptbot.pipeline.goal_planner.conformal import OLD_RULE, shipped
 from conceptbot.systems import build_system
 
 OUT = Path("results/asking.json")
@@ -86,12 +87,16 @@ def measure(
     readings: bool = True,
     known: dict[str, dict[str, Any]] | None = None,
     keep: Callable[[dict[str, Any]], None] | None = None,
+    which_one: str | None = None,
 ) -> dict[str, Any]:
     """One row: the split's tasks (``ids``: only those) planned with and without the gold answers
     (:func:`outcome`); with ``ids``, each task's outcome too (``per_task``). ``known`` holds outcomes
     of an earlier run by task id, taken instead of planning the task again (``--resume``); ``keep``
-    gets each new outcome as it is found."""
-    system = build_system(load_settings(), system_name, SystemOptions(coverage=coverage, level=level))
+    gets each new outcome as it is found. ``which_one``: the which-one rule (None: the
+    calibration's)."""
+    options = SystemOptions(coverage=coverage, level=level, which_one=which_one)
+    system = build_system(load_settings(), system_name, options)
+    rule = which_one or shipped().rule
     tasks = [t for t in load_tasks(split=split) if not ids or t.id in ids]
     found = []
     for done, task in enumerate(tasks):
@@ -110,6 +115,7 @@ def measure(
         "coverage": coverage,
         **summary(found, level),
         "reading_asked": readings,
+        "which_one": rule,
         **({"per_task": found} if ids else {}),
     }
 
@@ -144,7 +150,14 @@ def summary(found: list[dict[str, Any]], level: str = "plan") -> dict[str, Any]:
 
 def _key(r: dict[str, Any]) -> tuple[Any, ...]:
     """What a row (or a task's outcome) was measured as."""
-    return r["split"], r["system"], r.get("level", "decision"), r["coverage"], r.get("reading_asked", False)
+    return (
+        r["split"],
+        r["system"],
+        r.get("level", "decision"),
+        r["coverage"],
+        r.get("reading_asked", False),
+        r.get("which_one") or OLD_RULE,  # rows before 2026-12-03 were all softmax
+    )
 
 
 def _outcomes(resume: bool) -> list[dict[str, Any]]:
@@ -235,6 +248,9 @@ def main() -> None:
     parser.add_argument(
         "--no-readings", action="store_true", help="the person does not say which reading was meant"
     )
+    parser.add_argument(
+        "--which-one", choices=WHICH_ONE, default=None, help="the which-one rule (default: the calibration's)"
+    )
     parser.add_argument("--tasks", default="", help="only these task ids (comma-separated; not written)")
     parser.add_argument(
         "--resume",
@@ -272,7 +288,10 @@ def main() -> None:
     # ASK_ALL: every calibrated decision asked, the most the answers can do (the ceiling).
     coverages = (*COVERAGES, ASK_ALL)
     readings = not args.no_readings
-    keys = [(args.split, s, args.level, c, readings) for s in args.systems.split(",") for c in coverages]
+    rule = args.which_one or shipped().rule
+    keys = [
+        (args.split, s, args.level, c, readings, rule) for s in args.systems.split(",") for c in coverages
+    ]
     earlier = _outcomes(args.resume)
     if args.write:
         # Without --resume, this run's keys start afresh; other keys' outcomes stay.
@@ -280,16 +299,19 @@ def main() -> None:
         TASKS.write_text("".join(json.dumps(o) + "\n" for o in kept), encoding="utf-8")
     rows = []
     for key in keys:
-        split, system_name, level, coverage, _ = key
+        split, system_name, level, coverage, _, _ = key
         known = {o["task"]: o for o in earlier if _key(o) == key}
-        fields = dict(zip(("split", "system", "level", "coverage", "reading_asked"), key, strict=True))
+        names = ("split", "system", "level", "coverage", "reading_asked", "which_one")
+        fields = dict(zip(names, key, strict=True))
 
         def keep(found: dict[str, Any], fields: dict[str, Any] = fields) -> None:
             with TASKS.open("a", encoding="utf-8") as out:
                 out.write(json.dumps({**fields, **found}) + "\n")
 
         rows.append(
-            measure(split, system_name, coverage, level, ids, readings, known, keep if args.write else None)
+            measure(
+                split, system_name, coverage, level, ids, readings, known, keep if args.write else None, rule
+            )
         )
     columns = ("cover", "alone", "asked", "help", "q/task", "obj/q", "emp.cov", "dec.cov", "n task")
     print(f"{'system':10} {'level':8} " + " ".join(f"{c:>7}" for c in columns))

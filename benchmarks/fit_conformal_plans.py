@@ -8,13 +8,15 @@ each is all right far less often).
 
 Each system (the default ``conceptbot``: the ``graph`` combination; ``nokg``: ``nograph``) plans
 every dev task once without asking (through the cache; the probabilities do not depend on
-``qhat``), and :mod:`conceptbot.bench.conformal_fit` fits (``conceptbot calibrate --conformal`` does
-the same for a user's own model). Printed per coverage: ``qhat``, the leave-one-task-
-out coverage of whole tasks (how often a task's every decision would be covered by a ``qhat``
-fitted without it). ``--write`` stores the
-thresholds in ``src/conceptbot/pipeline/conformal.json`` (``plan_qhat``), which the planner reads.
+``qhat``), and :mod:`conceptbot.bench.conformal_fit` fits both which-one rules from those plans
+(``fits``: whether the likeliest candidate fits; ``softmax``: its share of the ranking;
+``conceptbot calibrate --conformal`` does the same for a user's own model). Printed per rule and
+coverage: ``qhat`` and the leave-one-task-out coverage of whole tasks (how often a task's every
+decision would be covered by a ``qhat`` fitted without it). ``--write`` stores the thresholds in
+``src/conceptbot/pipeline/conformal.json``, which the planner reads: ``plan_qhat`` for the rule
+``--which-one`` names (the default), ``plan_qhat_RULE`` for the other.
 
-    .venv/bin/python benchmarks/fit_conformal_plans.py [--write]
+    .venv/bin/python benchmarks/fit_conformal_plans.py [--write] [--which-one fits|softmax]
 """
 
 from __future__ import annotations
@@ -26,39 +28,50 @@ from pathlib import Path
 from conceptbot.bench.conformal_fit import SYSTEMS, PlanFit, collect, fit
 from conceptbot.bench.grading import load_tasks
 from conceptbot.core.config import load_settings
-from conceptbot.core.system import SystemOptions
+from conceptbot.core.system import WHICH_ONE, SystemOptions
 from conceptbot.pipeline.goal_planner.conformal import CALIBRATION_DOC
 from conceptbot.systems import build_system
 
 CONFORMAL = Path("src/conceptbot/pipeline/conformal.json")
 
 
-def fit_system(system_name: str) -> PlanFit:
-    """Plan the dev tasks with one system and fit; print the figures per coverage."""
+def fit_system(system_name: str) -> dict[str, PlanFit]:
+    """Plan the dev tasks with one system and fit each which-one rule; print the figures."""
     system = build_system(load_settings(), system_name, SystemOptions())
-    found = fit(collect(system, load_tasks(split="dev")))
-    print(f"\n{system_name}: {found.tasks} dev tasks with calibrated decisions ({found.decisions} decisions)")
-    print(f"{'coverage':>8} {'qhat':>6} {'leave-one-out':>13}")
-    for coverage, q in found.qhat.items():
-        print(f"{coverage:>8.2f} {q:>6.3f} {found.held_out[coverage]:>13.1%}")
-    return found
+    fits = {rule: fit(scores) for rule, scores in collect(system, load_tasks(split="dev")).items()}
+    for rule, found in fits.items():
+        print(
+            f"\n{system_name}, which-one rule {rule}: {found.tasks} dev tasks with calibrated decisions "
+            f"({found.decisions} decisions)"
+        )
+        print(f"{'coverage':>8} {'qhat':>6} {'leave-one-out':>13}")
+        for coverage, q in found.qhat.items():
+            print(f"{coverage:>8.2f} {q:>6.3f} {found.held_out[coverage]:>13.1%}")
+    return fits
 
 
 def main(argv: list[str] | None = None) -> int:
     """Fit and print; with ``--write``, store the thresholds."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--write", action="store_true", help=f"store the thresholds in {CONFORMAL}")
+    parser.add_argument(
+        "--which-one", choices=WHICH_ONE, default="fits", help="the rule the planner uses by default"
+    )
     args = parser.parse_args(argv)
     fits = {name: fit_system(system) for name, system in SYSTEMS}
-    qhat = {name: found.qhat for name, found in fits.items()}
-    counts = {name: found.tasks for name, found in fits.items()}
     if args.write:
         data = json.loads(CONFORMAL.read_text(encoding="utf-8"))
         data["_doc"] = CALIBRATION_DOC
-        data["plan_qhat"] = {n: {str(c): round(q, 4) for c, q in f.items()} for n, f in qhat.items()}
+        data["plan_which_one"] = args.which_one
+        for rule in WHICH_ONE:
+            key = "plan_qhat" if rule == args.which_one else f"plan_qhat_{rule}"
+            data[key] = {
+                name: {str(c): round(q, 4) for c, q in found[rule].qhat.items()}
+                for name, found in fits.items()
+            }
+        counts = ", ".join(f"{name} {found[args.which_one].tasks}" for name, found in fits.items())
         data["plan_fitted_on"] = (
-            f"dev tasks with calibrated decisions (graph {counts['graph']}, nograph {counts['nograph']}), "
-            "benchmarks/fit_conformal_plans.py"
+            f"dev tasks with calibrated decisions ({counts}), benchmarks/fit_conformal_plans.py"
         )
         CONFORMAL.write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
         print(f"wrote {CONFORMAL}")

@@ -163,6 +163,7 @@ def _conceptbot(config: str, settings: Settings, options: SystemOptions, parts: 
         coverage=options.coverage,
         level=options.level,
         reading=options.reading,
+        which_one=options.which_one,
         # A model calibrated with `conceptbot calibrate --conformal` asks by its own thresholds.
         calibration_dir=settings.calibration_dir,
     )

@@ -3,10 +3,13 @@
 
 A plan is right only if every calibrated decision in it is, so a task's nonconformity is its worst
 decision's ``1 - p(right answer)`` (KnowNo's multi-step form): for a yes/no decision the gold's
-answer; for a which-one decision the likeliest object the gold accepts (one where the gold accepts
-none of the target's objects is left out: the request was read wrong, and no set of that target's
-objects can cover it). ``qhat`` per coverage is the split-conformal quantile of the tasks'
-nonconformities; the tasks without a calibrated decision take no part.
+answer; for a which-one decision, by the ``fits`` rule the gold's answer to whether the likeliest
+candidate fits (its calibrated P(yes) or P(no)), by the ``softmax`` rule the ``p_one`` of the
+likeliest object the gold accepts (one where the gold accepts none of the target's objects is left
+out either way: the request was read wrong, and no set of that target's objects can cover it).
+Both rules' scores come from the same plans, so one pass over the tasks fits both. ``qhat`` per
+coverage is the split-conformal quantile of the tasks' nonconformities; the tasks without a
+calibrated decision take no part.
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ from dataclasses import dataclass
 
 from conceptbot.bench.grading import Task, gold_answer, task_scene
 from conceptbot.core.plan import Plan
-from conceptbot.core.system import COVERAGES, PlannerSystem
+from conceptbot.core.system import COVERAGES, WHICH_ONE, PlannerSystem
 from conceptbot.pipeline.goal_planner.conformal import conformal_threshold
 
 SYSTEMS = (("graph", "conceptbot"), ("nograph", "nokg"))
@@ -34,7 +37,8 @@ class Labelled:
 
     Attributes:
         p_right: The probability the planner gave the right answer: the gold's answer of a yes/no
-            decision; the likeliest object the gold accepts of a which-one decision.
+            decision; of a which-one decision, the gold's answer to whether the likeliest candidate
+            fits (``fits``), or the likeliest object the gold accepts (``softmax``).
         covered: Whether its prediction set holds the right answer.
         p_yes: A yes/no decision's P(yes) (None for which-one).
         yes: A yes/no decision's gold answer (None for which-one).
@@ -46,9 +50,10 @@ class Labelled:
     yes: bool | None = None
 
 
-def labelled(task: Task, plan: Plan) -> list[Labelled]:
+def labelled(task: Task, plan: Plan, rule: str = "fits") -> list[Labelled]:
     """Each calibrated decision in ``plan`` (planned for ``task`` without asking), judged by the gold
-    (a which-one decision whose target the gold accepts no object for is left out)."""
+    (a which-one decision whose target the gold accepts no object for is left out), its which-one
+    decisions by ``rule`` (:data:`~conceptbot.core.system.WHICH_ONE`)."""
     found: list[Labelled] = []
     for d in plan.trace.decisions or ():
         for j in d.objects:
@@ -61,14 +66,26 @@ def labelled(task: Task, plan: Plan) -> list[Labelled]:
             for j in d.objects
             if j.p_one is not None and gold_answer(task, j.object, d.target.to) == "yes"
         }
-        if d.candidates is not None and accepted:
-            found.append(Labelled(max(accepted.values()), bool(accepted.keys() & set(d.candidates))))
+        if d.candidates is None or not accepted:
+            continue
+        covered = bool(accepted.keys() & set(d.candidates))
+        if rule == "softmax":
+            found.append(Labelled(max(accepted.values()), covered))
+            continue
+        scored = [j for j in d.objects if j.p_one is not None]
+        if not all(j.p_one == j.p_one for j in scored):  # the ranking cannot be read: no score
+            found.append(Labelled(float("nan"), covered))
+            continue
+        top = max(scored, key=lambda j: j.p_one or 0.0)
+        fits = top.object in accepted
+        found.append(Labelled(top.p_yes if fits else 1.0 - top.p_yes, covered, top.p_yes, fits))
     return found
 
 
-def task_scores(task: Task, plan: Plan) -> list[float]:
-    """Each calibrated decision's nonconformity in ``plan`` (planned for ``task`` without asking)."""
-    return [nonconformity(found.p_right) for found in labelled(task, plan)]
+def task_scores(task: Task, plan: Plan, rule: str = "fits") -> list[float]:
+    """Each calibrated decision's nonconformity in ``plan`` (planned for ``task`` without asking),
+    its which-one decisions by ``rule``."""
+    return [nonconformity(found.p_right) for found in labelled(task, plan, rule)]
 
 
 @dataclass(frozen=True)
@@ -91,14 +108,17 @@ class PlanFit:
 
 def collect(
     system: PlannerSystem, tasks: Iterable[Task], progress: Callable[[Task], None] | None = None
-) -> list[list[float]]:
-    """Plan every task once without asking; each task's decision nonconformities (tasks without a
-    calibrated decision left out). ``progress`` is called after each task."""
-    found = []
+) -> dict[str, list[list[float]]]:
+    """Plan every task once without asking; per which-one rule (:data:`WHICH_ONE`), each task's
+    decision nonconformities (tasks without a calibrated decision left out). ``progress`` is called
+    after each task."""
+    found: dict[str, list[list[float]]] = {rule: [] for rule in WHICH_ONE}
     for task in tasks:
-        scores = task_scores(task, system.plan(task.request, task_scene(task)))
-        if scores:
-            found.append(scores)
+        plan = system.plan(task.request, task_scene(task))
+        for rule in WHICH_ONE:
+            scores = task_scores(task, plan, rule)
+            if scores:
+                found[rule].append(scores)
         if progress is not None:
             progress(task)
     return found

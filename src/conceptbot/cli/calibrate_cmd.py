@@ -18,7 +18,7 @@ from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.cli.params import FiniteFloatRange
 from conceptbot.cli.progress import count_progress
 from conceptbot.core.errors import ConceptBotError
-from conceptbot.core.system import SystemOptions
+from conceptbot.core.system import WHICH_ONE, SystemOptions
 from conceptbot.core.text import terminal_safe
 from conceptbot.knowledge.base import TARGET_PROPERTIES
 from conceptbot.knowledge.registry import open_graph
@@ -33,7 +33,7 @@ from conceptbot.pipeline.calibrate import (
     rows_for,
     thetas_between,
 )
-from conceptbot.pipeline.goal_planner.conformal import user_file
+from conceptbot.pipeline.goal_planner.conformal import shipped, user_file
 from conceptbot.pipeline.retrieval import RelationRetriever, default_theta
 from conceptbot.systems import build_system
 
@@ -163,8 +163,9 @@ def calibrate(
 def _conformal(app: AppContext, as_json: bool) -> None:
     """``calibrate --conformal``: fit and store the configured model's plan-level thresholds."""
     tasks = load_tasks(split="dev")
-    fits: dict[str, PlanFit] = {}
+    fits: dict[str, dict[str, PlanFit]] = {}
     backend = model = ""
+    rule = shipped().rule  # the which-one rule the planner uses unless told otherwise
     for combination, config in SYSTEMS:
         system = build_system(app.settings, config, SystemOptions())
         if getattr(system, "planner_kind", None) != "goal":
@@ -176,7 +177,7 @@ def _conformal(app: AppContext, as_json: bool) -> None:
         with count_progress(len(tasks), f"calibrating {config}") as step:
             scores = collect(system, tasks, lambda task, name=config: step(f"{name}: {task.id}"))
         try:
-            fits[combination] = fit(scores)
+            fits[combination] = {r: fit(found) for r, found in scores.items()}
         except ValueError as exc:
             raise ConceptBotError(
                 str(exc), hint="the dev tasks gave this model no calibrated decision"
@@ -188,11 +189,15 @@ def _conformal(app: AppContext, as_json: bool) -> None:
         "backend": backend,
         "model": model,
         "fitted_on": (
-            f"{len(tasks)} dev tasks ({fits['graph'].tasks} with calibrated decisions), {backend}:{model}"
+            f"{len(tasks)} dev tasks ({fits['graph'][rule].tasks} with calibrated decisions), "
+            f"{backend}:{model}"
         ),
-        "plan_qhat": {c: {str(k): round(q, 4) for k, q in f.qhat.items()} for c, f in fits.items()},
-        "held_out": {c: {str(k): round(h, 4) for k, h in f.held_out.items()} for c, f in fits.items()},
+        "plan_which_one": rule,
+        "held_out": {c: {str(k): round(h, 4) for k, h in f[rule].held_out.items()} for c, f in fits.items()},
     }
+    for each in WHICH_ONE:  # both rules' thresholds: `--which-one` may pick either
+        key = "plan_qhat" if each == rule else f"plan_qhat_{each}"
+        document[key] = {c: {str(k): round(q, 4) for k, q in f[each].qhat.items()} for c, f in fits.items()}
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")  # never a half-written file
     tmp.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
@@ -201,7 +206,8 @@ def _conformal(app: AppContext, as_json: bool) -> None:
         click.echo(json.dumps({**document, "path": str(path)}, indent=2))
         return
     table = Table("combination", "coverage", "qhat", "held-out plan coverage", "tasks")
-    for combination, found in fits.items():
+    for combination, by_rule in fits.items():
+        found = by_rule[rule]
         for coverage, q in found.qhat.items():
             table.add_row(
                 combination, f"{coverage:g}", f"{q:.3f}", f"{found.held_out[coverage]:.1%}", str(found.tasks)

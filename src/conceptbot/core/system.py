@@ -35,6 +35,10 @@ LEVELS = ("plan", "decision")
 #: How the goal planner reads a request: ``restated`` (the rules on its words and on the model's
 #: plain form of it, the better kept; ``pipeline/goal/aided.py``) or ``words`` (the rules alone).
 READINGS = ("restated", "words")
+#: How a target taking one object is judged sure (:mod:`conceptbot.pipeline.goal_planner.asking`):
+#: ``fits``, by the calibrated P(yes) that its likeliest candidate fits (any object that fits will
+#: do); ``softmax``, by that candidate's share of a softmax over the ranking (as before 2026-12-03).
+WHICH_ONE = ("fits", "softmax")
 """What the conformal coverage holds for: ``plan`` (every calibrated decision of a plan at once, the
 default) or ``decision`` (each decision on its own)."""
 """ConceptBot's planners: ``auto`` (the goal planner), ``goal``, ``steps`` (the paper's)."""
@@ -99,6 +103,8 @@ class SystemOptions:
         reading: How the goal planner reads the request (:data:`READINGS`): ``restated`` (one more
             model call, a median of 1.0 s on the embedded model) or ``words`` (the rules alone, as
             before 2026-12-02).
+        which_one: How a target taking one object is judged sure (:data:`WHICH_ONE`); None: the
+            rule the calibration was fitted for (``fits`` for the shipped one).
 
     Raises:
         ConfigError: A value of the wrong type, out of range or not one of the choices.
@@ -112,6 +118,7 @@ class SystemOptions:
     coverage: float = 0.9
     level: str = "plan"
     reading: str = "restated"
+    which_one: str | None = None
 
     def __post_init__(self) -> None:
         if self.theta is not None:
@@ -129,6 +136,8 @@ class SystemOptions:
         _choice("coverage", self.coverage, (*COVERAGES, ASK_ALL))
         _choice("level", self.level, LEVELS)
         _choice("reading", self.reading, READINGS)
+        if self.which_one is not None:
+            _choice("which_one", self.which_one, WHICH_ONE)
         if isinstance(self.n, bool) or not isinstance(self.n, int) or self.n < 1:
             raise ConfigError(f"n must be a whole number of completions >= 1, got {self.n!r}")
         if self.fallback is not None and not isinstance(self.fallback, bool):

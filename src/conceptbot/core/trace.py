@@ -324,7 +324,8 @@ class ClarifyingQuestion:
         objects: The objects it is about, most uncertain (``one``: most likely) first; for
             ``reading``, the two readings in words, the one the plan acts on first.
         p_yes: Each object's calibrated probability (4 decimals), in the order of ``objects``: P(yes)
-            for ``confirm`` and ``choose``, P(it is the one) for ``one``, P(it is what was meant)
+            for ``confirm`` and ``choose``; for ``one``, P(it fits) by the ``fits`` rule, P(it is the
+            one) by the ``softmax`` rule; P(it is what was meant)
             for ``reading``.
         kind: One of :data:`KINDS`.
         answer: The person's answer as read (``yes``/``no``; for ``choose`` the chosen objects joined

@@ -97,6 +97,8 @@ class ConceptBot:
         level: What the coverage holds for (``plan`` or ``decision``).
         reading: ``restated``: the goal planner reads the request's words and the model's plain
             form of it and keeps the better reading; ``words``: the rules alone.
+        which_one: How a target taking one object is judged sure (``fits`` or ``softmax``); None:
+            the rule the calibration names.
         calibration_dir: Where ``conceptbot calibrate --conformal`` wrote a model's thresholds.
     """
 
@@ -115,6 +117,7 @@ class ConceptBot:
         level: str = "plan",
         calibration_dir: Path | None = None,
         reading: str = "restated",
+        which_one: str | None = None,
     ) -> None:
         if config not in SWITCHES:
             raise ValueError(f"config must be one of {CONFIGS}")
@@ -170,7 +173,12 @@ class ConceptBot:
             # Its decisions' conformal thresholds, fitted on the same combination's probabilities.
             # The model's own where `conceptbot calibrate --conformal` wrote one in calibration_dir.
             calibration=conformal.calibration_for(
-                calibration_dir, llm.backend, llm.model, "graph" if graph is not None else "nograph", level
+                calibration_dir,
+                llm.backend,
+                llm.model,
+                "graph" if graph is not None else "nograph",
+                level,
+                which_one,
             ),
             coverage=coverage,
         )

@@ -201,6 +201,46 @@ def test_a_sure_choice_is_not_asked_and_an_unreadable_one_is() -> None:
     assert unreadable.confidence([("coke", "user")]) == 0.0
 
 
+def _fits(*rows: tuple[str, float, float]) -> tuple[dict[int, list[Judgement]], tuple[DecisionTrace, ...]]:
+    """A target taking one object: each candidate's (object, p_one, P(it fits))."""
+    judgements = [Judgement(o, "user", p, 0.0, scoring="logprob", p_one=one) for o, one, p in rows]
+    judgements.sort(key=lambda j: -(j.p_one or 0.0))
+    decision = DecisionTrace(target_trace(USER), True, tuple(judgement_trace(j) for j in judgements))
+    return {0: judgements}, (decision,)
+
+
+def test_by_the_fits_rule_two_candidates_that_both_fit_are_no_reason_to_ask() -> None:
+    # The softmax splits its mass between the water and the juice (0.5 and 0.45): asked by it.
+    ranked, decisions = _fits(("water", 0.5, 0.97), ("juice", 0.45, 0.95), ("sponge", 0.05, 0.02))
+    assert clarify([USER], ranked, decisions, 0.8).questions[0].objects == ("water", "juice")
+    sure = clarify([USER], ranked, decisions, 0.8, rule="fits")  # "no" needs P(no) >= 0.2
+    assert sure.questions == () and sure.decisions[0].candidates == ("water",)
+    assert sure.confidence([("water", "user")]) == pytest.approx(0.97)  # P(the water fits)
+    assert sure.confidence([("juice", "user")]) == pytest.approx(0.95)  # the water was vetoed
+
+
+def test_by_the_fits_rule_an_unsure_likeliest_asks_among_those_that_may_fit() -> None:
+    ranked, decisions = _fits(("coke", 0.6, 0.7), ("water", 0.3, 0.5), ("sponge", 0.1, 0.1))
+    [question] = clarify([USER], ranked, decisions, 0.8, rule="fits").questions
+    # The sponge's set is "no" alone (P(yes) 0.1 < 0.2): not listed, but offered as another.
+    assert question.kind == "one" and question.objects == ("coke", "water") and question.others == ("sponge",)
+    assert question.p_yes == (0.7, 0.5)  # P(it fits), the rule's probability
+    # Only the likeliest may fit, and not surely: the two likeliest, so that there is a choice.
+    alone, traces = _fits(("coke", 0.6, 0.7), ("water", 0.3, 0.1), ("sponge", 0.1, 0.1))
+    assert clarify([USER], alone, traces, 0.8, rule="fits").questions[0].objects == ("coke", "water")
+    asked = clarify([USER], ranked, decisions, 0.8, ask=lambda q: "water", rule="fits")
+    assert asked.decisions[0].candidates == ("water",) and asked.confidence([("water", "user")]) == 1.0
+
+
+def test_by_the_fits_rule_an_unreadable_probability_is_asked_about() -> None:
+    ranked, decisions = _fits(("coke", 0.9, math.nan), ("water", 0.1, 0.2))
+    found = clarify([USER], ranked, decisions, 0.8, rule="fits")
+    assert found.questions[0].objects == ("coke", "water")
+    assert found.confidence([("coke", "user")]) == 0.0  # NaN: no confidence
+    broken, traces = _fits(("coke", math.nan, 0.99), ("water", math.nan, 0.99))
+    assert clarify([USER], broken, traces, 0.8, rule="fits").questions[0].kind == "one"
+
+
 @pytest.mark.parametrize(
     ("reply", "chosen"),
     [

@@ -84,6 +84,29 @@ def test_a_models_own_calibration_is_read_before_the_shipped_one(tmp_path) -> No
     )
 
 
+def test_a_calibration_holds_for_the_which_one_rule_it_was_fitted_for(tmp_path) -> None:
+    from conceptbot.core.errors import ConfigError
+    from conceptbot.pipeline.goal_planner.conformal import OLD_RULE, calibration_for, user_file
+
+    path = user_file(tmp_path, "b", "m")
+    fits = {"graph": {"0.8": 0.5, "0.9": 0.6, "0.95": 0.7}}
+    softmax = {"graph": {"0.8": 0.7, "0.9": 0.8, "0.95": 0.9}}
+    both = {"plan_which_one": "fits", "plan_qhat": fits, "plan_qhat_softmax": softmax, "fitted_on": "x"}
+    path.write_text(json.dumps(both))
+    assert calibration_for(tmp_path, "b", "m").rule == "fits"
+    assert calibration_for(tmp_path, "b", "m").qhat[0.9] == 0.6
+    other = calibration_for(tmp_path, "b", "m", rule="softmax")
+    assert other.rule == "softmax" and other.qhat[0.9] == 0.8
+    # A file written before the rules were named is the softmax rule's, and has no other.
+    path.write_text(json.dumps({"plan_qhat": softmax, "fitted_on": "x"}))
+    assert calibration_for(tmp_path, "b", "m").rule == OLD_RULE == "softmax"
+    with pytest.raises(ConfigError, match="for this rule") as caught:
+        calibration_for(tmp_path, "b", "m", rule="fits")
+    assert "calibrate --conformal" in (caught.value.hint or "")
+    with pytest.raises(ValueError, match="no which-one rule 'best'"):
+        shipped(rule="best")
+
+
 @pytest.mark.parametrize(
     "text", ["not json", "[]", '{"plan_qhat": {"graph": {"0.8": 0.5}}, "fitted_on": "x"}', "NAN"]
 )

@@ -6,10 +6,15 @@ decision get conformal prediction sets (:mod:`.conformal`):
   decisions make one question: about one object, yes or no ("Should I put the lemon in or on the
   bowl (an ingredient of hollandaise)?"); about several, which of them go ("Which of these should I
   put in or on the salad bowl (...): the kiwi, the olive oil or the sugar? Any, all or none.");
-- which object a target taking one gets (the ranking as a softmax over the candidates): a set of
-  two or more is a question of which one ("Which one should I give to the user: the coke or the
-  water? One of them, another, or none."); the person may name another of the target's candidates,
-  since a set can miss what they meant.
+- which object a target taking one gets: a set of two or more is a question of which one ("Which
+  one should I give to the user: the coke or the water? One of them, another, or none."); the
+  person may name another of the target's candidates, since a set can miss what they meant. By the
+  ``fits`` rule (the default), the decision is whether the likeliest candidate fits, by its
+  calibrated P(yes): any object that fits will do, so two that both fit ("a drink": the water or
+  the juice) are no reason to ask. Sure that it fits, the set is that one; else it is every
+  candidate at least ``1 - qhat`` likely to fit (two at least). By the ``softmax`` rule (before
+  2026-12-03), the set holds each candidate whose share of a softmax over the ranking is at least
+  ``1 - qhat``, so candidates that fit alike split the mass and are asked about;
 
 - which of two readings of the request was meant, where the rules read its words and the model's
   plain form of it differently (:class:`~conceptbot.pipeline.goal_planner.targets.ReadingDoubt`):
@@ -56,6 +61,7 @@ class Clarified:
         which: The which-one targets no answer settled: their scored candidates.
         calibrated: Whether the plan has a calibrated decision (answered ones included).
         asked: The targets an answer settled decisions of.
+        rule: How the which-one decisions were judged (``fits`` or ``softmax``).
     """
 
     ranked: dict[int, list[Judgement]]
@@ -66,6 +72,7 @@ class Clarified:
     which: dict[int, list[Judgement]] = field(default_factory=dict)
     calibrated: bool = False
     asked: tuple[int, ...] = ()
+    rule: str = "softmax"
 
     def confidence(self, moves: Iterable[tuple[str, str]]) -> float | None:
         """The probability that the plan's final ``moves`` (object, destination) are right in every
@@ -82,7 +89,8 @@ class Clarified:
 
         A yes/no decision counts its P(yes) when its object went to its target, else P(no): an
         object the risk checks dropped counts as not moved. A which-one decision counts the
-        ``p_one`` of the object the target got (a replacement after a veto included); a target the
+        probability of the object the target got (a replacement after a veto included): that it
+        fits (``p_yes``) by the ``fits`` rule, its ``p_one`` by the ``softmax`` rule; a target the
         risk checks left empty counts for nothing: what it does is the checks' decision, which has
         no calibrated probability. A probability that cannot be read (NaN) counts as 0."""
         done = set(moves)
@@ -91,8 +99,8 @@ class Clarified:
             acted = decision.p_yes if (obj, self.places[number]) in done else 1.0 - decision.p_yes
             found[number] = found.get(number, 1.0) * (acted if acted == acted else 0.0)
         for number, judgements in self.which.items():
-            got = [j.p_one for j in judgements if (j.subject, self.places[number]) in done]
-            chance = got[0] if got and got[0] is not None else 1.0
+            got = [j for j in judgements if (j.subject, self.places[number]) in done and j.p_one is not None]
+            chance = _chance(got[0], self.rule) if got else 1.0
             found[number] = found.get(number, 1.0) * (chance if chance == chance else 0.0)
         return found
 
@@ -154,6 +162,7 @@ def clarify(
     qhat: float,
     ask: Ask | None = None,
     which_one: bool = True,
+    rule: str = "softmax",
 ) -> Clarified:
     """Sets, questions and answers for the calibrated decisions (see the module docstring).
 
@@ -166,6 +175,8 @@ def clarify(
             (:meth:`ClarifyingQuestion.read`) counts as no answer.
         which_one: Whether ``qhat`` holds for which-one decisions too (a plan-level calibration);
             else targets taking one object are not asked about.
+        rule: How a which-one decision is judged (``fits`` or ``softmax``; the module docstring):
+            the rule ``qhat`` was fitted for.
     """
     sets: dict[tuple[int, str], DecisionSet] = {}
     unsure: dict[int, list[Judgement]] = {}
@@ -181,7 +192,7 @@ def clarify(
                 unsure.setdefault(number, []).append(judgement)
     # Targets taking one object: the set of which one.
     candidates = {
-        number: one_of(ranked.get(number, []), qhat)
+        number: one_of(ranked.get(number, []), qhat, rule)
         for number, target in enumerate(targets)
         if which_one
         and target.count == 1
@@ -194,9 +205,11 @@ def clarify(
         doubt[number] = (_uncertainty(js[0]), question_for(number, targets[number], js))
     for number, found in candidates.items():
         if len(found) > 1:
-            top = found[0].p_one if found[0].p_one == found[0].p_one else 0.5
+            top = _chance(found[0], rule)
+            top = top if top == top else 0.5
             others = [j.subject for j in ranked.get(number, []) if j.p_one is not None]
-            doubt[number] = (abs(top - 0.5), which_one_question(targets[number], found, others))
+            question = which_one_question(targets[number], found, others, rule)
+            doubt[number] = (abs(top - 0.5), question)
     # One question per target, the target whose most uncertain decision is most uncertain first.
     questions = []
     answered: dict[tuple[int, str], str] = {}
@@ -251,6 +264,7 @@ def clarify(
         {number: ranked[number] for number in candidates if number not in settled},
         bool(sets or candidates),
         tuple(sorted(settled)),
+        rule,
     )
 
 
@@ -270,23 +284,40 @@ def reading_question(doubt: ReadingDoubt, qhat: float) -> ClarifyingQuestion | N
     )
 
 
-def one_of(judgements: list[Judgement], qhat: float) -> list[Judgement]:
-    """The conformal set of which one: the candidates at least ``1 - qhat`` likely, most likely first;
-    where none is (or the probabilities cannot be read), the :data:`MAX_OPTIONS` likeliest, so that
-    the person is asked rather than a guess made."""
+def one_of(judgements: list[Judgement], qhat: float, rule: str = "softmax") -> list[Judgement]:
+    """The conformal set of which one, most likely first (one candidate: the planner acts on it).
+
+    ``softmax``: the candidates whose ``p_one`` is at least ``1 - qhat``. ``fits``: the likeliest
+    alone where its P(yes) puts only "yes" in its set (:func:`.conformal.decision_set`: sure that
+    it fits); else the candidates at least ``1 - qhat`` likely to fit, two at least. Either way,
+    where too few are (or the probabilities cannot be read), the :data:`MAX_OPTIONS` likeliest, so
+    that the person is asked rather than a guess made."""
     scored = [j for j in judgements if j.p_one is not None]
     readable = all(j.p_one == j.p_one for j in scored)
     likeliest = sorted(scored, key=lambda j: -(j.p_one or 0.0)) if readable else scored
+    if rule == "fits":
+        if readable and likeliest and decision_set(likeliest[0].p_yes, qhat).answers == ("yes",):
+            return likeliest[:1]
+        may_fit = [j for j in likeliest if readable and decision_set(j.p_yes, qhat).answers != ("no",)]
+        return may_fit[:MAX_OPTIONS] if len(may_fit) > 1 else likeliest[: max(2, len(may_fit))]
     kept = [j for j in likeliest if readable and (j.p_one or 0.0) >= 1.0 - qhat]
     return kept or likeliest[:MAX_OPTIONS]
 
 
+def _chance(judgement: Judgement, rule: str) -> float:
+    """A which-one candidate's probability by ``rule``: that it fits (``fits``) or that it is the one
+    (``softmax``); NaN where it has none."""
+    found = judgement.p_yes if rule == "fits" else judgement.p_one
+    return math.nan if found is None else found
+
+
 def which_one_question(
-    target: Target, found: list[Judgement], others: Iterable[str] = ()
+    target: Target, found: list[Judgement], others: Iterable[str] = (), rule: str = "softmax"
 ) -> ClarifyingQuestion:
     """The question of which one: "Which one should I give to the user: the coke, the 7up or the
     water bottle? One of them, another, or none." ``others``: the target's other candidates, which
-    the person may name instead (a set can miss what they meant)."""
+    the person may name instead (a set can miss what they meant). Each object's probability is the
+    ``rule``'s: that it fits, or that it is the one."""
     kept = found[:MAX_OPTIONS]
     names = [j.subject for j in kept]
     rest = tuple(o for o in others if o not in names)
@@ -295,7 +326,7 @@ def which_one_question(
         + ("One of them, another, or none." if rest else "One of them, or none."),
         target.name,
         tuple(names),
-        tuple(_shown(j.p_one) for j in kept),
+        tuple(_shown(_chance(j, rule)) for j in kept),
         kind="one",
         others=rest,
     )

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from conceptbot.core.errors import ConfigError
-from conceptbot.core.system import ASK_ALL, COVERAGES, LEVELS
+from conceptbot.core.system import ASK_ALL, COVERAGES, LEVELS, WHICH_ONE
 
 __all__ = [
     "COVERAGES",
@@ -43,8 +43,11 @@ CALIBRATION_DOC = (
     "Split conformal thresholds (qhat) per combination and coverage, read by "
     "conceptbot.pipeline.goal_planner.conformal. qhat: decision level, on the combination's held-out "
     "P(yes) over the judgement set (benchmarks/fit_judgements.py --conformal --write). plan_qhat: plan "
-    "level, a dev task's worst decision (benchmarks/fit_conformal_plans.py --write). Refit for another model."
+    "level, a dev task's worst decision (benchmarks/fit_conformal_plans.py --write), for the which-one "
+    "rule plan_which_one names; plan_qhat_RULE: for another rule. Refit for another model."
 )
+#: The which-one rule of a plan-level calibration that names none (written before 2026-12-03).
+OLD_RULE = "softmax"
 
 
 def conformal_threshold(scores: Sequence[float], coverage: float) -> float:
@@ -101,12 +104,15 @@ def decision_set(p_yes: float, qhat: float) -> DecisionSet:
 
 @dataclass(frozen=True)
 class Calibration:
-    """The shipped thresholds: ``qhat`` per coverage, where they were fitted, and whether they hold
-    for which-one decisions (``which_one``; the decision level's, from yes/no judgements, do not)."""
+    """The shipped thresholds: ``qhat`` per coverage, where they were fitted, whether they hold
+    for which-one decisions (``which_one``; the decision level's, from yes/no judgements, do not),
+    and the rule that judges a which-one decision (``rule``, one of :data:`WHICH_ONE`: a threshold
+    holds only for the scores it was fitted on)."""
 
     qhat: dict[float, float]
     fitted_on: str
     which_one: bool = True  # fitted on which-one decisions too (plan level), so they get sets
+    rule: str = OLD_RULE
 
     def threshold(self, coverage: float) -> float:
         """``qhat`` for ``coverage`` (one of :data:`COVERAGES`; :data:`ASK_ALL` keeps every answer).
@@ -122,25 +128,47 @@ class Calibration:
         return self.qhat[coverage]
 
 
+def plan_key(data: dict[str, Any], rule: str | None) -> tuple[str, str]:
+    """Where a calibration document keeps the plan-level thresholds of a which-one ``rule`` (None:
+    the one it names in ``plan_which_one``), and that rule: ``plan_qhat`` for the rule it names,
+    ``plan_qhat_RULE`` for another.
+
+    Raises:
+        ValueError: A rule that is not one of :data:`WHICH_ONE`.
+    """
+    named = str(data.get("plan_which_one", OLD_RULE))
+    rule = rule or named
+    if rule not in WHICH_ONE:
+        raise ValueError(f"no which-one rule {rule!r}; known: {', '.join(WHICH_ONE)}")
+    return ("plan_qhat" if rule == named else f"plan_qhat_{rule}"), rule
+
+
 @cache
-def shipped(combination: str = "graph", level: str = "plan") -> Calibration:
+def shipped(combination: str = "graph", level: str = "plan", rule: str | None = None) -> Calibration:
     """The calibration shipped with the package (``conformal.json``) for a combination's
     probabilities (``graph``: the default system's, ``nograph``: the ablation's), at a level
     (:data:`LEVELS`: ``plan`` from the dev tasks, ``benchmarks/fit_conformal_plans.py``;
-    ``decision`` from the judgement set, ``benchmarks/fit_judgements.py --conformal``).
+    ``decision`` from the judgement set, ``benchmarks/fit_judgements.py --conformal``), for a
+    which-one ``rule`` (None: the one the file names; the decision level has no which-one decision).
 
     Raises:
-        ValueError: A combination or level without a calibration.
+        ValueError: A combination, level or rule without a calibration.
     """
     if level not in LEVELS:
         raise ValueError(f"no conformal level {level!r}; known: {', '.join(LEVELS)}")
     text = resources.files("conceptbot.pipeline").joinpath(CALIBRATION).read_text(encoding="utf-8")
     data = json.loads(text)
-    key, where = ("plan_qhat", "plan_fitted_on") if level == "plan" else ("qhat", "fitted_on")
+    if level == "plan":
+        (key, rule), where = plan_key(data, rule), "plan_fitted_on"
+    else:
+        key, where, rule = "qhat", "fitted_on", rule or OLD_RULE
     if combination not in data.get(key, {}):
-        raise ValueError(f"no {level}-level conformal calibration for the {combination!r} combination")
+        raise ValueError(
+            f"no {level}-level conformal calibration for the {combination!r} combination ({key})"
+        )
     fitted = data[key][combination]
-    return Calibration({float(k): float(v) for k, v in fitted.items()}, str(data[where]), level == "plan")
+    qhat = {float(k): float(v) for k, v in fitted.items()}
+    return Calibration(qhat, str(data[where]), level == "plan", rule)
 
 
 def user_file(directory: Path, backend: str, model: str) -> Path:
@@ -150,27 +178,35 @@ def user_file(directory: Path, backend: str, model: str) -> Path:
 
 
 def calibration_for(
-    directory: Path | None, backend: str, model: str, combination: str = "graph", level: str = "plan"
+    directory: Path | None,
+    backend: str,
+    model: str,
+    combination: str = "graph",
+    level: str = "plan",
+    rule: str | None = None,
 ) -> Calibration:
     """The model's own plan-level calibration where ``conceptbot calibrate --conformal`` wrote one
-    (in ``directory``), else the shipped one (fitted for the embedded model).
+    (in ``directory``), else the shipped one (fitted for the embedded model); for a which-one
+    ``rule`` (None: the one the calibration names).
 
     Raises:
-        ConfigError: A calibration file that is not one (with how to make it again).
+        ConfigError: A calibration file that is not one, or that has no thresholds for ``rule``
+            (with how to make it again).
     """
     path = user_file(directory, backend, model) if directory is not None else None
     if level != "plan" or path is None or not path.is_file():
-        return shipped(combination, level)
+        return shipped(combination, level, rule)
     fix = f"run `conceptbot calibrate --conformal` again, or remove {path}"
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
-        fitted = data["plan_qhat"][combination]
+        key, rule = plan_key(data, rule)
+        fitted = data[key][combination]
         qhat = {float(c): float(fitted[str(c)]) for c in COVERAGES}
         where = str(data["fitted_on"])
-    except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError) as exc:
+    except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError, AttributeError) as exc:
         raise ConfigError(
-            f"{path} is not a conformal calibration ({type(exc).__name__}: {exc})", hint=fix
+            f"{path} is not a conformal calibration for this rule ({type(exc).__name__}: {exc})", hint=fix
         ) from None
     if not all(0.0 <= q <= 1.0 for q in qhat.values()):  # NaN fails too
         raise ConfigError(f"{path}: a threshold is not a number in [0, 1]", hint=fix)
-    return Calibration(qhat, where, True)
+    return Calibration(qhat, where, True, rule)

@@ -271,7 +271,9 @@ class GoalPlanner:
         # object is shared between threads), the last question's method as before.
         asked = [j.scoring for js in ranked.values() for j in js if j.scoring]
         # Where a calibrated decision is unsure, a question (asked if someone answers): asking.py.
-        clarified = clarify(targets, ranked, decisions, qhat, ask, self.calibration.which_one)
+        clarified = clarify(
+            targets, ranked, decisions, qhat, ask, self.calibration.which_one, self.calibration.rule
+        )
         ranked, decisions = clarified.ranked, clarified.decisions
         observer.event("decisions", DecisionsEvent(tuple(decisions)))
         pile: StackTrace | None = None
