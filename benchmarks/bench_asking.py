@@ -345,19 +345,20 @@ def plot(rows: list[dict[str, Any]]) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(6, 4))
+    fig, ax = plt.subplots(figsize=(10, 5))
 
-    def group(r: dict[str, Any]) -> tuple[str, str, str, bool]:
-        return r["split"], r["system"], r.get("level", "decision"), bool(r.get("reading_asked", False))
+    def group(r: dict[str, Any]) -> tuple[str, str, str, bool, str]:
+        readings = bool(r.get("reading_asked", False))
+        return r["split"], r["system"], r.get("level", "decision"), readings, r.get("which_one") or OLD_RULE
 
-    for split, system, level, readings in sorted({group(r) for r in rows}):
-        line = sorted(
-            (r for r in rows if group(r) == (split, system, level, readings)), key=lambda r: r["coverage"]
-        )
+    for key in sorted({group(r) for r in rows}):
+        split, system, level, readings, rule = key
+        line = sorted((r for r in rows if group(r) == key), key=lambda r: r["coverage"])
         xs = [0.0] + [r["help_rate"] for r in line]
         ys = [line[0]["success_without_questions"]] + [r["success"] for r in line]
         asked = ", reading asked" if readings else ""
-        ax.plot(xs, ys, marker="o", label=f"{split}: {system}, {level} level{asked}")
+        which = f", which one by {rule}" if rule != OLD_RULE else ""
+        ax.plot(xs, ys, marker="o", label=f"{split}: {system}, {level} level{asked}{which}")
         for r in line:
             ax.annotate(str(r["coverage"]), (r["help_rate"], r["success"]), fontsize=7)
     ax.scatter([40], [90], marker="*", s=120, color="red", label="issue 35's target (test, 0.9)")
@@ -365,7 +366,7 @@ def plot(rows: list[dict[str, Any]]) -> None:
     ax.set_ylabel("success with the answers (%)")
     ax.set_title("Asking instead of guessing (embedded 1.5B; labels: coverage)")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))  # beside: the lines cross
     fig.tight_layout()
     fig.savefig(FIGURE, dpi=120)
 

@@ -63,6 +63,7 @@ def main(argv: list[str] | None = None) -> int:
         data = json.loads(CONFORMAL.read_text(encoding="utf-8"))
         data["_doc"] = CALIBRATION_DOC
         data["plan_which_one"] = args.which_one
+        data.pop(f"plan_qhat_{args.which_one}", None)  # the default rule's are plan_qhat
         for rule in WHICH_ONE:
             key = "plan_qhat" if rule == args.which_one else f"plan_qhat_{rule}"
             data[key] = {

@@ -104,7 +104,8 @@ class SystemOptions:
             model call, a median of 1.0 s on the embedded model) or ``words`` (the rules alone, as
             before 2026-12-02).
         which_one: How a target taking one object is judged sure (:data:`WHICH_ONE`); None: the
-            rule the calibration was fitted for (``fits`` for the shipped one).
+            rule the calibration names (``softmax`` for the shipped one: on dev, ``fits`` asked a
+            little less and succeeded a little less, docs/asking.md).
 
     Raises:
         ConfigError: A value of the wrong type, out of range or not one of the choices.

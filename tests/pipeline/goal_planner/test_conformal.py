@@ -58,6 +58,10 @@ def test_the_shipped_calibration_has_every_coverage_in_order() -> None:
     # All of a plan's decisions at once need a wider set than one decision does.
     assert all(calibration.qhat[c] >= decisions.qhat[c] for c in COVERAGES)
     assert shipped("nograph").qhat != calibration.qhat
+    # Both which-one rules are fitted on the same plans; the default is the softmax's.
+    fits = shipped(rule="fits")
+    assert calibration.rule == "softmax" and fits.rule == "fits" and set(fits.qhat) == set(COVERAGES)
+    assert fits.qhat != calibration.qhat and shipped("nograph", rule="fits").qhat != fits.qhat
     with pytest.raises(ValueError, match="no plan-level conformal calibration"):
         shipped("other")
     with pytest.raises(ValueError, match="no conformal level"):

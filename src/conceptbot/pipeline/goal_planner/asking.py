@@ -9,12 +9,13 @@ decision get conformal prediction sets (:mod:`.conformal`):
 - which object a target taking one gets: a set of two or more is a question of which one ("Which
   one should I give to the user: the coke or the water? One of them, another, or none."); the
   person may name another of the target's candidates, since a set can miss what they meant. By the
-  ``fits`` rule (the default), the decision is whether the likeliest candidate fits, by its
+  ``softmax`` rule (the default), the set holds each candidate whose share of a softmax over the
+  ranking is at least ``1 - qhat``, so candidates that fit alike split the mass and are asked
+  about. By the ``fits`` rule, the decision is whether the likeliest candidate fits, by its
   calibrated P(yes): any object that fits will do, so two that both fit ("a drink": the water or
   the juice) are no reason to ask. Sure that it fits, the set is that one; else it is every
-  candidate at least ``1 - qhat`` likely to fit (two at least). By the ``softmax`` rule (before
-  2026-12-03), the set holds each candidate whose share of a softmax over the ranking is at least
-  ``1 - qhat``, so candidates that fit alike split the mass and are asked about;
+  candidate at least ``1 - qhat`` likely to fit (two at least). On dev the two are level on
+  success against help (docs/asking.md), so the default stayed;
 
 - which of two readings of the request was meant, where the rules read its words and the model's
   plain form of it differently (:class:`~conceptbot.pipeline.goal_planner.targets.ReadingDoubt`):
