@@ -60,6 +60,11 @@ def test_calibrate_conformal_writes_the_models_thresholds_for_the_planner(
     }
     # Every task's worst decision is 1 - 0.7 (yes) or 0.7 (no): the threshold is one of them.
     assert all(round(q, 4) in (0.3, 0.7) for q in found.qhat.values())
+    # Both which-one rules are fitted from the same plans; the default is the shipped one's.
+    assert data["plan_which_one"] == found.rule == "softmax"
+    assert set(data["plan_qhat_fits"]) == {"graph", "nograph"}
+    fits = calibration_for(load_settings().calibration_dir, "openai-compatible", "my-model", rule="fits")
+    assert fits.rule == "fits" and set(fits.qhat) == set(found.qhat)
 
 
 def test_calibrate_conformal_needs_the_goal_planner(
