@@ -41,6 +41,9 @@ RELIABILITY = Path("results/asking-reliability.png")
 # and what ``--resume`` continues from after a stop.
 TASKS = Path("results/asking-tasks.jsonl")
 BINS = 10
+# How the planner reads the request here (the default, SystemOptions.reading); the rows measured
+# with the rules alone, before 2026-12-02, say "words".
+READING = SystemOptions().reading
 
 
 def outcome(system: Any, task: Task, readings: bool = True) -> dict[str, Any]:
@@ -116,6 +119,7 @@ def measure(
         **summary(found, level),
         "reading_asked": readings,
         "which_one": rule,
+        "reading": READING,
         **({"per_task": found} if ids else {}),
     }
 
@@ -157,6 +161,7 @@ def _key(r: dict[str, Any]) -> tuple[Any, ...]:
         r["coverage"],
         r.get("reading_asked", False),
         r.get("which_one") or OLD_RULE,  # rows before 2026-12-03 were all softmax
+        r.get("reading", READING),  # how the request was read (rows of the rules alone say "words")
     )
 
 
@@ -290,7 +295,9 @@ def main() -> None:
     readings = not args.no_readings
     rule = args.which_one or shipped().rule
     keys = [
-        (args.split, s, args.level, c, readings, rule) for s in args.systems.split(",") for c in coverages
+        (args.split, s, args.level, c, readings, rule, READING)
+        for s in args.systems.split(",")
+        for c in coverages
     ]
     earlier = _outcomes(args.resume)
     if args.write:
@@ -299,9 +306,9 @@ def main() -> None:
         TASKS.write_text("".join(json.dumps(o) + "\n" for o in kept), encoding="utf-8")
     rows = []
     for key in keys:
-        split, system_name, level, coverage, _, _ = key
+        split, system_name, level, coverage, _, _, _ = key
         known = {o["task"]: o for o in earlier if _key(o) == key}
-        names = ("split", "system", "level", "coverage", "reading_asked", "which_one")
+        names = ("split", "system", "level", "coverage", "reading_asked", "which_one", "reading")
         fields = dict(zip(names, key, strict=True))
 
         def keep(found: dict[str, Any], fields: dict[str, Any] = fields) -> None:
@@ -346,19 +353,22 @@ def plot(rows: list[dict[str, Any]]) -> None:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(10, 5))
+    ax.set_prop_cycle(color=plt.cm.tab20.colors)  # more lines than the default ten colours
 
-    def group(r: dict[str, Any]) -> tuple[str, str, str, bool, str]:
+    def group(r: dict[str, Any]) -> tuple[str, str, str, bool, str, str]:
         readings = bool(r.get("reading_asked", False))
-        return r["split"], r["system"], r.get("level", "decision"), readings, r.get("which_one") or OLD_RULE
+        rule = r.get("which_one") or OLD_RULE
+        return r["split"], r["system"], r.get("level", "decision"), readings, rule, r.get("reading", READING)
 
     for key in sorted({group(r) for r in rows}):
-        split, system, level, readings, rule = key
+        split, system, level, readings, rule, reading = key
         line = sorted((r for r in rows if group(r) == key), key=lambda r: r["coverage"])
         xs = [0.0] + [r["help_rate"] for r in line]
         ys = [line[0]["success_without_questions"]] + [r["success"] for r in line]
         asked = ", reading asked" if readings else ""
         which = f", which one by {rule}" if rule != OLD_RULE else ""
-        ax.plot(xs, ys, marker="o", label=f"{split}: {system}, {level} level{asked}{which}")
+        read = ", the rules' reading" if reading == "words" else ""
+        ax.plot(xs, ys, marker="o", label=f"{split}: {system}, {level} level{read}{asked}{which}")
         for r in line:
             ax.annotate(str(r["coverage"]), (r["help_rate"], r["success"]), fontsize=7)
     ax.scatter([40], [90], marker="*", s=120, color="red", label="issue 35's target (test, 0.9)")
