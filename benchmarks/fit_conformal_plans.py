@@ -25,11 +25,11 @@ import argparse
 import json
 from pathlib import Path
 
-from conceptbot.bench.conformal_fit import SYSTEMS, PlanFit, collect, fit
+from conceptbot.bench.conformal_fit import SYSTEMS, PlanFit, collect, fit, thresholds_document
 from conceptbot.bench.grading import load_tasks
 from conceptbot.core.config import load_settings
 from conceptbot.core.system import WHICH_ONE, SystemOptions
-from conceptbot.pipeline.goal_planner.conformal import CALIBRATION_DOC
+from conceptbot.pipeline.goal_planner.conformal import CALIBRATION_DOC, shipped
 from conceptbot.systems import build_system
 
 CONFORMAL = Path("src/conceptbot/pipeline/conformal.json")
@@ -55,21 +55,18 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--write", action="store_true", help=f"store the thresholds in {CONFORMAL}")
     parser.add_argument(
-        "--which-one", choices=WHICH_ONE, default="fits", help="the rule the planner uses by default"
+        "--which-one",
+        choices=WHICH_ONE,
+        default=shipped().rule,
+        help="the rule the planner uses by default (default: the one the shipped file names now)",
     )
     args = parser.parse_args(argv)
     fits = {name: fit_system(system) for name, system in SYSTEMS}
     if args.write:
         data = json.loads(CONFORMAL.read_text(encoding="utf-8"))
         data["_doc"] = CALIBRATION_DOC
-        data["plan_which_one"] = args.which_one
         data.pop(f"plan_qhat_{args.which_one}", None)  # the default rule's are plan_qhat
-        for rule in WHICH_ONE:
-            key = "plan_qhat" if rule == args.which_one else f"plan_qhat_{rule}"
-            data[key] = {
-                name: {str(c): round(q, 4) for c, q in found[rule].qhat.items()}
-                for name, found in fits.items()
-            }
+        data.update(thresholds_document(fits, args.which_one))
         counts = ", ".join(f"{name} {found[args.which_one].tasks}" for name, found in fits.items())
         data["plan_fitted_on"] = (
             f"dev tasks with calibrated decisions ({counts}), benchmarks/fit_conformal_plans.py"

@@ -16,11 +16,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from typing import Any
 
 from conceptbot.bench.grading import Task, gold_answer, task_scene
 from conceptbot.core.plan import Plan
 from conceptbot.core.system import COVERAGES, WHICH_ONE, PlannerSystem
-from conceptbot.pipeline.goal_planner.conformal import conformal_threshold
+from conceptbot.pipeline.goal_planner.conformal import OLD_RULE, conformal_threshold
 
 SYSTEMS = (("graph", "conceptbot"), ("nograph", "nokg"))
 """Each combination the calibration ships, and the system whose plans it is fitted on."""
@@ -50,7 +51,7 @@ class Labelled:
     yes: bool | None = None
 
 
-def labelled(task: Task, plan: Plan, rule: str = "fits") -> list[Labelled]:
+def labelled(task: Task, plan: Plan, rule: str = OLD_RULE) -> list[Labelled]:
     """Each calibrated decision in ``plan`` (planned for ``task`` without asking), judged by the gold
     (a which-one decision whose target the gold accepts no object for is left out), its which-one
     decisions by ``rule`` (:data:`~conceptbot.core.system.WHICH_ONE`)."""
@@ -82,7 +83,7 @@ def labelled(task: Task, plan: Plan, rule: str = "fits") -> list[Labelled]:
     return found
 
 
-def task_scores(task: Task, plan: Plan, rule: str = "fits") -> list[float]:
+def task_scores(task: Task, plan: Plan, rule: str = OLD_RULE) -> list[float]:
     """Each calibrated decision's nonconformity in ``plan`` (planned for ``task`` without asking),
     its which-one decisions by ``rule``."""
     return [nonconformity(found.p_right) for found in labelled(task, plan, rule)]
@@ -142,3 +143,15 @@ def fit(tasks: list[list[float]]) -> PlanFit:
         ]
         held[coverage] = sum(kept) / len(kept)
     return PlanFit(qhat, held, len(tasks), sum(map(len, tasks)))
+
+
+def thresholds_document(fits: dict[str, dict[str, PlanFit]], rule: str) -> dict[str, Any]:
+    """The plan-level thresholds as a calibration file keeps them, for ``fits`` per combination and
+    which-one rule: ``plan_which_one`` names the default ``rule``, whose thresholds are
+    ``plan_qhat``; another rule's are ``plan_qhat_RULE`` (what
+    :func:`~conceptbot.pipeline.goal_planner.conformal.plan_key` reads)."""
+    document: dict[str, Any] = {"plan_which_one": rule}
+    for each in WHICH_ONE:
+        key = "plan_qhat" if each == rule else f"plan_qhat_{each}"
+        document[key] = {c: {str(k): round(q, 4) for k, q in f[each].qhat.items()} for c, f in fits.items()}
+    return document

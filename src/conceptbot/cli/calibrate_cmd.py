@@ -12,13 +12,13 @@ import click
 from rich.console import Console
 from rich.table import Table
 
-from conceptbot.bench.conformal_fit import SYSTEMS, PlanFit, collect, fit
+from conceptbot.bench.conformal_fit import SYSTEMS, PlanFit, collect, fit, thresholds_document
 from conceptbot.bench.grading import load_tasks
 from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.cli.params import FiniteFloatRange
 from conceptbot.cli.progress import count_progress
 from conceptbot.core.errors import ConceptBotError
-from conceptbot.core.system import WHICH_ONE, SystemOptions
+from conceptbot.core.system import SystemOptions
 from conceptbot.core.text import terminal_safe
 from conceptbot.knowledge.base import TARGET_PROPERTIES
 from conceptbot.knowledge.registry import open_graph
@@ -194,10 +194,9 @@ def _conformal(app: AppContext, as_json: bool) -> None:
         ),
         "plan_which_one": rule,
         "held_out": {c: {str(k): round(h, 4) for k, h in f[rule].held_out.items()} for c, f in fits.items()},
+        # Both rules' thresholds: `which_one` may pick either.
+        **thresholds_document(fits, rule),
     }
-    for each in WHICH_ONE:  # both rules' thresholds: `--which-one` may pick either
-        key = "plan_qhat" if each == rule else f"plan_qhat_{each}"
-        document[key] = {c: {str(k): round(q, 4) for k, q in f[each].qhat.items()} for c, f in fits.items()}
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")  # never a half-written file
     tmp.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")

@@ -39,7 +39,7 @@ from dataclasses import dataclass, field, replace
 
 from conceptbot.core.system import Ask
 from conceptbot.core.trace import ClarifyingQuestion, DecisionTrace, JudgementTrace
-from conceptbot.pipeline.goal_planner.conformal import DecisionSet, decision_set
+from conceptbot.pipeline.goal_planner.conformal import OLD_RULE, DecisionSet, decision_set
 from conceptbot.pipeline.goal_planner.decide import Judgement
 from conceptbot.pipeline.goal_planner.targets import ALL, ReadingDoubt, Target
 from conceptbot.pipeline.hazards import is_person
@@ -73,7 +73,7 @@ class Clarified:
     which: dict[int, list[Judgement]] = field(default_factory=dict)
     calibrated: bool = False
     asked: tuple[int, ...] = ()
-    rule: str = "softmax"
+    rule: str = OLD_RULE
 
     def confidence(self, moves: Iterable[tuple[str, str]]) -> float | None:
         """The probability that the plan's final ``moves`` (object, destination) are right in every
@@ -163,7 +163,7 @@ def clarify(
     qhat: float,
     ask: Ask | None = None,
     which_one: bool = True,
-    rule: str = "softmax",
+    rule: str = OLD_RULE,
 ) -> Clarified:
     """Sets, questions and answers for the calibrated decisions (see the module docstring).
 
@@ -285,7 +285,7 @@ def reading_question(doubt: ReadingDoubt, qhat: float) -> ClarifyingQuestion | N
     )
 
 
-def one_of(judgements: list[Judgement], qhat: float, rule: str = "softmax") -> list[Judgement]:
+def one_of(judgements: list[Judgement], qhat: float, rule: str = OLD_RULE) -> list[Judgement]:
     """The conformal set of which one, most likely first (one candidate: the planner acts on it).
 
     ``softmax``: the candidates whose ``p_one`` is at least ``1 - qhat``. ``fits``: the likeliest
@@ -313,7 +313,7 @@ def _chance(judgement: Judgement, rule: str) -> float:
 
 
 def which_one_question(
-    target: Target, found: list[Judgement], others: Iterable[str] = (), rule: str = "softmax"
+    target: Target, found: list[Judgement], others: Iterable[str] = (), rule: str = OLD_RULE
 ) -> ClarifyingQuestion:
     """The question of which one: "Which one should I give to the user: the coke, the 7up or the
     water bottle? One of them, another, or none." ``others``: the target's other candidates, which

@@ -46,7 +46,8 @@ CALIBRATION_DOC = (
     "level, a dev task's worst decision (benchmarks/fit_conformal_plans.py --write), for the which-one "
     "rule plan_which_one names; plan_qhat_RULE: for another rule. Refit for another model."
 )
-#: The which-one rule of a plan-level calibration that names none (written before 2026-12-03).
+#: The which-one rule of a plan-level calibration that names none (written before 2026-12-03), and
+#: of the sets where no rule is given.
 OLD_RULE = "softmax"
 
 
