@@ -24,6 +24,7 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
+from typing import Any
 
 from conceptbot.bench.conformal_fit import SYSTEMS, PlanFit, collect, fit, thresholds_document
 from conceptbot.bench.grading import load_tasks
@@ -50,6 +51,23 @@ def fit_system(system_name: str) -> dict[str, PlanFit]:
     return fits
 
 
+def merged(data: dict[str, Any], fits: dict[str, dict[str, PlanFit]], rule: str) -> dict[str, Any]:
+    """The calibration file ``data`` with the plan-level thresholds of the combinations in ``fits``
+    replaced (the other combinations' kept, so that a long fit can be split by system), ``rule``
+    the default which-one rule."""
+    data = {**data, "_doc": CALIBRATION_DOC}
+    data.pop(f"plan_qhat_{rule}", None)  # the default rule's thresholds are plan_qhat
+    for key, value in thresholds_document(fits, rule).items():
+        kept = data.get(key) if isinstance(data.get(key), dict) else {}
+        data[key] = {**kept, **value} if isinstance(value, dict) else value
+    counts = {**data.get("plan_fitted_tasks", {})}
+    counts.update({name: found[rule].tasks for name, found in fits.items()})
+    data["plan_fitted_tasks"] = counts
+    tasks = ", ".join(f"{name} {n}" for name, n in counts.items())
+    data["plan_fitted_on"] = f"dev tasks with calibrated decisions ({tasks}), {Path(__file__).name}"
+    return data
+
+
 def main(argv: list[str] | None = None) -> int:
     """Fit and print; with ``--write``, store the thresholds."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -60,18 +78,26 @@ def main(argv: list[str] | None = None) -> int:
         default=shipped().rule,
         help="the rule the planner uses by default (default: the one the shipped file names now)",
     )
+    parser.add_argument(
+        "--systems",
+        default=",".join(system for _, system in SYSTEMS),
+        help="comma-separated systems to fit (a long fit can be split; the others' thresholds are kept)",
+    )
     args = parser.parse_args(argv)
-    fits = {name: fit_system(system) for name, system in SYSTEMS}
+    wanted = {s for s in args.systems.split(",") if s}
+    unknown = wanted - {system for _, system in SYSTEMS}
+    if unknown:
+        known = ", ".join(system for _, system in SYSTEMS)
+        parser.error(f"unknown systems: {', '.join(sorted(unknown))} (known: {known})")
+    data = json.loads(CONFORMAL.read_text(encoding="utf-8"))
+    switching = data.get("plan_which_one", args.which_one) != args.which_one
+    if args.write and switching and len(wanted) < len(SYSTEMS):
+        # The default rule's thresholds are plan_qhat: switching it moves every combination's.
+        parser.error("switching --which-one needs every system fitted at once")
+    fits = {name: fit_system(system) for name, system in SYSTEMS if system in wanted}
     if args.write:
-        data = json.loads(CONFORMAL.read_text(encoding="utf-8"))
-        data["_doc"] = CALIBRATION_DOC
-        data.pop(f"plan_qhat_{args.which_one}", None)  # the default rule's are plan_qhat
-        data.update(thresholds_document(fits, args.which_one))
-        counts = ", ".join(f"{name} {found[args.which_one].tasks}" for name, found in fits.items())
-        data["plan_fitted_on"] = (
-            f"dev tasks with calibrated decisions ({counts}), benchmarks/fit_conformal_plans.py"
-        )
-        CONFORMAL.write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
+        text = json.dumps(merged(data, fits, args.which_one), indent=2) + "\n"
+        CONFORMAL.write_text(text, encoding="utf-8")
         print(f"wrote {CONFORMAL}")
     return 0
 

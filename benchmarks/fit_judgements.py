@@ -15,6 +15,10 @@ accuracy per kind of:
   criterion (measured, not shipped: a point above ``combined`` for one more question per object);
 * ``nokg``: the question without facts and the name features (the no-graph ablation's combination).
 
+With ``--described FILE`` (``judgement_described.py``) only the rows it read are scored, and two more
+variants take the model's answer with its own description of the object in the question:
+``combined+described`` and ``nokg+described``.
+
 With ``--conformal`` it also calibrates split conformal prediction on the combination's held-out
 probabilities (:mod:`conceptbot.pipeline.goal_planner.conformal`): per coverage, the threshold
 fitted on four folds and measured on the fifth (empirical coverage, the share of decisions with one
@@ -87,8 +91,22 @@ VARIANTS = {
     ),
     "nokg": tuple(dict.fromkeys((*GROUP, *GRAPH_FREE))),
 }
+#: The described reading (``--described``): as read, standardised in its group, and its gap.
+DESCRIBED = ("described", "described_z", "described_gap")
+#: The described reading per kind of criterion (a description names one material: "several" reads it
+#: the other way round).
+DESCRIBED_KINDS = ("described*is_several", "described*is_dish", "described*is_poison", "described*is_safe")
+DESCRIBED_VARIANTS = {
+    "described": ("described",),
+    "combined+described": tuple(dict.fromkeys((*GROUP, *DESCRIBED, *FEATURES))),
+    "combined+desc+kinds": tuple(dict.fromkeys((*GROUP, *DESCRIBED, *DESCRIBED_KINDS, *FEATURES))),
+    "nokg+described": tuple(dict.fromkeys((*GROUP, *DESCRIBED, *GRAPH_FREE))),
+    "nokg+desc+kinds": tuple(dict.fromkeys((*GROUP, *DESCRIBED, *DESCRIBED_KINDS, *GRAPH_FREE))),
+}
 #: The combinations shipped: the default system's and the no-graph ablation's.
 SHIPPED = (("graph", "combined"), ("nograph", "nokg"))
+#: The same with the described reading (``--described`` over every row).
+SHIPPED_DESCRIBED = (("graph", "combined+described"), ("nograph", "nokg+described"))
 
 
 def fit(x: np.ndarray, y: np.ndarray, l2: float = L2) -> tuple[np.ndarray, float]:
@@ -135,10 +153,18 @@ def add_group_readings(rows: list[dict]) -> None:
     for members in groups.values():
         with_facts = group_readings({r["object"]: r["model"] for r in members})
         without = group_readings({r["object"]: r["plain"] for r in members})
+        described = (
+            group_readings({r["object"]: r["described"] for r in members})
+            if all("described" in r for r in members)
+            else {}
+        )
         for r in members:
             r.update(with_facts[r["object"]])
             r.update({f"nokg_{k}": v for k, v in without[r["object"]].items()})
             r.update({f"plain{k[len('model') :]}": v for k, v in without[r["object"]].items()})
+            for k, v in described.get(r["object"], {}).items():
+                name = f"described{k[len('model') :]}"
+                r[name] = r[f"nokg_{name}"] = v
 
 
 def coverage(rows: list[dict]) -> None:
@@ -166,8 +192,27 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--write", action="store_true", help=f"write the fitted weights to {WEIGHTS}")
     parser.add_argument("--errors", action="store_true", help="print the combination's held-out errors")
     parser.add_argument("--conformal", action="store_true", help="calibrate conformal prediction too")
+    parser.add_argument(
+        "--described", type=Path, default=None, help="judgement_described.py's readings: score those rows"
+    )
     args = parser.parse_args(argv)
     rows = [json.loads(line) for line in args.readings.read_text(encoding="utf-8").splitlines() if line]
+    variants = dict(VARIANTS)
+    shipped = SHIPPED
+    if args.described is not None:
+        found = {}
+        for line in args.described.read_text(encoding="utf-8").splitlines():
+            if line.strip():
+                r = json.loads(line)
+                found[(r["object"], r["criterion"], r["request"])] = r["described"]
+        every = len(rows)
+        rows = [r for r in rows if (r["object"], r["criterion"], r["request"]) in found]
+        for r in rows:
+            r["described"] = found[(r["object"], r["criterion"], r["request"])]
+        variants.update(DESCRIBED_VARIANTS)
+        if len(rows) < every and args.write:
+            parser.error(f"--described read {len(rows)} of the {every} rows: the weights need every row")
+        shipped = SHIPPED_DESCRIBED
     graph = GraphEvidence(open_graph(load_settings(), fallback=False))
     names_only = GraphEvidence(None)
     for row in rows:
@@ -183,27 +228,34 @@ def main(argv: list[str] | None = None) -> int:
     folds = np.array([fold(r["object"]) for r in rows])
     predicted: dict[str, np.ndarray] = {}
     # Each shipped combination's P(yes), each row scored by a fit without it (for --conformal).
-    held_out_p = {variant: np.zeros(len(rows)) for _, variant in SHIPPED}
-    for variant, names in VARIANTS.items():
+    held_out_p = {variant: np.zeros(len(rows)) for _, variant in shipped}
+    log_loss: dict[str, float] = {}  # held-out, over every row: how sharp and honest P(yes) is
+    for variant, names in variants.items():
         if names is None:
             predicted[variant] = np.array([r["model"] > 0 for r in rows], dtype=float)
             continue
-        x = matrix(rows, names, ablation=variant == "nokg")
+        x = matrix(rows, names, ablation=variant.startswith("nokg"))
         out = np.zeros(len(rows))
+        p_out = np.zeros(len(rows))
         for k in range(FOLDS):
             train, test = folds != k, folds == k
             w, b = fit(x[train], y[train])
             out[test] = (x[test] @ w + b) > 0
-            if variant in held_out_p:
-                held_out_p[variant][test] = 1.0 / (1.0 + np.exp(-(x[test] @ w + b)))
+            p_out[test] = 1.0 / (1.0 + np.exp(-(x[test] @ w + b)))
+        if variant in held_out_p:
+            held_out_p[variant] = p_out
+        p_clipped = np.clip(p_out, 1e-6, 1 - 1e-6)
+        log_loss[variant] = float(-np.mean(y * np.log(p_clipped) + (1 - y) * np.log(1 - p_clipped)))
         predicted[variant] = out
     kinds = sorted({r["kind"] for r in rows})
-    header = f"{'kind':16} {'n':>4} " + " ".join(f"{v:>15}" for v in VARIANTS)
+    header = f"{'kind':16} {'n':>4} " + " ".join(f"{v:>15}" for v in variants)
     print(header)
     for kind in [*kinds, "all"]:
         mask = np.array([kind in ("all", r["kind"]) for r in rows])
-        cells = " ".join(f"{(predicted[v][mask] == y[mask]).mean():>15.1%}" for v in VARIANTS)
+        cells = " ".join(f"{(predicted[v][mask] == y[mask]).mean():>15.1%}" for v in variants)
         print(f"{kind:16} {int(mask.sum()):>4} {cells}")
+    cells = " ".join(f"{log_loss[v]:>15.3f}" if v in log_loss else f"{'-':>15}" for v in variants)
+    print(f"{'log-loss':16} {len(rows):>4} {cells}")
     stated = np.array([any(r[f] for f in FEATURES if f not in GRAPH_FREE) for r in rows])
     print(f"\nrows where the graph states something: {int(stated.sum())} of {len(rows)}")
     for v in ("model", "graph", "combined"):
@@ -218,10 +270,10 @@ def main(argv: list[str] | None = None) -> int:
                     f"answer={r['answer']!s:5} model={r['model']:+.2f} {'; '.join(r['statements'])[:160]}"
                 )
     fitted = {}
-    for name, variant in SHIPPED:
-        names = VARIANTS[variant]
+    for name, variant in shipped:
+        names = variants[variant]
         assert names is not None
-        w, b = fit(matrix(rows, names, ablation=variant == "nokg"), y)
+        w, b = fit(matrix(rows, names, ablation=variant.startswith("nokg")), y)
         fitted[name] = {
             "features": list(names),
             "weights": [round(float(v), 4) for v in w],
@@ -233,7 +285,7 @@ def main(argv: list[str] | None = None) -> int:
             + f", bias {b:+.2f}"
         )
     qhat = (
-        {name: conformal(held_out_p[variant], y, folds, name) for name, variant in SHIPPED}
+        {name: conformal(held_out_p[variant], y, folds, name) for name, variant in shipped}
         if args.conformal
         else {}
     )
@@ -257,6 +309,7 @@ def main(argv: list[str] | None = None) -> int:
             f"{args.readings.name}; read by conceptbot.pipeline.goal_planner.combine. "
             "Refit for another model.",
             "readings": args.readings.name,
+            **({"described": args.described.name} if args.described is not None else {}),
             "rows": len(rows),
             "combinations": fitted,
         }

@@ -78,3 +78,32 @@ def test_the_asking_benchmark_resumes_from_kept_outcomes(monkeypatch: pytest.Mon
     row = asking.measure("test", "conceptbot", 0.9, known=earlier, keep=kept.append)
     assert planned == ["t2"] and [o["task"] for o in kept] == ["t2"]  # t1 is taken, not planned again
     assert row["success"] == 50.0 and row["tasks"] == 2
+
+
+def _script(name: str) -> Any:
+    """A benchmark script as a module (scripts run only under __main__)."""
+    spec = importlib.util.spec_from_file_location(f"benchmark_{name}", BENCHMARKS[0].parent / f"{name}.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_a_plan_fit_of_one_system_keeps_the_other_system_s_thresholds() -> None:
+    plans = _script("fit_conformal_plans")
+    from conceptbot.bench.conformal_fit import PlanFit
+
+    def found(q: float) -> PlanFit:
+        return PlanFit(qhat={0.9: q}, held_out={0.9: 0.9}, tasks=70, decisions=500)
+
+    data = {
+        "qhat": {"graph": {"0.9": 0.2}},
+        "plan_which_one": "softmax",
+        "plan_qhat": {"graph": {"0.9": 0.8}, "nograph": {"0.9": 0.85}},
+        "plan_qhat_fits": {"graph": {"0.9": 0.7}, "nograph": {"0.9": 0.75}},
+    }
+    out = plans.merged(data, {"graph": {"softmax": found(0.6), "fits": found(0.5)}}, "softmax")
+    assert out["plan_qhat"] == {"graph": {"0.9": 0.6}, "nograph": {"0.9": 0.85}}
+    assert out["plan_qhat_fits"] == {"graph": {"0.9": 0.5}, "nograph": {"0.9": 0.75}}
+    assert out["qhat"] == data["qhat"] and "graph 70" in out["plan_fitted_on"]
+    assert data["plan_qhat"]["graph"] == {"0.9": 0.8}  # the file read is not changed in place

@@ -266,6 +266,8 @@ def _goal(console: Console, trace: PlanTrace) -> None:
         names = any(row.name_score is not None for row in decision.objects)
         # Combined decisions: the model's own log-odds beside the score, and the graph's evidence.
         combined = any(row.model is not None for row in decision.objects)
+        # Where the combination also asked with the model's own description of each object.
+        described = any(row.described for row in decision.objects)
         columns = [
             "object",
             "P(yes)",
@@ -273,6 +275,7 @@ def _goal(console: Console, trace: PlanTrace) -> None:
             *(["model"] if combined else []),
             *(["name"] if names else []),
             "graph evidence" if combined else "graph facts in the question",
+            *(["the model's description"] if described else []),
         ]
         table = Table(*columns, title=title)
         for row in sorted(decision.objects, key=lambda r: -r.score):
@@ -281,7 +284,8 @@ def _goal(console: Console, trace: PlanTrace) -> None:
             model = [f"{row.model:+.2f}" if row.model is not None else ""] if combined else []
             name = [f"{row.name_score:+.2f}" if row.name_score is not None else ""] if names else []
             cells = (f"{row.p_yes:.2f}", f"{row.score:+.2f}", *model, *name)
-            table.add_row(plain(row.object), *cells, plain(facts))
+            told = [plain(row.described[:80])] if described else []
+            table.add_row(plain(row.object), *cells, plain(facts), *told)
         if decision.context:
             console.print(line("  facts about the request: " + "; ".join(decision.context)))
         console.print(table)

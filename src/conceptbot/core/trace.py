@@ -269,6 +269,8 @@ class JudgementTrace:
             where the planner calibrated it, else None.
         p_one: For a target taking one object, the probability that this is the one (a softmax of
             the ranking over the candidates, 4 decimals), else None.
+        described: The model's own description of the object, where the combination asked the
+            question with it too, else "".
     """
 
     object: str
@@ -280,6 +282,7 @@ class JudgementTrace:
     evidence: Mapping[str, Any] | None = None
     answers: tuple[str, ...] | None = None
     p_one: float | None = None
+    described: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (``name_score`` only where there is one)."""
@@ -302,6 +305,8 @@ class JudgementTrace:
             data["answers"] = list(self.answers)
         if self.p_one is not None:
             data["p_one"] = self.p_one
+        if self.described:
+            data["described"] = self.described
         return data
 
 

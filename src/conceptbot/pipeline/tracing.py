@@ -105,4 +105,5 @@ def judgement_trace(judgement: Judgement, name_score: float | None = None) -> Ju
         p_one=None
         if judgement.p_one is None or judgement.p_one != judgement.p_one
         else round(judgement.p_one, 4),
+        described=judgement.described,
     )

@@ -32,7 +32,8 @@ def test_malformed_weights_are_refused() -> None:
 def test_the_shipped_weights_use_the_graph_only_where_there_is_one() -> None:
     graph, nograph = combination(True), combination(False)
     assert any(f in graph.features for f in FEATURES if f not in GRAPH_FREE)
-    readings = ("model", "model_z", "model_gap", "plain")  # the model's answers, no graph in them
+    # The model's answers, no graph in them: with graph facts left out, or its own description.
+    readings = ("model", "model_z", "model_gap", "plain", "described", "described_z", "described_gap")
     assert all(part in (*readings, *GRAPH_FREE) for f in nograph.features for part in f.split("*"))
     # The model's answer counts in both, and in the same direction.
     assert graph.weights[graph.features.index("model")] > 0

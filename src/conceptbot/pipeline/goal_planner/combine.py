@@ -34,9 +34,11 @@ class Combination:
 
     Attributes:
         features: Input names: ``model``, ``plain`` (the model's calibrated log-odds with and without
-            graph facts), ``model_z`` and ``model_gap`` (the model's log-odds standardised over the
-            objects judged together, and its distance below the best of them: the model ranks
-            ingredients well but leans towards No for all of them), evidence feature names
+            graph facts), ``described`` (with the model's own one-sentence description of the object
+            instead of graph facts, and its ``_z`` and ``_gap`` forms), ``model_z`` and ``model_gap``
+            (the model's log-odds standardised over the objects judged together, and its distance
+            below the best of them: the model ranks ingredients well but leans towards No for all of
+            them), evidence feature names
             (:data:`conceptbot.pipeline.goal_planner.evidence.FEATURES`), and products of these
             (``model*is_dish``).
         weights: One weight per feature.
@@ -51,6 +53,12 @@ class Combination:
     def uses_plain(self) -> bool:
         """Whether the model must also be asked without graph facts."""
         return "plain" in self.features
+
+    @property
+    def uses_described(self) -> bool:
+        """Whether the model must also be asked with its own description of the object
+        (``described``, ``described_z``, ``described_gap``)."""
+        return any(part.startswith("described") for f in self.features for part in f.split("*"))
 
     def log_odds(self, readings: Mapping[str, float], evidence: Evidence | None) -> float:
         """The combined log-odds of Yes.

@@ -25,7 +25,7 @@ from typing import Any
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.knowledge.normalize import singular
-from conceptbot.models.llm import LLM, Message, ScoreRequest
+from conceptbot.models.llm import LLM, ChatRequest, Message, ScoreRequest
 from conceptbot.pipeline import prompts
 from conceptbot.pipeline.goal_planner.combine import Combination, sigmoid
 from conceptbot.pipeline.goal_planner.evidence import Evidence, GraphEvidence
@@ -36,6 +36,7 @@ ANSWERS = ("Yes", "No")
 NEUTRAL_REQUEST = "Please help me."  # the request the name ranking is calibrated against
 DEFINING = ("DefinedAs", "MadeOf")  # a word's own definition and ingredients
 CONTENT_FREE = "object"
+DESCRIPTION_TOKENS = 48  # one sentence; the model's descriptions of the judgement set end well before
 _STOP = {
     "a", "an", "the", "of", "to", "for", "and", "or", "with", "that", "is", "are", "be", "made", "only",
     "something", "thing", "things", "one", "some", "all", "any", "every", "my", "me", "you", "it", "in",
@@ -60,6 +61,8 @@ class Judgement:
         evidence: The evidence that was combined, else None.
         p_one: For a target taking one object, the probability that this is the one (a softmax of
             the target's ranking over its candidates), else None.
+        described: The model's own description of the object, where the combination asked the
+            question with it too (:meth:`Decider.describe`), else "".
     """
 
     subject: str
@@ -71,6 +74,7 @@ class Judgement:
     model: float | None = None
     evidence: Evidence | None = None
     p_one: float | None = None
+    described: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form for the trace (``model`` and ``evidence`` only where the score is combined)."""
@@ -84,6 +88,8 @@ class Judgement:
             data["model"] = round(self.model, 3)
         if self.evidence is not None:
             data["evidence"] = self.evidence.to_dict()
+        if self.described:
+            data["described"] = self.described
         return data
 
 
@@ -333,6 +339,34 @@ class Decider:
             judgements.append(Judgement(obj, label, p_yes, log_odds - prior, about[obj], method))
         return judgements, usage
 
+    def describe(self, objects: Sequence[str]) -> tuple[dict[str, str], Usage]:
+        """The model's own one-sentence description of each object (what it is, what it is made of,
+        whether it is safe to eat or to touch), greedy and cached like any reply: a small model says
+        more about a thing when asked to describe it than its Yes/No log-odds show ("generated
+        knowledge", Liu et al. 2022), and the graph states nothing about 40% of the objects judged."""
+        usage = Usage(calls=0)
+        found: dict[str, str] = {}
+        system = Message("system", prompts.fill("describe_system"))
+        for obj in dict.fromkeys(objects):
+            user = Message("user", prompts.fill("describe_user", object=obj))
+            ask = ChatRequest.of([system, user], max_tokens=DESCRIPTION_TOKENS, temperature=0.0)
+            reply = self.llm.chat(ask)
+            usage = usage + reply.usage
+            found[obj] = " ".join(reply.choices[0].split()) if reply.choices else ""
+        return found, usage
+
+    def _described(
+        self, objects: Sequence[str], question: Callable[[str | None, str], str], what: str
+    ) -> tuple[dict[str, dict[str, float]], dict[str, str], Usage]:
+        """The question asked with each object's description in it (no graph facts), calibrated
+        against the content-free object without one, as readings ``described`` (``_z``, ``_gap``)."""
+        descriptions, usage = self.describe(objects)
+        about = {o: (descriptions[o],) for o in objects}
+        judgements, used = self._judge_each(objects, about, what, lambda o, f: question(o, f[0] if f else ""))
+        group = group_readings({j.subject: j.score for j in judgements})
+        readings = {o: {f"described{k[len('model') :]}": v for k, v in g.items()} for o, g in group.items()}
+        return readings, descriptions, usage + used
+
     def moves(
         self, request: str, target: str, move: str, objects: Sequence[str], scene: Scene
     ) -> tuple[list[Judgement], tuple[str, ...], Usage]:
@@ -416,9 +450,24 @@ class Decider:
                 )
                 usage = usage + used
                 plain = {j.subject: j.score for j in bare}
+            described: dict[str, dict[str, float]] = {o: {} for o in objects}
+            descriptions: dict[str, str] = {}
+            if self.combination.uses_described:
+
+                def told(obj: str | None, description: str) -> str:
+                    return described_question(request, what, dish, obj, description)
+
+                described, descriptions, used = self._described(objects, told, what)
+                usage = usage + used
             group = group_readings({j.subject: j.score for j in judgements})
             judgements = [
-                self._combined(j, what, {**group[j.subject], "plain": plain[j.subject]}) for j in judgements
+                replace(
+                    self._combined(
+                        j, what, {**group[j.subject], "plain": plain[j.subject], **described[j.subject]}
+                    ),
+                    described=descriptions.get(j.subject, ""),
+                )
+                for j in judgements
             ]
         return judgements, context, usage.with_latency(time.perf_counter() - started)
 
@@ -486,6 +535,20 @@ class Decider:
         p_safe, log_odds, used, method = self._ask(question(move, lines))
         judgement = Judgement(move, "dangerous", 1.0 - p_safe, prior - log_odds, tuple(lines), method)
         return judgement, (usage + used).with_latency(time.perf_counter() - started)
+
+
+def described_question(request: str, what: str, dish: str, obj: str | None, description: str) -> str:
+    """The yes/no question of :meth:`Decider.fits` with the model's description of the object in it
+    instead of graph facts (``obj`` None: the content-free object, without one)."""
+    return prompts.render(
+        "ingredient_user" if dish else "decide_user",
+        request=request,
+        context="",
+        what=what,
+        dish=dish,
+        object=obj if obj is not None else CONTENT_FREE,
+        facts=f"What is known about it: {description}\n" if description else "",
+    )
 
 
 def group_readings(scores: dict[str, float]) -> dict[str, dict[str, float]]:
