@@ -62,3 +62,15 @@ def test_which_combinations_use_it() -> None:
     assert DESCRIBED.uses_described
     assert Combination(("model*described_z",), (1.0,), 0.0).uses_described
     assert not Combination(("model", "plain"), (1.0, 1.0), 0.0).uses_described
+
+
+def test_the_plain_reading_is_standardised_in_its_group_like_the_model_s() -> None:
+    # No graph here, so the plain reading is the question itself: +1 and -1 around a prior of 0.
+    llm = FakeLLM(scores=[[-1.0, -1.0], [-0.5, -1.5], [-1.5, -0.5]])
+    decider = Decider(
+        llm, FactFinder(None), combination=Combination(("plain_gap", "plain_z"), (1.0, 0.5), 0.0)
+    )
+    judgements, _, _ = decider.fits("bin the poisonous plants", "poisonous", ["foxglove", "parsley"], SCENE)
+    by = {j.subject: j.score for j in judgements}
+    assert by["foxglove"] == pytest.approx(0.5)  # gap 0, z +1
+    assert by["parsley"] == pytest.approx(-2.0 - 0.5)  # gap -2, z -1

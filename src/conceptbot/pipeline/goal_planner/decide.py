@@ -460,10 +460,15 @@ class Decider:
                 described, descriptions, used = self._described(objects, told, what)
                 usage = usage + used
             group = group_readings({j.subject: j.score for j in judgements})
+            # The plain reading standardised in its group too (plain, plain_z, plain_gap).
+            bare_group = {
+                o: {f"plain{k[len('model') :]}": v for k, v in g.items()}
+                for o, g in group_readings(plain).items()
+            }
             judgements = [
                 replace(
                     self._combined(
-                        j, what, {**group[j.subject], "plain": plain[j.subject], **described[j.subject]}
+                        j, what, {**group[j.subject], **bare_group[j.subject], **described[j.subject]}
                     ),
                     described=descriptions.get(j.subject, ""),
                 )
