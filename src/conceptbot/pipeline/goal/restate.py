@@ -81,6 +81,37 @@ class Restater:
             return Restatement("", problem=str(exc))
         return _made(response.text, response.usage)
 
+    def variants(self, request: str, n: int, temperature: float = 0.8, seed: int = 0) -> list[Restatement]:
+        """``n`` plain forms of ``request`` sampled at ``temperature`` (other readings the greedy one
+        may have missed); never raises for a model's failure (then none). The usage of the one call
+        is on the first.
+
+        Args:
+            request: What the person said.
+            n: How many to sample.
+            temperature: Sampling temperature (above 0).
+            seed: Base seed (completion ``i`` uses ``seed + i`` where a backend loops).
+        """
+        words = " ".join(request.split())
+        if not words or len(words) > MAX_REQUEST or n < 1:
+            return []
+        chat = ChatRequest.of(
+            prompts.fill("restate_user", request=words),
+            system=prompts.render("restate_system"),
+            max_tokens=self.max_tokens,
+            stop=("\n",),
+            n=n,
+            temperature=temperature,
+            seed=seed,
+        )
+        try:
+            response = self.llm.chat(chat)
+        except ConceptBotError as exc:
+            logger.warning("sampling plain forms of %r failed: %s", words[:80], exc)
+            return []
+        made = [_made(text, Usage(calls=0)) for text in response.choices]
+        return [Restatement(made[0].text, response.usage, made[0].problem), *made[1:]] if made else []
+
 
 def _made(reply: str, usage: Usage) -> Restatement:
     text, problem = _checked(reply)
