@@ -29,7 +29,7 @@ from conceptbot.bench.conformal_fit import labelled
 from conceptbot.bench.grading import Task, gold_reading, gold_reply, grade, load_tasks, task_scene
 from conceptbot.core.config import load_settings
 from conceptbot.core.plan import Plan
-from conceptbot.core.system import ASK_ALL, COVERAGES, LEVELS, WHICH_ONE, SystemOptions
+from conceptbot.core.system import ASK_ALL, COVERAGES, LEVELS, READINGS, WHICH_ONE, SystemOptions
 from conceptbot.core.trace import ClarifyingQuestion
 from conceptbot.pipeline.goal_planner.conformal import OLD_RULE, shipped
 from conceptbot.systems import build_system
@@ -91,13 +91,14 @@ def measure(
     known: dict[str, dict[str, Any]] | None = None,
     keep: Callable[[dict[str, Any]], None] | None = None,
     which_one: str | None = None,
+    reading: str = READING,
 ) -> dict[str, Any]:
     """One row: the split's tasks (``ids``: only those) planned with and without the gold answers
     (:func:`outcome`); with ``ids``, each task's outcome too (``per_task``). ``known`` holds outcomes
     of an earlier run by task id, taken instead of planning the task again (``--resume``); ``keep``
     gets each new outcome as it is found. ``which_one``: the which-one rule (None: the
-    calibration's)."""
-    options = SystemOptions(coverage=coverage, level=level, which_one=which_one)
+    calibration's); ``reading``: how the planner reads the request (``SystemOptions.reading``)."""
+    options = SystemOptions(coverage=coverage, level=level, which_one=which_one, reading=reading)
     system = build_system(load_settings(), system_name, options)
     rule = which_one or shipped().rule
     tasks = [t for t in load_tasks(split=split) if not ids or t.id in ids]
@@ -119,7 +120,7 @@ def measure(
         **summary(found, level),
         "reading_asked": readings,
         "which_one": rule,
-        "reading": READING,
+        "reading": reading,
         **({"per_task": found} if ids else {}),
     }
 
@@ -257,6 +258,14 @@ def main() -> None:
         "--which-one", choices=WHICH_ONE, default=None, help="the which-one rule (default: the calibration's)"
     )
     parser.add_argument("--tasks", default="", help="only these task ids (comma-separated; not written)")
+    parser.add_argument("--reading", choices=READINGS, default=READING, help="how the request is read")
+    parser.add_argument(
+        "--coverage",
+        type=float,
+        action="append",
+        choices=(*COVERAGES, ASK_ALL),
+        help="only this coverage (repeatable; default: every one)",
+    )
     parser.add_argument(
         "--resume",
         action="store_true",
@@ -291,11 +300,11 @@ def main() -> None:
             print(f"wrote {OUT} and {RELIABILITY}")
         return
     # ASK_ALL: every calibrated decision asked, the most the answers can do (the ceiling).
-    coverages = (*COVERAGES, ASK_ALL)
+    coverages = tuple(args.coverage) if args.coverage else (*COVERAGES, ASK_ALL)
     readings = not args.no_readings
     rule = args.which_one or shipped().rule
     keys = [
-        (args.split, s, args.level, c, readings, rule, READING)
+        (args.split, s, args.level, c, readings, rule, args.reading)
         for s in args.systems.split(",")
         for c in coverages
     ]
@@ -317,7 +326,16 @@ def main() -> None:
 
         rows.append(
             measure(
-                split, system_name, coverage, level, ids, readings, known, keep if args.write else None, rule
+                split,
+                system_name,
+                coverage,
+                level,
+                ids,
+                readings,
+                known,
+                keep if args.write else None,
+                rule,
+                args.reading,
             )
         )
     columns = ("cover", "alone", "asked", "help", "q/task", "obj/q", "emp.cov", "dec.cov", "n task")

@@ -8,6 +8,8 @@ from typing import Any, TypeVar
 
 import click
 
+from conceptbot.core.system import READINGS
+
 F = TypeVar("F", bound=Callable[..., object])
 
 
@@ -32,9 +34,11 @@ def reading_option(command: F) -> F:
     """Add ``--reading``: how the goal planner reads a request (``SystemOptions.reading``)."""
     return click.option(
         "--reading",
-        type=click.Choice(["restated", "words"]),
+        type=click.Choice(list(READINGS)),
         default="restated",
         show_default=True,
         help="How the goal planner reads the request: restated (the model says it plainly first and "
-        "the better of the two readings is kept; one more model call) or words (the rules alone).",
+        "the better of the two readings is kept; one more model call), words (the rules alone) or "
+        "sampled (as restated, and four more plain forms sampled: where their readings differ, "
+        "the person may be asked which was meant).",
     )(command)

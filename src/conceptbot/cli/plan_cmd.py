@@ -238,6 +238,7 @@ READINGS = {
     "both": "the request's own words read the same",
     "plain": "read from the plain form (the request's own words read otherwise)",
     "words": "read from the request's own words (the plain form read otherwise)",
+    "sampled": "read from a sampled plain form, as the person chose",
 }
 
 

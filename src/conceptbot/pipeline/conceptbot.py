@@ -37,6 +37,7 @@ from conceptbot.models.cache_db import CacheStore
 from conceptbot.models.llm import LLM
 from conceptbot.pipeline import modes, prompts
 from conceptbot.pipeline.goal import GoalFinder, GoalReader
+from conceptbot.pipeline.goal.adapter import SAMPLES
 from conceptbot.pipeline.goal.restate import Restater
 from conceptbot.pipeline.goal_planner import conformal
 from conceptbot.pipeline.goal_planner.combine import combination
@@ -96,7 +97,8 @@ class ConceptBot:
         coverage: The goal planner's conformal coverage (see ``SystemOptions``).
         level: What the coverage holds for (``plan`` or ``decision``).
         reading: ``restated``: the goal planner reads the request's words and the model's plain
-            form of it and keeps the better reading; ``words``: the rules alone.
+            form of it and keeps the better reading; ``words``: the rules alone; ``sampled``: as
+            ``restated``, with sampled plain forms' readings offered where the person is asked.
         which_one: How a target taking one object is judged sure (``fits`` or ``softmax``); None:
             the rule the calibration names.
         calibration_dir: Where ``conceptbot calibrate --conformal`` wrote a model's thresholds.
@@ -164,7 +166,9 @@ class ConceptBot:
                 facts.dish_concept if retriever is not None else None,
                 # The model says the request plainly and the rules read that too: they read plain
                 # commands well and talk badly (docs/notes/2026-12-02-restated-reading.md).
-                Restater(self._llm_for("restate")) if reading == "restated" else None,
+                Restater(self._llm_for("restate")) if reading in ("restated", "sampled") else None,
+                # Sampled plain forms: more readings to offer where they disagree (goal/adapter.py).
+                samples=SAMPLES if reading == "sampled" else 0,
             ),
             decider,
             self.ope if self.switches.ope else None,

@@ -321,3 +321,30 @@ def test_a_reading_is_asked_about_unless_its_set_is_the_reading_taken_alone() ->
     assert reading_question(_doubt(0.05, 0.04), 0.9066) is not None  # neither likely: asked, not guessed
     same = _doubt(0.5, 0.5, taken="give the user the tea and the cake")
     assert reading_question(same, 0.9066) is None  # the person could not tell the two apart
+
+
+def test_sampled_readings_likely_enough_are_listed_after_the_two_readings_once_each() -> None:
+    from conceptbot.pipeline.goal_planner.targets import Alternative
+
+    def never() -> TargetsRead:
+        raise AssertionError("not made by the question")
+
+    more = (
+        Alternative("give the user the cake", 0.33, never),
+        Alternative("give the user the tea", 0.2, never),  # reads as the reading taken: left out
+        Alternative("give the user the jam", 0.05, never),  # below 1 - qhat at 0.9
+    )
+    doubt = ReadingDoubt("give the user the tea", "", 0.9, 0.0, "agree", never, more)
+    question = reading_question(doubt, 0.9066)
+    assert question is not None and question.objects == ("give the user the tea", "give the user the cake")
+    assert question.p_yes == (0.9, 0.33)
+    assert (
+        question.text
+        == "Did you mean: give the user the tea, or give the user the cake? One of them, or none."
+    )
+    assert (
+        reading_question(
+            ReadingDoubt("give the user the tea", "", 0.9, 0.0, "agree", never, more[1:]), 0.9066
+        )
+        is None
+    )

@@ -625,3 +625,28 @@ def test_a_reading_whose_other_is_unlikely_is_not_asked_about() -> None:
     result = planner.plan("chips", SCENE, ask=lambda q: asked.append(q) or "none")
     assert not asked and not result.questions
     assert format_actions(result.actions) == ["pick_and_place(chips, user)", "done()"]
+
+
+def test_a_sampled_reading_the_person_chooses_is_planned() -> None:
+    from conceptbot.pipeline.goal_planner.targets import Alternative
+
+    def glue() -> TargetsRead:
+        return TargetsRead(False, [Target("user", 1, "named", ["glue"])], Usage(calls=1), "p", "sampled")
+
+    def unused() -> TargetsRead:
+        raise AssertionError("the other reading is not made")
+
+    class _Sampled:
+        def read(self, request: str, scene: Scene) -> TargetsRead:
+            more = (Alternative("give the user the glue", 0.33, glue),)
+            doubt = ReadingDoubt("give the user the chips", "", 0.8, 0.0, "agree", unused, more)
+            chips = [Target("user", 1, "named", ["chips"])]
+            return TargetsRead(False, chips, Usage(calls=0), "p", "both", None, doubt)
+
+    llm = FakeLLM(scores=[PRIOR, SAFE])
+    asked: list = []
+    planner = GoalPlanner(_Sampled(), Decider(llm, FactFinder(None)))
+    result = planner.plan("chips", SCENE, ask=lambda q: asked.append(q) or q.objects[1])
+    assert [q.objects for q in asked] == [("give the user the chips", "give the user the glue")]
+    assert format_actions(result.actions) == ["pick_and_place(glue, user)", "done()"]
+    assert result.trace.goal.reading == "sampled" and result.usage["goal"].calls == 1

@@ -42,6 +42,11 @@ class Reading:
         usage: The model's calls.
         step: Which of :func:`choose`'s steps decided (one of :data:`STEPS`; "" where only one
             reading was made or a fixed policy chose): how sure the choice is depends on it.
+        sampled: Readings of plain forms sampled from the model that are neither ``goal`` nor
+            :attr:`other`, each with how many of the pool read it (most first); empty unless
+            sampled.
+        pool: How many readings were counted: the words', the greedy plain form's and each
+            sample's (0 unless sampled).
     """
 
     goal: Goal
@@ -51,6 +56,8 @@ class Reading:
     source: Literal["words", "plain", "both"] = "words"
     usage: Usage = field(default_factory=lambda: Usage(calls=0))
     step: str = ""
+    sampled: tuple[tuple[Goal, int], ...] = ()
+    pool: int = 0
 
     @property
     def doubtful(self) -> bool:
@@ -161,24 +168,57 @@ class AidedReader:
         reader: The rules.
         restater: The model's plain form.
         policy: Which reading wins where they differ.
+        samples: Plain forms sampled besides the greedy one (0: none).
     """
 
-    def __init__(self, reader: GoalReader, restater: Restater, policy: Policy = "grounded") -> None:
+    def __init__(
+        self, reader: GoalReader, restater: Restater, policy: Policy = "grounded", samples: int = 0
+    ) -> None:
         self.reader = reader
         self.restater = restater
         self.policy = policy
+        self.samples = samples
 
     def read(self, request: str, scene: Scene) -> Reading:
-        """Both readings of ``request`` and the one chosen."""
-        return read_twice(self.reader.read, self.restater, request, scene, self.policy)
+        """Both readings of ``request`` and the one chosen (and the sampled ones' votes)."""
+        return read_twice(self.reader.read, self.restater, request, scene, self.policy, self.samples)
 
 
 def read_twice(
-    read: Callable[[str, Scene], Goal], restater: Restater, request: str, scene: Scene, policy: Policy
+    read: Callable[[str, Scene], Goal],
+    restater: Restater,
+    request: str,
+    scene: Scene,
+    policy: Policy,
+    samples: int = 0,
+    temperature: float = 0.8,
 ) -> Reading:
-    """``read`` on the request's words and on ``restater``'s plain form, and ``policy``'s choice."""
+    """``read`` on the request's words and on ``restater``'s plain form, and ``policy``'s choice;
+    with ``samples``, also on that many plain forms sampled at ``temperature``, whose other
+    readings are kept with their votes (:func:`votes`)."""
     own = read(request, scene)
     said = restater.restate(request)
     restated = read(said.text, scene) if said.text else None
-    chosen = choose(own, restated, policy, request, said.text)
-    return replace(chosen, plain=said.text, usage=said.usage)
+    chosen = replace(choose(own, restated, policy, request, said.text), plain=said.text, usage=said.usage)
+    if samples < 1:
+        return chosen
+    drawn = restater.variants(request, samples, temperature)
+    pool = [
+        own,
+        *([restated] if restated is not None else []),
+        *(read(d.text, scene) for d in drawn if d.text),
+    ]
+    usage = sum((d.usage for d in drawn), chosen.usage)
+    known = [chosen.goal, *([chosen.other] if chosen.other is not None else [])]
+    return replace(chosen, usage=usage, sampled=votes(pool, known), pool=len(pool))
+
+
+def votes(pool: list[Goal], known: list[Goal]) -> tuple[tuple[Goal, int], ...]:
+    """The distinct readings of ``pool`` that are none of ``known``, each with how many of the pool
+    are the same goal, most first (the first read on a tie)."""
+    counted: list[tuple[Goal, int]] = []
+    for goal in pool:
+        if any(same_goal(goal, k).ok for k in known) or any(same_goal(goal, g).ok for g, _ in counted):
+            continue
+        counted.append((goal, sum(same_goal(goal, other).ok for other in pool)))
+    return tuple(sorted(counted, key=lambda gv: -gv[1]))

@@ -270,17 +270,26 @@ def clarify(
 
 
 def reading_question(doubt: ReadingDoubt, qhat: float) -> ClarifyingQuestion | None:
-    """The question of which reading was meant, or None where the set is the reading taken alone
-    (the reading dropped is less than ``1 - qhat`` likely, and the one taken is not) or the two
-    read the same in words (the person could not tell them apart)."""
+    """The question of which reading was meant, or None where the set is the reading taken alone.
+
+    The set holds the reading dropped unless it is less than ``1 - qhat`` likely and the one taken
+    is not, and each sampled reading at least ``1 - qhat`` likely; a reading that reads the same in
+    words as one before it is left out (the person could not tell them apart)."""
     floor = 1.0 - qhat
-    if doubt.taken == doubt.other or (doubt.p_taken >= floor and doubt.p_other < floor):
+    options = [(doubt.taken, doubt.p_taken)]
+    if doubt.other and not (doubt.p_taken >= floor and doubt.p_other < floor):
+        options.append((doubt.other, doubt.p_other))
+    options += [(m.text, m.p) for m in doubt.more if m.p >= floor]
+    seen: set[str] = set()
+    kept = [(text, p) for text, p in options if not (text in seen or seen.add(text))]
+    if len(kept) < 2:
         return None
+    listed = ", or ".join(text for text, _ in kept)
     return ClarifyingQuestion(
-        f"Did you mean: {doubt.taken}, or {doubt.other}? One of them, or none.",
+        f"Did you mean: {listed}? One of them, or none.",
         "",
-        (doubt.taken, doubt.other),
-        (_shown(doubt.p_taken), _shown(doubt.p_other)),
+        tuple(text for text, _ in kept),
+        tuple(_shown(p) for _, p in kept),
         kind="reading",
     )
 

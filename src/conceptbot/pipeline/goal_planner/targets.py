@@ -191,17 +191,34 @@ class Target:
 
 
 @dataclass(frozen=True)
+class Alternative:
+    """A reading of a sampled plain form that neither the words nor the greedy plain form read.
+
+    Attributes:
+        text: The reading in words.
+        p: How likely it is the one meant: the share of the readings counted that read it.
+        read: Reads the request as this reading.
+    """
+
+    text: str
+    p: float
+    read: Callable[[], TargetsRead]
+
+
+@dataclass(frozen=True)
 class ReadingDoubt:
     """Where the request reads two ways: both readings in words, how likely each is the one meant,
     and the other reading's targets, made when asked for (scoring an open place is a model call).
 
     Attributes:
         taken: The reading the targets are, in words.
-        other: The reading not taken, in words.
+        other: The reading not taken, in words ("" where the words and the plain form agree and
+            only sampled readings differ).
         p_taken: P(the reading taken is the one meant), from the step of the choice that kept it.
         p_other: P(the reading not taken is).
         step: The step of the choice (:data:`conceptbot.pipeline.goal.aided.STEPS`).
         alternative: Reads the request as the other reading.
+        more: Readings of sampled plain forms, likeliest first (empty unless sampled).
     """
 
     taken: str
@@ -210,6 +227,7 @@ class ReadingDoubt:
     p_other: float
     step: str
     alternative: Callable[[], TargetsRead]
+    more: tuple[Alternative, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -183,7 +183,8 @@ function showGoal(goal) {
   if (goal.stack) $("targets").append(el("li", {}, "stack the objects"));
   // Where the model said the request plainly first (pipeline/goal/aided.py), which reading won.
   const readings = {both: "its own words read the same", plain: "read from this plain form",
-                    words: "read from its own words; this plain form read otherwise"};
+                    words: "read from its own words; this plain form read otherwise",
+                    sampled: "read from a sampled plain form, as you chose"};
   if (goal.reading) $("targets").append(el("li", {class: "plain"},
     `said plainly by the model: “${goal.plain}” (${readings[goal.reading]})`));
 }
