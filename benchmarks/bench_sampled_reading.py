@@ -18,7 +18,6 @@ same prompt, ``n``, temperature and seed (resume). The model's calls go through 
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import sys
 import time
@@ -33,19 +32,12 @@ from conceptbot.pipeline.goal import Goal, GoalReader, same_goal
 from conceptbot.pipeline.goal.aided import choose
 from conceptbot.pipeline.goal.restate import Restater
 
+# The greedy records and the reader are the restated reading benchmark's (a sibling script).
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import bench_restated_reading as restated
 
-def _sibling(name: str) -> Any:
-    """A sibling benchmark script as a module (the scripts are not a package)."""
-    spec = importlib.util.spec_from_file_location(name, Path(__file__).with_name(f"{name}.py"))
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-_RESTATED = _sibling("bench_restated_reading")
-PROMPT: str = _RESTATED.PROMPT
-graph_reader = _RESTATED.graph_reader
+PROMPT: str = restated.PROMPT
+graph_reader = restated.graph_reader
 GREEDY = Path("results/restate/goal-set.jsonl")
 
 
@@ -106,7 +98,7 @@ _SCENES: dict[str, str] = {}
 def _scene(record: dict[str, Any]) -> str:
     """The dev scene of a goal-set record (the goal set names it per row)."""
     if not _SCENES:
-        for row in json.loads(_RESTATED.GOAL_SET.read_text(encoding="utf-8"))["requests"]:
+        for row in json.loads(restated.GOAL_SET.read_text(encoding="utf-8"))["requests"]:
             _SCENES[row["task"]] = row["scene"]
     return _SCENES[record["task"]]
 
