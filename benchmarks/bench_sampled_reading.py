@@ -30,7 +30,7 @@ from conceptbot.core.config import load_settings
 from conceptbot.models.registry import open_llm
 from conceptbot.pipeline.goal import Goal, GoalReader, same_goal
 from conceptbot.pipeline.goal.aided import choose
-from conceptbot.pipeline.goal.restate import Restater
+from conceptbot.pipeline.goal.restate import PLACEHOLDER, Restater
 
 # The greedy records and the reader are the restated reading benchmark's (a sibling script).
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -101,6 +101,18 @@ def _scene(record: dict[str, Any]) -> str:
         for row in json.loads(restated.GOAL_SET.read_text(encoding="utf-8"))["requests"]:
             _SCENES[row["task"]] = row["scene"]
     return _SCENES[record["task"]]
+
+
+def _checked(row: dict[str, Any]) -> dict[str, Any]:
+    """A row as today's restater would have read it: samples that copy a placeholder of the prompt
+    (``restate.PLACEHOLDER``, checked since 2026-12-04) give no reading."""
+    read = [text for text in row["samples"] if text]  # the samples that were read, in order
+    keep = [not PLACEHOLDER.search(text) for text in read]
+    return {
+        **row,
+        "sampled_ok": [ok for ok, k in zip(row["sampled_ok"], keep, strict=True) if k],
+        "sampled_goals": [g for g, k in zip(row["sampled_goals"], keep, strict=True) if k],
+    }
 
 
 def report(greedy: dict[str, dict[str, Any]], rows: Sequence[dict[str, Any]]) -> None:
@@ -197,7 +209,7 @@ def main() -> None:
     restater = Restater(open_llm(load_settings(), module="restate"))
     read_rows(records, args.out, graph_reader(), restater, args.n, args.temperature, args.seed)
     wanted = {_key(r, args.n, args.temperature, args.seed) for r in records}
-    rows = [json.loads(x) for x in args.out.read_text(encoding="utf-8").splitlines() if x]
+    rows = [_checked(json.loads(x)) for x in args.out.read_text(encoding="utf-8").splitlines() if x]
     chosen = [r for r in rows if r["key"] in wanted]
     report({r["key"]: r for r in records}, chosen)
     report_sets({r["key"]: r for r in records}, chosen)

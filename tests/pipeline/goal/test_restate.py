@@ -42,6 +42,12 @@ def test_sampled_plain_forms_are_one_call_at_the_given_temperature() -> None:
     assert said[0].usage.calls == 1 and said[1].usage.calls == 0
 
 
+def test_a_plain_form_copying_the_prompt_s_placeholder_is_no_plain_form() -> None:
+    said = Restater(FakeLLM(["Make D.", "Put everything W in the Y.", "Make a PB&J."])).variants("Lunch?", 3)
+    assert [s.text for s in said] == ["", "", "Make a PB&J."]
+    assert said[0].problem == "the reply copies a placeholder of the prompt"
+
+
 def test_sampling_fails_to_no_plain_forms() -> None:
     assert Restater(FakeLLM([BackendRequestError("server said 500")])).variants("Shells away.", 2) == []
     llm = FakeLLM([])
