@@ -180,7 +180,8 @@ def fit_odds(records: Sequence[dict[str, Any]]) -> dict[str, Any]:
             "other": round((dropped + 1) / (n + 3), 4),
         }
         for step, (n, kept, dropped) in sorted(counts.items())
-        if step not in ("agree", "words only")  # nothing to ask there: one reading
+        # "agree": one reading, but sampled plain forms may offer others (--reading sampled).
+        if step != "words only"  # nothing to ask there: the words alone were read
     }
     return {
         "_doc": (
