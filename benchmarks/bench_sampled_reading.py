@@ -30,7 +30,8 @@ from conceptbot.core.config import load_settings
 from conceptbot.models.registry import open_llm
 from conceptbot.pipeline.goal import Goal, GoalReader, same_goal
 from conceptbot.pipeline.goal.aided import choose
-from conceptbot.pipeline.goal.restate import PLACEHOLDER, Restater
+from conceptbot.pipeline.goal.aided import votes as counted_votes
+from conceptbot.pipeline.goal.restate import PLACEHOLDER, TEMPERATURE, Restater
 
 # The greedy records and the reader are the restated reading benchmark's (a sibling script).
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -162,10 +163,7 @@ def vote_sets(
         plain = Goal.from_dict(g["plain_goal"]) if g["plain_goal"] else None
         taken = choose(words, plain, "grounded", g["request"], g["plain"]).goal
         pool = [words, *([plain] if plain else []), *(Goal.from_dict(x) for x in row["sampled_goals"])]
-        counted = [(goal, sum(same_goal(goal, other).ok for other in pool)) for goal in _distinct(pool)]
-        kept = [goal for goal, n in counted if n >= votes]
-        if not any(same_goal(taken, goal).ok for goal in kept):
-            kept.insert(0, taken)
+        kept = [taken, *(goal for goal, n in counted_votes(pool, [taken]) if n >= votes)]
         gold = Goal.from_dict(g["gold"])
         covered += any(same_goal(goal, gold).ok for goal in kept)
         asked += len(kept) > 1
@@ -199,7 +197,7 @@ def main() -> None:
     parser.add_argument("--out", type=Path, required=True, help="JSON lines, resumed")
     parser.add_argument("--greedy", type=Path, default=GREEDY, help="bench_restated_reading.py's records")
     parser.add_argument("-n", type=int, default=4, help="plain forms sampled per request")
-    parser.add_argument("--temperature", type=float, default=0.8)
+    parser.add_argument("--temperature", type=float, default=TEMPERATURE)
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
     records = [json.loads(x) for x in args.greedy.read_text(encoding="utf-8").splitlines() if x]

@@ -61,9 +61,8 @@ from conceptbot.pipeline.goal_planner.targets import (
 #: rounds 11 and 12, two of six kept the gold in the set as often as the two readings do, with a
 #: question on 35-40% of requests instead of 54-55% (benchmarks/bench_sampled_reading.py).
 MIN_VOTES = 2
-#: Plain forms sampled for ``--reading sampled``, and their temperature.
+#: Plain forms sampled for ``--reading sampled`` (at ``restate.TEMPERATURE``).
 SAMPLES = 4
-TEMPERATURE = 0.8
 
 #: Chooses the destinations of a target whose goal names none: ``(destination, score)`` pairs, best
 #: first (the score is kept in :attr:`Target.score`).
@@ -252,7 +251,6 @@ class GoalFinder:
                 scene,
                 self.policy,
                 self.samples,
-                TEMPERATURE,
             )
         read = self._targets(request, scene, reading.goal, reading.usage, started)
         # No plain form (no restater, or the model failed or said nothing): the words alone were

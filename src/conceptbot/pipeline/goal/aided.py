@@ -17,7 +17,7 @@ from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline.goal.compare import same_goal, structure, words
 from conceptbot.pipeline.goal.reader import GoalReader
-from conceptbot.pipeline.goal.restate import Restater
+from conceptbot.pipeline.goal.restate import TEMPERATURE, Restater
 from conceptbot.pipeline.goal.types import Goal
 
 Policy = Literal["words", "plain", "grounded"]
@@ -191,7 +191,7 @@ def read_twice(
     scene: Scene,
     policy: Policy,
     samples: int = 0,
-    temperature: float = 0.8,
+    temperature: float = TEMPERATURE,
 ) -> Reading:
     """``read`` on the request's words and on ``restater``'s plain form, and ``policy``'s choice;
     with ``samples``, also on that many plain forms sampled at ``temperature``, whose other
