@@ -123,3 +123,17 @@ def test_the_sampled_reading_set_keeps_readings_by_votes_and_counts_questions() 
     rows = [{"key": "a|n4|t0.8|s0", "round": 12, "sampled_goals": [right, right, wrong, wrong]}]
     assert sampled.vote_sets(greedy, rows, 2) == (1, 1, 2)  # both readings kept: a question
     assert sampled.vote_sets(greedy, rows, 3) == (0, 0, 1)  # only the taken (4 votes): no question
+
+
+def test_the_risk_set_benchmark_ranks_and_counts_over_a_threshold() -> None:
+    risk = _script("bench_risk_set")
+    assert risk.auc([2.0, 1.0], [0.0, -1.0]) == 1.0 and risk.auc([0.0], [0.0]) == 0.5
+    assert risk.auc([-1.0], [1.0]) == 0.0
+    scored = [(2.0, True), (1.0, True), (0.5, False), (-1.0, False)]
+    assert risk.best_threshold(scored) == 1.0  # flag at and above it: all four right
+    rows = [{"score": 0.4}, {"score": 0.2}, {"score": float("nan")}]
+    assert risk.over(rows, lambda r: 0.3) == "1/3" and risk.over([], lambda r: 0.3) == "-"
+    limits = risk.Thresholds()
+    assert risk.planner_limit("plain", {"to": "toddler"}) == limits.unsafe_vulnerable
+    assert risk.planner_limit("shipped", {"to": "toddler"}) == limits.risk
+    assert risk.planner_limit("shipped", {"to": "oven"}) == limits.risk_place

@@ -7,6 +7,7 @@ import json
 
 import pytest
 
+from conceptbot.core.errors import BackendRequestError
 from conceptbot.core.plan import format_actions
 from conceptbot.core.scene import Scene, scene_from_dict
 from conceptbot.core.usage import Usage
@@ -197,6 +198,8 @@ def test_an_unsafe_move_is_dropped_and_the_target_takes_its_next_best_object() -
         UNSAFE,  # scissors to the child
         PRIOR,
         SAFE,  # safety scissors
+        PRIOR,  # asked plainly: "is it safe to give the child the object?"
+        SAFE,  # the safety scissors
     ]
     result = _planner(scores).plan("Give my son something to cut paper", SCENE)
     assert format_actions(result.actions) == ["pick_and_place(safety scissors, child)", "done()"]
@@ -241,6 +244,8 @@ def _toddler_plan(ratings: dict) -> tuple[object, RatingOPE]:
         [-2.0, -2.0],  # and neutral
         PRIOR,  # risk: giving "the object" to the toddler
         UNSAFE,  # the question flags the crayons
+        PRIOR,  # kept: asked plainly, the content-free object for the toddler
+        SAFE,  # and the crayons
     ]
     llm = FakeLLM(scores=scores)
     ope = RatingOPE(ratings)
@@ -322,6 +327,8 @@ def test_a_target_taking_one_object_ranks_by_the_decision_and_the_name_ranking_t
         NEUTRAL,
         PRIOR,
         SAFE,
+        PRIOR,  # asked plainly
+        SAFE,
     ]
     result = _planner(scores).plan("Give my son something to cut paper", SCENE)
     assert format_actions(result.actions) == ["pick_and_place(safety scissors, child)", "done()"]
@@ -335,6 +342,70 @@ def test_named_objects_skip_the_decisions_and_an_only_move_judged_unsafe_is_a_re
     assert format_actions(result.actions) == ["done()"] and result.refused
     assert "give the scissors to the child: judged dangerous" in (result.reason or "")
     assert (result.trace.decisions or ())[0].decided is False
+
+
+def test_a_hand_over_to_a_child_the_plain_question_calls_unsafe_is_dropped_and_says_why() -> None:
+    # The question with the request calls it safe; asked plainly, without the request, it is not.
+    planner = _planner([PRIOR, SAFE, PRIOR, UNSAFE])
+    result = planner.plan("Give the child the glue", SCENE)
+    assert format_actions(result.actions) == ["done()"] and result.refused
+    [check] = result.trace.risk
+    assert check.dropped and check.reason == (
+        "asked plainly, 'give the child the glue' scores +2.95 unsafe (over +0.30)"
+    )
+    plain = planner.decider.llm.score_requests[-1].messages[-1].content
+    assert plain.strip() == "Is it safe to give the child the glue?"
+
+
+def test_a_hand_over_to_an_adult_is_not_asked_plainly() -> None:
+    llm = FakeLLM(scores=[PRIOR, SAFE, PRIOR, UNSAFE])
+    planner = GoalPlanner(TargetFinder(llm, is_person), Decider(llm, FactFinder(None)))
+    result = planner.plan("Give me the glue", SCENE)
+    assert format_actions(result.actions) == ["pick_and_place(glue, user)", "done()"]
+    assert len(llm.score_requests) == 2  # the question with the request only
+
+
+class _FailingOnCall(FakeLLM):
+    """A fake backend whose ``n``-th scoring call fails with a backend error."""
+
+    def __init__(self, n: int, scores: list[list[float]]) -> None:
+        super().__init__(scores=scores)
+        self.n = n
+
+    def score(self, request):  # type: ignore[no-untyped-def]
+        if len(self.score_requests) + 1 == self.n:
+            self.score_requests.append(request)
+            raise BackendRequestError("the server answered 500")
+        return super().score(request)
+
+
+@pytest.mark.parametrize(
+    "llm",
+    [
+        FakeLLM(scores=[PRIOR, SAFE, PRIOR, [float("nan"), -1.0]]),
+        FakeLLM(scores=[PRIOR, SAFE, [float("nan"), float("nan")], SAFE]),
+        _FailingOnCall(4, [PRIOR, SAFE, PRIOR]),
+    ],
+    ids=["nan-answer", "nan-prior", "backend-error"],
+)
+def test_a_plain_question_that_cannot_be_answered_vetoes_the_hand_over(llm: FakeLLM) -> None:
+    """Fails closed: NaN > limit is False, so without the check a NaN would keep the move."""
+    planner = GoalPlanner(TargetFinder(llm, is_person), Decider(llm, FactFinder(None)))
+    result = planner.plan("Give the child the glue", SCENE)
+    assert format_actions(result.actions) == ["done()"] and result.refused
+    [check] = result.trace.risk
+    assert check.dropped and check.why == "vetoed"
+
+
+def test_the_plain_question_is_calibrated_against_the_content_free_object_without_the_request() -> None:
+    llm = FakeLLM(scores=[[-0.5, -1.5], [-2.0, -0.5]])  # prior: Yes by 1.0; the chocolate: No by 1.5
+    judgement, _ = Decider(llm, FactFinder(None)).unsafe("dog", "chocolate bar")
+    assert judgement.subject == "give the dog the chocolate bar" and judgement.score == pytest.approx(2.5)
+    questions = [r.messages[-1].content.strip() for r in llm.score_requests]
+    assert questions == [
+        "Is it safe to give the dog the object?",
+        "Is it safe to give the dog the chocolate bar?",
+    ]
 
 
 def test_every_fitting_object_goes_to_an_all_target_and_each_object_where_it_fits_best() -> None:

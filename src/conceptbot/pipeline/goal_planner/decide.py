@@ -541,6 +541,33 @@ class Decider:
         judgement = Judgement(move, "dangerous", 1.0 - p_safe, prior - log_odds, tuple(lines), method)
         return judgement, (usage + used).with_latency(time.perf_counter() - started)
 
+    def unsafe(self, to: str, obj: str) -> tuple[Judgement, Usage]:
+        """Whether handing ``obj`` to ``to`` would be unsafe, asked plainly: "Is it safe to give the
+        dog the chocolate bar?", with neither the request, the scene nor any state.
+
+        On the labelled risk set (``benchmarks/data/risk_set.jsonl``) this separated dangerous from
+        safe hand-overs to children and animals far better than :meth:`dangerous`: the request in
+        the question sways the small model towards what was asked ("Share my chocolate bar with
+        the dog": safe), and states in it swayed it too ("the chocolate bar: dark chocolate"
+        scored safer than the name alone). The score is how much less likely "Yes, it is safe" is
+        than for the content-free object: above 0, less safe than handing over an unknown object.
+        """
+        started = time.perf_counter()
+        _, prior, usage, _ = self._ask(
+            prompts.render("risk_plain_user", move=handover_words(to, CONTENT_FREE))
+        )
+        move = handover_words(to, obj)
+        p_safe, log_odds, used, method = self._ask(prompts.render("risk_plain_user", move=move))
+        judgement = Judgement(move, "unsafe", 1.0 - p_safe, prior - log_odds, (), method)
+        return judgement, (usage + used).with_latency(time.perf_counter() - started)
+
+
+def handover_words(to: str, obj: str) -> str:
+    """A hand-over in the plain safety question's words, the recipient first: "give the dog the
+    chocolate bar" (on dev hand-overs the small model separated these better than "give the
+    chocolate bar to the dog")."""
+    return f"give the {to} the {obj}"
+
 
 def described_question(request: str, what: str, dish: str, obj: str | None, description: str) -> str:
     """The yes/no question of :meth:`Decider.fits` with the model's description of the object in it

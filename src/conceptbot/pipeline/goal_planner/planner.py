@@ -111,6 +111,11 @@ class Thresholds:
             takes an object whose combined score (:mod:`conceptbot.pipeline.goal_planner.combine`: a fitted
             log-odds, so 0 is P = 0.5) is above this; ``fit`` and ``ingredients`` apply where the
             score is the model's alone.
+        unsafe_vulnerable: A hand-over to a child or an animal is dropped when the plain safety
+            question (:meth:`Decider.unsafe`, "is it safe to give the dog the chocolate bar?")
+            scores it above this, whatever OPE rates (on the labelled risk set,
+            ``benchmarks/data/risk_set.jsonl``, 35 of 40 dangerous hand-overs to children and
+            animals are above it and 2 of 40 safe ones; ``docs/asking.md``).
     """
 
     fit: float = -0.5
@@ -123,6 +128,7 @@ class Thresholds:
     ingredients: float = 0.7
     name_weight: float = 1.0
     combined: float = 0.0
+    unsafe_vulnerable: float = 0.3
 
 
 @dataclass
@@ -185,6 +191,11 @@ def _failed(obj: str, target: str, message: str) -> Veto:
 def _vetoed(veto: Veto, move: str, ope: str | None, s_aff: float) -> RiskCheck:
     """The risk check of a vetoed move (no score: none was needed, or none could be had)."""
     return RiskCheck(veto.object, veto.to, move, None, None, (), ope, round(s_aff, 4), True, "vetoed", veto)
+
+
+def _plainly(judgement: Judgement, limit: float) -> str:
+    """Why the plain safety question drops a move, for the trace."""
+    return f"asked plainly, {judgement.subject!r} scores {judgement.score:+.2f} unsafe (over {limit:+.2f})"
 
 
 def _evidence(props: ObjectProperties, target: str) -> str:
@@ -539,6 +550,18 @@ class GoalPlanner:
             # dropped for what it names, which the trace shows.
             self._properties(request, scene, [obj], properties, usage, observer)
             reason = self._reason(obj, target, properties, flagged)
+        if reason is None and is_vulnerable(target):
+            # Asked without the request, which sways the small model towards what was asked.
+            try:
+                plain, used = self.decider.unsafe(target, obj)
+            except (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError) as exc:
+                return _vetoed(_failed(obj, target, exc.message), move, ope, s_aff)
+            usage["risk"] = usage["risk"] + used
+            asked.append(plain.scoring)
+            if not (math.isfinite(plain.score) and math.isfinite(plain.p_yes)):
+                return _vetoed(_failed(obj, target, "the backend gave a non-finite score"), move, ope, s_aff)
+            if plain.score > self.thresholds.unsafe_vulnerable:
+                reason = _plainly(plain, self.thresholds.unsafe_vulnerable)
         dangerous = reason is not None
         infeasible = factors.get("pick", 1.0) <= 0.0 or factors.get("place", 1.0) <= 0.0
         return RiskCheck(
