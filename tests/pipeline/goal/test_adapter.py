@@ -2,7 +2,7 @@ from __future__ import annotations
 
 import pytest
 
-from conceptbot.core.scene import scene_from_dict
+from conceptbot.core.scene import Scene, scene_from_dict
 from conceptbot.models.fake import FakeLLM
 from conceptbot.pipeline.goal import Goal, GoalFinder, GoalReader, GoalTarget, to_targets
 from conceptbot.pipeline.goal.adapter import ScoredChooser
@@ -67,6 +67,21 @@ def test_open_targets_need_a_chooser_except_a_need() -> None:
         ("serving bowl", "scored", 2.5, True, "guacamole", "an ingredient of guacamole")
     ]
     assert to_targets(Goal(stack=True, targets=(GoalTarget(None, "all"),)), SHELLS) == []
+
+
+def test_a_dish_keeps_the_words_it_was_said_in_beside_the_graph_s_concept() -> None:
+    def choose(target: GoalTarget, scene: Scene) -> list[tuple[str, float]]:
+        return [("serving bowl", 1.0)]
+
+    goal = Goal(dish="salad", targets=(GoalTarget(None, "ingredients", ("tomato",)),))
+    (said,) = to_targets(goal, PANTRY, choose=choose, dish_said="tomato and cucumber salad")
+    assert (said.dish, said.criterion, said.dish_said) == (
+        "salad",
+        "an ingredient of salad",  # the graph's evidence is read for the concept
+        "tomato and cucumber salad",
+    )
+    (same,) = to_targets(goal, PANTRY, choose=choose, dish_said="salad")
+    assert same.dish_said == ""  # nothing more said than the concept
 
 
 def test_the_scored_chooser_asks_the_target_finder_s_question() -> None:

@@ -74,3 +74,22 @@ def test_the_plain_reading_is_standardised_in_its_group_like_the_model_s() -> No
     by = {j.subject: j.score for j in judgements}
     assert by["foxglove"] == pytest.approx(0.5)  # gap 0, z +1
     assert by["parsley"] == pytest.approx(-2.0 - 0.5)  # gap -2, z -1
+
+
+def test_an_ingredient_question_asks_about_the_dish_as_it_was_said() -> None:
+    # The graph's concept is "salad"; the person asked for a tomato and cucumber salad, and a kiwi
+    # is an ingredient of the one but not of the other.
+    llm = FakeLLM(scores=[[-1.0, -1.0]] * 4)  # the content-free object and the kiwi, twice
+    decider = Decider(llm, FactFinder(None), combination=Combination(("model",), (1.0,), 0.0))
+    decider.fits(
+        "I fancy a tomato and cucumber salad.",
+        "an ingredient of salad",
+        ["kiwi"],
+        SCENE,
+        dish="salad",
+        said="tomato and cucumber salad",
+    )
+    asked = [r.messages[-1].content for r in llm.score_requests]
+    assert all("an ingredient of tomato and cucumber salad?" in a for a in asked)
+    decider.fits("Make a salad.", "an ingredient of salad", ["kiwi"], SCENE, dish="salad")
+    assert "an ingredient of salad?" in llm.score_requests[-1].messages[-1].content

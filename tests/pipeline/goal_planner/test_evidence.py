@@ -19,6 +19,19 @@ GRAPH = DictGraph(
         "paper cup": [("paper cup", "MadeOf", "paper"), ("paper cup", "IsA", "cup")],
         "jar": [("jar", "MadeOf", "glass")],
         "hollandaise": [("hollandaise", "DefinedAs", "eggs and butter with lemon juice")],
+        "french toast": [("french toast", "DefinedAs", "bread slice dipped in egg and milk and fried")],
+        "carton": [("carton", "IsA", "box")],
+        "box": [("box", "IsA", "container")],
+        "knife": [("knife", "IsA", "tool")],
+        "mug": [("mug", "IsA", "container"), ("mug", "IsA", "crockery")],
+        "tiramisu": [("tiramisu", "DefinedAs", "sponge cake soaked in coffee with mascarpone")],
+        "pesto": [("pesto", "DefinedAs", "a sauce typically served with pasta"), ("pesto", "IsA", "sauce")],
+        "mashed potato": [
+            ("mashed potato", "DefinedAs", "potato boiled and then mashed"),
+            ("mashed potato", "IsA", "potato"),
+        ],
+        "salad": [("salad", "DefinedAs", "food mixtures served with a dressing"), ("salad", "IsA", "food")],
+        "sugar": [("sugar", "IsA", "food")],
         "mystery berry": [("mystery berry", "HasProperty", "not edible")],
         "ginger": [("ginger", "HasProperty", "inedible raw")],
     }
@@ -72,6 +85,24 @@ def test_a_dish_gloss_names_its_ingredients() -> None:
     assert _features("lemon", "an ingredient of hollandaise") == {"dish_yes": 1.0}
     assert _features("olive oil", "an ingredient of hollandaise") == {"dish_no": 1.0}
     assert _features("lemon", "an ingredient of something unknown") == {}
+
+
+def test_a_containers_name_says_what_it_holds() -> None:
+    # "carton" is a container two IsA steps up: its other words are the contents.
+    assert _features("milk carton", "an ingredient of french toast") == {"dish_yes": 1.0}
+    assert _features("carton of eggs", "an ingredient of french toast") == {"dish_yes": 1.0}
+    # A knife is no container: "bread knife" holds no bread; tableware says what it is for.
+    assert _features("bread knife", "an ingredient of french toast") == {"dish_no": 1.0}
+    assert _features("coffee mug", "an ingredient of tiramisu") == {"dish_no": 1.0}
+
+
+def test_the_dishs_own_kind_names_no_ingredient() -> None:
+    # "pesto: a sauce ..." names what pesto is; soy sauce is another sauce, not an ingredient.
+    assert _features("soy sauce", "an ingredient of pesto") == {"dish_no": 1.0}
+    # But a bag of potatoes holds what mashed potato is made of.
+    assert _features("bag of potatoes", "an ingredient of mashed potato") == {"dish_yes": 1.0}
+    # Salad and sugar are both food: that is no evidence that sugar goes in a salad.
+    assert _features("sugar", "an ingredient of salad") == {"dish_no": 1.0}
 
 
 def test_without_a_graph_only_the_name_counts() -> None:

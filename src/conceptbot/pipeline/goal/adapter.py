@@ -85,7 +85,7 @@ def _criterion(target: GoalTarget, name: str, dish: str) -> str:
     return target.criterion
 
 
-def to_targets(goal: Goal, scene: Scene, choose: Chooser | None = None) -> list[Target]:
+def to_targets(goal: Goal, scene: Scene, choose: Chooser | None = None, dish_said: str = "") -> list[Target]:
     """The goal planner's targets for ``goal`` (see the module docstring).
 
     Args:
@@ -93,6 +93,8 @@ def to_targets(goal: Goal, scene: Scene, choose: Chooser | None = None) -> list[
         scene: Its scene.
         choose: Chooses destinations for targets the goal leaves open; None: a need goes to the
             scene's user, and any other open target is an error.
+        dish_said: The dish as the request says it, where ``goal.dish`` is the graph's concept
+            for it (``Target.dish_said``).
 
     Returns:
         The targets, in the goal's order (a chosen target's places best first).
@@ -131,6 +133,7 @@ def to_targets(goal: Goal, scene: Scene, choose: Chooser | None = None) -> list[
                     target.takes == "ingredients",
                     target.takes == "remainder",
                     _part(target) if several and _counted(target) else "",
+                    dish_said if target.takes == "ingredients" and dish_said != dish else "",
                 )
             )
     return targets
@@ -311,12 +314,15 @@ class GoalFinder:
 
     def _targets(self, request: str, scene: Scene, goal: Goal, usage: Usage, started: float) -> TargetsRead:
         """A goal's targets, its dish as the graph's concept and open places chosen by scoring."""
+        said = (goal.dish or "").lower()
         if goal.dish:
             found = self.dish_concept
             concept = found(goal.dish, scene.pickable) if found is not None else None
-            goal = replace(goal, dish=concept or goal.dish.lower())
+            goal = replace(goal, dish=concept or said)
         chooser = ScoredChooser(self.finder, request, goal.dish or "")
-        targets = to_targets(goal, scene, choose=chooser)
+        # The model is asked about the dish as it was said ("is the kiwi an ingredient of tomato and
+        # cucumber salad?"); the graph's concept ("salad") is what its facts are read for.
+        targets = to_targets(goal, scene, choose=chooser, dish_said=said)
         usage = (chooser.usage + usage).with_latency(time.perf_counter() - started)
         return TargetsRead(goal.stack, targets, usage)
 

@@ -408,6 +408,7 @@ class Decider:
         scene: Scene,
         dish: str = "",
         combine: bool = True,
+        said: str = "",
     ) -> tuple[list[Judgement], tuple[str, ...], Usage]:
         """Whether each object fits a description ("poisonous", "an ingredient of guacamole"),
         calibrated, and where the decider has a combination, combined with the graph's evidence.
@@ -418,6 +419,9 @@ class Decider:
                 on the dev split) with the dish's definition in it.
             combine: Combine with the evidence (False: the model's calibrated answer only, for a
                 description that is no property to look up, such as a good base for a stack).
+            said: The dish in the request's words, when it says more than the graph's concept
+                ``dish`` ("tomato and cucumber salad"): the question asks about it, the facts
+                are read for ``dish``.
 
         Returns:
             The judgements, the facts every question carried (the dish's definition), and usage.
@@ -435,7 +439,7 @@ class Decider:
                 request=request,
                 context=context_text,
                 what=what,
-                dish=dish,
+                dish=said or dish,
                 object=obj if obj is not None else CONTENT_FREE,
                 facts=("Facts about it: " + "; ".join(facts) + ".\n") if facts else "",
             )
@@ -455,7 +459,7 @@ class Decider:
             if self.combination.uses_described:
 
                 def told(obj: str | None, description: str) -> str:
-                    return described_question(request, what, dish, obj, description)
+                    return described_question(request, what, said or dish, obj, description)
 
                 described, descriptions, used = self._described(objects, told, what)
                 usage = usage + used

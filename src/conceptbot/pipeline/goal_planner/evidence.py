@@ -21,8 +21,9 @@ answer:
 * **negation**: a term after "not", "no", "non", "without" within three words, or with a negating
   prefix ("inedible", "nontoxic"), is evidence the other way;
 * **dishes**: for "an ingredient of hollandaise", whether the dish's gloss or ``MadeOf`` edges name
-  the object (or its singular form, its head noun, or one of its ``IsA`` parents): "hollandaise:
-  eggs and butter with lemon juice" names the egg, the butter and the lemon.
+  the object (or its singular form, its head noun, what a container holds, or one of its ``IsA``
+  parents): "hollandaise: eggs and butter with lemon juice" names the egg, the butter and the
+  lemon; "french toast: bread slice dipped in egg and milk" names the milk carton.
 
 Each feature is 0 (silent), 0.5 (an ambiguous gloss) or 1; the statements that set it are kept for
 the trace.
@@ -49,6 +50,10 @@ DEPTH = 3  # IsA steps up from the object
 PER_LEVEL = 12  # parents followed per step, strongest first
 WINDOW = 3  # words before a term that a negation reaches
 AMBIGUOUS = 0.5  # the weight of a gloss of a word with several WordNet senses
+CONTAINER = "container"  # the graph's kind whose members' names say what they hold ("milk carton")
+# Kinds of container whose names say what they are for, not what they hold ("salad bowl", "coffee
+# mug", "frying pan"): the graph places them under these.
+TABLEWARE = frozenset({"dish", "crockery", "tableware", "cooking utensil", "kitchen utensil", "drink vessel"})
 _INGREDIENT = re.compile(r"^(?:an?\s+)?ingredients?\s+(?:of|for|in)\s+(?:an?\s+|the\s+)?(.+)$")
 
 #: The features, in the order :meth:`Evidence.vector` gives them.
@@ -359,8 +364,23 @@ class GraphEvidence:
                         statements.append(f"materials_named: {edge.sentence}")
         features["materials_named"] = float(min(len(found), 3))
 
+    def _holds(self, head: str) -> bool:
+        """Whether a name with this head noun says what it holds: a container (packaging: "carton",
+        "jar", "shaker"), not tableware."""
+        kinds = set(self._ancestors(head))
+        return CONTAINER in kinds and not kinds & TABLEWARE
+
     def _dish(self, obj: str, dish: str, note: Any) -> None:
-        """Whether the dish's gloss or ``MadeOf`` edges name the object, its head noun or a parent."""
+        """Whether the dish's gloss or ``MadeOf`` edges name the object, its head noun, what it holds
+        or a parent.
+
+        A container's name says what it holds: when the graph places the head noun under
+        "container" ("carton", "shaker", "jar") and not under tableware ("salad bowl", "coffee mug"),
+        the words before it are the contents ("milk carton" -> milk: "french toast: bread slice
+        dipped in egg and milk"). A head noun that is the dish's
+        own kind, after a word that makes it another kind of it, is no ingredient ("soy sauce" for "pesto:
+        a sauce typically served with pasta").
+        """
         if self.graph is None:
             return
         own, _ = self._own(dish)
@@ -368,8 +388,14 @@ class GraphEvidence:
         if not stating:
             return
         name = words_of(obj)
-        names = [tuple(name), (name[-1],)] if name else []
-        parents = [tuple(words_of(p)) for p in self._ancestors(obj)[:PER_LEVEL]]
+        dish_kinds = set(self._ancestors(dish))
+        # "soy sauce" is a sauce of its own, a sibling of the dish; "bag of potatoes" holds potatoes.
+        sibling = len(name) > 1 and name[-2] != "of" and name[-1] in dish_kinds
+        names = [tuple(name)] + ([(name[-1],)] if name and not sibling else [])
+        if len(name) > 1 and "of" not in name and self._holds(name[-1]):
+            names.append(tuple(name[:-1]))
+        # A kind the dish shares says nothing ("salad: food mixtures ..." and "sugar" IsA "food").
+        parents = [tuple(words_of(p)) for p in self._ancestors(obj)[:PER_LEVEL] if p not in dish_kinds]
         for edge in stating:
             seq = words_of(edge.tail)
             if any(_phrase_at(seq, n) for n in names):

@@ -405,7 +405,7 @@ class GoalPlanner:
                 # Sorting by a property: "is the foxglove poisonous?" is a question the model answers
                 # far better than "should the robot put the foxglove on the toxic tray?".
                 judgements, context, used = self.decider.fits(
-                    request, target.criterion, others, scene, dish=target.dish
+                    request, target.criterion, others, scene, dish=target.dish, said=target.dish_said
                 )
             else:
                 move = move_words(target.name, "{object}", target.part)

@@ -155,12 +155,15 @@ class Target:
         score: The calibrated log-odds when scored.
         criterion: What decides which objects go there, in the request's words ("poisonous",
             "made entirely of glass"), when the request sorts by a property; "" otherwise.
-        dish: The dish the request asks to be made ("hollandaise"), when the graph says it is one.
+        dish: The dish the request asks to be made ("hollandaise"), when the graph says it is one:
+            the graph's concept, which its facts and evidence are read for.
         ingredients: The objects that go are the ingredients of food to prepare.
         rest: It takes whatever no other target takes ("the rest", "everything else").
         part: Where the request asks for several things of different kinds ("something to eat and
             something to drink", "I'm chilly and there's nothing to do"), what this one is for, as
             the questions say it ("as something to eat", 'for "I'm chilly"'); "" otherwise.
+        dish_said: The dish in the request's own words ("tomato and cucumber salad", where the
+            graph's concept is "salad"), which the model is asked about; "": as ``dish``.
     """
 
     name: str
@@ -173,6 +176,7 @@ class Target:
     ingredients: bool = False
     rest: bool = False
     part: str = ""
+    dish_said: str = ""
 
     def to_dict(self) -> dict:
         """JSON form for the trace."""
