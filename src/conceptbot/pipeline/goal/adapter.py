@@ -134,6 +134,7 @@ def to_targets(goal: Goal, scene: Scene, choose: Chooser | None = None, dish_sai
                     target.takes == "remainder",
                     _part(target) if several and _counted(target) else "",
                     dish_said if target.takes == "ingredients" and dish_said != dish else "",
+                    target.criterion if several and target.takes == "need" else "",
                 )
             )
     return targets

@@ -164,6 +164,9 @@ class Target:
             the questions say it ("as something to eat", 'for "I'm chilly"'); "" otherwise.
         dish_said: The dish in the request's own words ("tomato and cucumber salad", where the
             graph's concept is "salad"), which the model is asked about; "": as ``dish``.
+        need: Where the request states two or more needs ("I'm chilly and there's nothing to
+            do"), this one's own words ("I'm chilly"): its objects are decided as if it were the
+            whole request; "" otherwise.
     """
 
     name: str
@@ -177,6 +180,7 @@ class Target:
     rest: bool = False
     part: str = ""
     dish_said: str = ""
+    need: str = ""
 
     def to_dict(self) -> dict:
         """JSON form for the trace."""
