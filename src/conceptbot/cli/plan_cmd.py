@@ -267,6 +267,8 @@ def _goal(console: Console, trace: PlanTrace) -> None:
         names = any(row.name_score is not None for row in decision.objects)
         # Combined decisions: the model's own log-odds beside the score, and the graph's evidence.
         combined = any(row.model is not None for row in decision.objects)
+        # The graph's evidence: of a combination, or what the graph states an object is for.
+        evidenced = combined or any(row.evidence for row in decision.objects)
         # Where the combination also asked with the model's own description of each object.
         described = any(row.described for row in decision.objects)
         columns = [
@@ -275,12 +277,12 @@ def _goal(console: Console, trace: PlanTrace) -> None:
             "score",
             *(["model"] if combined else []),
             *(["name"] if names else []),
-            "graph evidence" if combined else "graph facts in the question",
+            "graph evidence" if evidenced else "graph facts in the question",
             *(["the model's description"] if described else []),
         ]
         table = Table(*columns, title=title)
         for row in sorted(decision.objects, key=lambda r: -r.score):
-            said = row.evidence["statements"] if combined and row.evidence else row.facts
+            said = row.evidence["statements"] if evidenced and row.evidence else row.facts
             facts = "; ".join(said)[:80]
             model = [f"{row.model:+.2f}" if row.model is not None else ""] if combined else []
             name = [f"{row.name_score:+.2f}" if row.name_score is not None else ""] if names else []

@@ -152,9 +152,11 @@ def test_several_kinds_of_thing_each_carry_what_they_are_for() -> None:
     assert [t.part for t in to_targets(needs, SHELLS)] == ['for "I cut my finger"', 'for "my head aches"']
     # each need is decided on its own words; other parts, and a single need, on the whole request
     assert [t.need for t in to_targets(needs, SHELLS)] == ["I cut my finger", "my head aches"]
+    # a need takes what helps with it; the other kinds of target do not
+    assert all(t.helps for t in to_targets(needs, SHELLS)) and not any(t.helps for t in (write, paper, box))
     assert (write.need, paper.need, box.need) == ("", "", "")
     (alone,) = to_targets(Goal(need="I'm cold", targets=(GoalTarget(None, "need", (), "I'm cold"),)), SHELLS)
-    assert alone.need == ""
+    assert alone.need == "" and alone.helps  # a single need is decided on the whole request
     # one thing asked for is asked about as before, with the whole request
     (one,) = to_targets(
         Goal(targets=(GoalTarget("user", "criterion", (), "something to write with", 1),)), SHELLS

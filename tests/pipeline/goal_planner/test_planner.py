@@ -611,8 +611,8 @@ def test_each_of_two_needs_is_decided_on_its_own_words() -> None:
     # "I'm cold and I'm hungry": each need is asked about as if it were the whole request, and its
     # name ranking is calibrated against a neutral request without the need in it; with the whole
     # request and the need in the move, the ranking for "I'm cold" favoured the other need's objects
-    cold = Target("user", 1, "named", [], part="for \"I'm cold\"", need="I'm cold")
-    hungry = Target("user", 1, "named", [], part="for \"I'm hungry\"", need="I'm hungry")
+    cold = Target("user", 1, "named", [], part='for "I\'m cold"', need="I'm cold")
+    hungry = Target("user", 1, "named", [], part='for "I\'m hungry"', need="I'm hungry")
     scores = [
         PRIOR,  # "I'm cold": the content-free object
         [-3.0, -0.1],  # scissors: no
@@ -644,9 +644,60 @@ def test_each_of_two_needs_is_decided_on_its_own_words() -> None:
     asked = [m.content for r in llm.score_requests for m in r.messages if m.role == "user"]
     decisions = [q for q in asked if "Which object" in q or "to do what the person asked" in q]
     assert not any("I'm cold and I'm hungry" in q for q in decisions)  # none carried the whole request
-    assert any("said: \"I'm cold\"" in q and "give to the user?" in q for q in decisions)
-    assert any('asked the robot: "I\'m hungry"' in q and "give the chips to the user?" in q for q in decisions)
+    assert any('said: "I\'m cold"' in q and "give to the user?" in q for q in decisions)
+    assert any(
+        'asked the robot: "I\'m hungry"' in q and "give the chips to the user?" in q for q in decisions
+    )
     assert not any('to the user for "I' in q for q in decisions)  # nor the need beside it
+
+
+def _need_plan(graph: DictGraph | None) -> tuple[list[str], FakeLLM, object]:
+    """'I need to stick these pages together' with the glue and the chips answered alike."""
+    scores = [
+        PRIOR,  # "would the object help with what the person said?"
+        [-3.0, -0.1],  # scissors: no
+        [-3.0, -0.1],  # safety scissors: no
+        [-0.5, -1.5],  # glue: lean yes
+        [-0.5, -1.5],  # chips: the same
+        PRIOR,
+        SAFE,  # the one given, to the user
+    ]
+    llm = FakeLLM(scores=scores)
+    finder = FactFinder(RelationRetriever(graph, FakeEmbedder(), theta=0.1) if graph is not None else None)
+    need = Target("user", 1, "speaker", [], helps=True)
+    result = GoalPlanner(_FixedTargets([need]), Decider(llm, finder)).plan(
+        "I need to stick these pages together", SCENE
+    )
+    return format_actions(result.actions), llm, result
+
+
+def test_a_need_takes_what_the_model_says_helps_ranked_with_what_the_graph_says_it_is_for() -> None:
+    graph = DictGraph(
+        {
+            "glue": [("glue", "UsedFor", "stick pages together")],
+            "chips": [("chips", "UsedFor", "eat as a snack")],
+        }
+    )
+    plan, llm, result = _need_plan(graph)
+    assert plan == ["pick_and_place(glue, user)", "done()"]
+    asked = [m.content for r in llm.score_requests for m in r.messages if m.role == "user"]
+    assert sum("would the" in q and "help with what the person said?" in q for q in asked) == 5
+    assert not any("Which object" in q for q in asked)  # no name ranking for a need
+    (decision,) = [d for d in result.trace.decisions or () if d.decided]
+    rows = {row.object: row for row in decision.objects}
+    assert (
+        rows["glue"].evidence is not None
+        and "glue is used for stick pages together" in rows["glue"].evidence["statements"][0]
+    )
+    assert rows["glue"].p_one > rows["chips"].p_one  # the graph's statement decides between equal answers
+
+
+def test_without_the_graph_a_need_is_the_model_s_answer_alone() -> None:
+    _, _, result = _need_plan(None)
+    (decision,) = [d for d in result.trace.decisions or () if d.decided]
+    rows = {row.object: row for row in decision.objects}
+    assert rows["glue"].p_one == pytest.approx(rows["chips"].p_one)
+    assert all(row.evidence is None for row in decision.objects)
 
 
 @pytest.mark.parametrize("bad", [float("nan"), float("inf")])

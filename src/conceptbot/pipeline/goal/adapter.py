@@ -135,6 +135,7 @@ def to_targets(goal: Goal, scene: Scene, choose: Chooser | None = None, dish_sai
                     _part(target) if several and _counted(target) else "",
                     dish_said if target.takes == "ingredients" and dish_said != dish else "",
                     target.criterion if several and target.takes == "need" else "",
+                    target.takes == "need",
                 )
             )
     return targets

@@ -35,6 +35,7 @@ from conceptbot.pipeline.retrieval import RelationRetriever, edge_text
 ANSWERS = ("Yes", "No")
 NEUTRAL_REQUEST = "Please help me."  # the request the name ranking is calibrated against
 DEFINING = ("DefinedAs", "MadeOf")  # a word's own definition and ingredients
+USES = ("UsedFor", "CapableOf", "DefinedAs")  # what an object is for, as the graph states it
 CONTENT_FREE = "object"
 DESCRIPTION_TOKENS = 48  # one sentence; the model's descriptions of the judgement set end well before
 _STOP = {
@@ -264,6 +265,27 @@ class FactFinder:
                 return False
         return False
 
+    def uses(self, objects: Sequence[str], need: str) -> dict[str, tuple[float, str]]:
+        """Per object, the highest cosine between ``need`` ("I can't make out this tiny print") and
+        what the graph states the object is for, with that statement: its own ``UsedFor`` and
+        ``CapableOf`` edges and its definition ("blanket UsedFor keep warm", "earplug: a plug ...
+        for protection against ... loud noise"), or its head noun's for a name the graph knows by
+        its head ("wool blanket"). NaN and "" where the graph states none (or without a graph)."""
+        if self.retriever is None:
+            return {o: (math.nan, "") for o in objects}
+        found = self.retriever.retrieve_many(objects, [need])
+        out = {}
+        for name, got in found.items():
+            heads = {name.lower(), (got.matched or name).split(" + ")[0].lower()}
+            stated = [
+                s
+                for s in got.edges
+                if s.edge.relation in USES and s.edge.head.lower() in heads and s.edge.weight > 0
+            ]
+            best = max(stated, key=lambda s: s.similarity, default=None)
+            out[name] = (best.similarity, edge_text(best.edge)) if best is not None else (math.nan, "")
+        return out
+
     def about(self, objects: Sequence[str], targets: Sequence[str]) -> dict[str, tuple[str, ...]]:
         """Per object: its kept facts, then kept facts of its IsA parents, most similar first."""
         if self.retriever is None:
@@ -399,6 +421,30 @@ class Decider:
 
         judgements, usage = self._judge_each(objects, about, target, question)
         return judgements, context, usage.with_latency(time.perf_counter() - started)
+
+    def helps(self, need: str, objects: Sequence[str]) -> tuple[list[Judgement], Usage]:
+        """Whether each object would help with ``need`` ("I can't make out this tiny print"), asked
+        without graph facts and calibrated against a content-free object; each judgement carries,
+        as its evidence, what the graph states the object is for and how close that is to the
+        need (feature ``use``, a cosine; :meth:`FactFinder.uses`), where the graph states it."""
+        started = time.perf_counter()
+
+        def question(obj: str | None, facts: Sequence[str]) -> str:
+            name = obj if obj is not None else CONTENT_FREE
+            return prompts.render("help_user", request=need, object=name)
+
+        judgements, usage = self._judge_each(objects, {o: () for o in objects}, need, question)
+        uses = self.facts.uses(objects, need)
+
+        def stated(j: Judgement) -> Judgement:
+            similarity, statement = uses[j.subject]
+            if not math.isfinite(similarity):
+                return j  # the graph states nothing the object is for
+            said = (f"use {similarity:.2f}: {statement}",)
+            return replace(j, evidence=Evidence(j.subject, need, {"use": similarity}, said))
+
+        judgements = [stated(j) for j in judgements]
+        return judgements, usage.with_latency(time.perf_counter() - started)
 
     def fits(
         self,

@@ -107,6 +107,10 @@ class Thresholds:
             fixed threshold fails, but the ranking is good; 0.6-0.7 on the dev split).
         name_weight: Weight of the name ranking (:meth:`Decider.name_scores`) against the yes/no
             decision when a target takes N objects (0: the decision alone).
+        use_weight: Weight of what the graph states an object is for (:meth:`FactFinder.uses`)
+            against the answer to "would the X help?" when a target takes what helps with a need
+            (chosen on the dev scenes' needs and the judgement set's, 0.5 against 0, 1 and the
+            name ranking: ``benchmarks/bench_need_questions.py``).
         combined: A target that takes every object fitting a criterion, or a dish's ingredients,
             takes an object whose combined score (:mod:`conceptbot.pipeline.goal_planner.combine`: a fitted
             log-odds, so 0 is P = 0.5) is above this; ``fit`` and ``ingredients`` apply where the
@@ -127,6 +131,7 @@ class Thresholds:
     partition: float = -5.0
     ingredients: float = 0.7
     name_weight: float = 1.0
+    use_weight: float = 0.25
     combined: float = 0.0
     unsafe_vulnerable: float = 0.3
 
@@ -165,6 +170,12 @@ def _softmax(judgements: list[Judgement], order: dict[str, float]) -> list[float
     weights = [math.exp(v - top) for v in values]
     total = sum(weights)
     return [w / total for w in weights]
+
+
+def _standardised_known(scores: dict[str, float]) -> dict[str, float]:
+    """:func:`_standardised` over the finite scores alone (fewer than two: none)."""
+    known = {k: v for k, v in scores.items() if math.isfinite(v)}
+    return _standardised(known) if len(known) >= 2 else {}
 
 
 def _standardised(scores: dict[str, float]) -> dict[str, float]:
@@ -412,13 +423,29 @@ class GoalPlanner:
                 judgements, context, used = self.decider.fits(
                     request, target.criterion, others, scene, dish=target.dish, said=target.dish_said
                 )
+            elif target.helps:
+                # What helps with a need: "would the reading glasses help with what the person
+                # said?", without graph facts (on the dev scenes' needs the move question with the
+                # facts ranked the stapler first for "I can't make out this tiny print"), ranked
+                # with what the graph states each object is for (docs/planning.md, needs).
+                judgements, used = self.decider.helps(said, others)
+                context = ()
             else:
                 move = move_words(target.name, "{object}", part)
                 judgements, context, used = self.decider.moves(said, target.name, move, others, scene)
             usage = usage + used
             order = {j.subject: j.score for j in judgements}
             names: dict[str, float] = {}
-            if target.count != ALL and not target.criterion and len(others) > 1:
+            if target.helps and target.count != ALL and len(others) > 1:
+                # Which one helps: the answer and the graph's statement together (each standardised;
+                # the graph's weighted by ``use_weight``; an object it says nothing of counts as
+                # the average). Without a graph, the answer alone.
+                yes_no = _standardised(order)
+                uses = _standardised_known(
+                    {j.subject: j.evidence.features["use"] for j in judgements if j.evidence}
+                )
+                order = {o: yes_no[o] + self.thresholds.use_weight * uses.get(o, 0.0) for o in order}
+            elif target.count != ALL and not target.criterion and len(others) > 1:
                 # Which N objects: rank by the yes/no decision and the name ranking together (each
                 # standardised; the name ranking weighted by ``name_weight``); the floor still
                 # applies to the decision's own score.

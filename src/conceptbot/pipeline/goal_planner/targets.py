@@ -167,6 +167,9 @@ class Target:
         need: Where the request states two or more needs ("I'm chilly and there's nothing to
             do"), this one's own words ("I'm chilly"): its objects are decided as if it were the
             whole request; "" otherwise.
+        helps: It takes what helps with a need the request states ("I can't make out this tiny
+            print"): each object is asked "would the X help with what the person said?", and
+            ranked with what the graph states it is for.
     """
 
     name: str
@@ -181,6 +184,7 @@ class Target:
     part: str = ""
     dish_said: str = ""
     need: str = ""
+    helps: bool = False
 
     def to_dict(self) -> dict:
         """JSON form for the trace."""

@@ -195,14 +195,16 @@ function showDecisions(decisions) {
     const names = d.objects.some((o) => "name_score" in o);
     // Combined decisions carry the model's own log-odds and the graph's evidence statements.
     const combined = d.objects.some((o) => "model" in o);
+    // The graph's evidence: of a combination, or what the graph states an object is for (a need).
+    const evidenced = combined || d.objects.some((o) => o.evidence);
     // Where the combination asked with the model's own description of each object too.
     const described = d.objects.some((o) => "described" in o);
     const table = el("table", {}, el("tr", {}, el("th", {}, `for the ${d.to}`), el("th", {}, "P(yes)"),
       el("th", {}, "score"), ...(combined ? [el("th", {}, "model")] : []), ...(names ? [el("th", {}, "name")] : []),
-      el("th", {}, combined ? "graph evidence" : "graph facts in the question"),
+      el("th", {}, evidenced ? "graph evidence" : "graph facts in the question"),
       ...(described ? [el("th", {}, "the model's description")] : [])));
     for (const o of d.objects.slice().sort((a, b) => b.score - a.score)) {
-      const said = combined && o.evidence ? o.evidence.statements : o.facts;
+      const said = evidenced && o.evidence ? o.evidence.statements : o.facts;
       table.append(el("tr", { class: o.score > 0 ? "kept" : "dropped" }, el("td", {}, o.object),
         el("td", {}, o.p_yes.toFixed(2)), el("td", {}, o.score.toFixed(2)),
         ...(combined ? [el("td", {}, "model" in o ? o.model.toFixed(2) : "")] : []),
