@@ -16,9 +16,9 @@ Readings, each per group (one calibration question per group, as in the planner)
   is for (its ``UsedFor`` and ``CapableOf`` edges and its gloss; ``FactFinder.uses``).
 
 For each reading and for rankings that add readings (each standardised within its group), the
-script prints the within-group AUC and how often the group's best object is one the gold accepts
-(top-1; what a target taking one object gets). Readings are appended to the output file as they
-come and read back on a rerun (resumable).
+script prints the AUC of those scores, pooled over the groups, and how often the group's best
+object is one the gold accepts (top-1; what a target taking one object gets). Readings are
+appended to the output file as they come and read back on a rerun (resumable).
 
 ``--scenes`` asks the same about the dev tasks that want one object for a need or a kind of thing
 ("I can't make out this tiny print", "something to write with"), over every pickable object of
@@ -123,7 +123,7 @@ def auc(positive: Sequence[float], negative: Sequence[float]) -> float:
 
 
 def report(groups: dict[str, list[dict]], weights: dict[str, float]) -> tuple[float, int]:
-    """Within-group AUC and top-1 hits of the weighted sum of standardised readings."""
+    """The AUC (pooled over groups) and top-1 hits of the weighted sum of standardised readings."""
     positive: list[float] = []
     negative: list[float] = []
     hits = 0

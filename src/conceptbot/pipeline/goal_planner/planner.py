@@ -109,8 +109,12 @@ class Thresholds:
             decision when a target takes N objects (0: the decision alone).
         use_weight: Weight of what the graph states an object is for (:meth:`FactFinder.uses`)
             against the answer to "would the X help?" when a target takes what helps with a need
-            (chosen on the dev scenes' needs and the judgement set's, 0.5 against 0, 1 and the
+            (chosen on the dev scenes' needs and the judgement set's, 0.25 against 0, 0.5, 1 and the
             name ranking: ``benchmarks/bench_need_questions.py``).
+        need_sharpness: The scale of a need's ranking in the which-one softmax (``p_one``): it
+            orders as before, but its share is sharper (2.1 maximised the likelihood of the gold's
+            objects over the 19 dev need decisions; at 1 their shares were too flat, and needs
+            right without a question were asked which one).
         combined: A target that takes every object fitting a criterion, or a dish's ingredients,
             takes an object whose combined score (:mod:`conceptbot.pipeline.goal_planner.combine`: a fitted
             log-odds, so 0 is P = 0.5) is above this; ``fit`` and ``ingredients`` apply where the
@@ -132,6 +136,7 @@ class Thresholds:
     ingredients: float = 0.7
     name_weight: float = 1.0
     use_weight: float = 0.25
+    need_sharpness: float = 2.0
     combined: float = 0.0
     unsafe_vulnerable: float = 0.3
 
@@ -444,7 +449,10 @@ class GoalPlanner:
                 uses = _standardised_known(
                     {j.subject: j.evidence.features["use"] for j in judgements if j.evidence}
                 )
-                order = {o: yes_no[o] + self.thresholds.use_weight * uses.get(o, 0.0) for o in order}
+                sharp = self.thresholds.need_sharpness
+                order = {
+                    o: sharp * (yes_no[o] + self.thresholds.use_weight * uses.get(o, 0.0)) for o in order
+                }
             elif target.count != ALL and not target.criterion and len(others) > 1:
                 # Which N objects: rank by the yes/no decision and the name ranking together (each
                 # standardised; the name ranking weighted by ``name_weight``); the floor still
