@@ -608,30 +608,17 @@ def test_several_kinds_of_thing_are_each_asked_about_with_their_own_words() -> N
 
 
 def test_each_of_two_needs_is_decided_on_its_own_words() -> None:
-    # "I'm cold and I'm hungry": each need is asked about as if it were the whole request, and its
-    # name ranking is calibrated against a neutral request without the need in it; with the whole
-    # request and the need in the move, the ranking for "I'm cold" favoured the other need's objects
-    cold = Target("user", 1, "named", [], part='for "I\'m cold"', need="I'm cold")
-    hungry = Target("user", 1, "named", [], part='for "I\'m hungry"', need="I'm hungry")
+    # "I'm cold and I'm hungry": each need is asked about as if it were the whole request; with the
+    # whole request beside it, the other need swayed the answers towards its own objects
+    cold = Target("user", 1, "speaker", [], part='for "I\'m cold"', need="I'm cold", helps=True)
+    hungry = Target("user", 1, "speaker", [], part='for "I\'m hungry"', need="I'm hungry", helps=True)
+    no, yes = [-3.0, -0.1], [-0.1, -3.0]
     scores = [
         PRIOR,  # "I'm cold": the content-free object
-        [-3.0, -0.1],  # scissors: no
-        [-3.0, -0.1],  # safety scissors: no
-        [-0.1, -3.0],  # glue: yes (the fake's stand-in for a blanket)
-        [-3.0, -0.1],  # chips: no
-        [-4.0, -4.0, -1.0, -3.0],  # the name ranking, for "I'm cold"
-        NEUTRAL,
+        *(no, no, yes, no),  # scissors, safety scissors, glue (the fake's stand-in for a blanket), chips
         PRIOR,  # "I'm hungry"
-        [-3.0, -0.1],
-        [-3.0, -0.1],
-        [-3.0, -0.1],
-        [-0.1, -3.0],  # chips: yes
-        [-4.0, -4.0, -3.0, -1.0],
-        NEUTRAL,
-        PRIOR,
-        SAFE,  # glue to the user
-        PRIOR,
-        SAFE,  # chips to the user
+        *(no, no, no, yes),  # the chips
+        *(PRIOR, SAFE) * 2,  # the glue, then the chips, to the user
     ]
     llm = FakeLLM(scores=scores)
     planner = GoalPlanner(_FixedTargets([cold, hungry]), Decider(llm, FactFinder(None)))
@@ -642,13 +629,13 @@ def test_each_of_two_needs_is_decided_on_its_own_words() -> None:
         "done()",
     ]
     asked = [m.content for r in llm.score_requests for m in r.messages if m.role == "user"]
-    decisions = [q for q in asked if "Which object" in q or "to do what the person asked" in q]
-    assert not any("I'm cold and I'm hungry" in q for q in decisions)  # none carried the whole request
-    assert any('said: "I\'m cold"' in q and "give to the user?" in q for q in decisions)
-    assert any(
-        'asked the robot: "I\'m hungry"' in q and "give the chips to the user?" in q for q in decisions
+    decisions = [q for q in asked if "help with what the person said?" in q]
+    assert len(decisions) == 10 and not any("I'm cold and I'm hungry" in q for q in decisions)
+    assert (
+        sum('said: "I\'m cold"' in q for q in decisions)
+        == sum('said: "I\'m hungry"' in q for q in decisions)
+        == 5
     )
-    assert not any('to the user for "I' in q for q in decisions)  # nor the need beside it
 
 
 def _need_plan(graph: DictGraph | None) -> tuple[list[str], FakeLLM, object]:
