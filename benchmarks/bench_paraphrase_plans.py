@@ -8,6 +8,7 @@ success rate like the dev split's, on requests no rule or prompt was written for
 
     .venv/bin/python benchmarks/bench_paraphrase_plans.py --tasks dev-implicit-23,dev-implicit-24
     .venv/bin/python benchmarks/bench_paraphrase_plans.py --category implicit --out FILE.jsonl
+    .venv/bin/python benchmarks/bench_paraphrase_plans.py --category implicit --rounds 11,12
 
 A results file (``--out``) is written a line per plan as it is made and read back on ``--resume``,
 so a long run can be stopped and continued. Answers come through the answer cache like any plan.
@@ -30,9 +31,11 @@ from conceptbot.systems import build_system
 GOAL_SET = Path(__file__).parent / "data" / "goal_set.json"
 
 
-def chosen_rows(tasks: set[str] | None, category: str | None, originals: bool) -> list[dict]:
+def chosen_rows(
+    tasks: set[str] | None, category: str | None, originals: bool, rounds: set[int] | None = None
+) -> list[dict]:
     """The goal set's rows for the chosen dev tasks (or category), paraphrases only unless
-    ``originals``."""
+    ``originals``, of the chosen ``rounds`` only if given."""
     rows = json.loads(GOAL_SET.read_text(encoding="utf-8"))["requests"]
     return [
         r
@@ -40,6 +43,7 @@ def chosen_rows(tasks: set[str] | None, category: str | None, originals: bool) -
         if (tasks is None or r["task"] in tasks)
         and (category is None or r["task"].startswith(f"dev-{category}-"))
         and (originals or r["split"] == "paraphrase")
+        and (rounds is None or r.get("round") in rounds)
     ]
 
 
@@ -52,6 +56,7 @@ def main() -> None:
     parser.add_argument("--tasks", help="comma-separated dev task ids")
     parser.add_argument("--category", help="a dev category (implicit, risk, ...)")
     parser.add_argument("--originals", action="store_true", help="plan the tasks' own requests too")
+    parser.add_argument("--rounds", help="comma-separated goal-set rounds (e.g. the held-out 11,12)")
     parser.add_argument("--system", default="conceptbot")
     parser.add_argument("--out", type=Path, help="results file, a JSON line per plan")
     parser.add_argument("--resume", action="store_true", help="keep the plans already in --out")
@@ -59,7 +64,8 @@ def main() -> None:
     if not args.tasks and not args.category:
         parser.error("choose --tasks or --category")
     wanted = set(args.tasks.split(",")) if args.tasks else None
-    rows = chosen_rows(wanted, args.category, args.originals)
+    rounds = {int(r) for r in args.rounds.split(",")} if args.rounds else None
+    rows = chosen_rows(wanted, args.category, args.originals, rounds)
     tasks = {t.id: t for t in load_tasks(split="dev")}
     unknown = sorted({r["task"] for r in rows} - tasks.keys())
     if unknown:

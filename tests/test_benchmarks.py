@@ -160,3 +160,12 @@ def test_the_need_question_benchmark_scores_rankings_within_each_request() -> No
     assert [r["object"] for r in scenes["I just spilled red wine on my white shirt!"] if r["answer"]] == [
         "stain remover"  # the detergent may come too, but alone fails the task
     ]
+
+
+def test_the_paraphrase_benchmark_takes_the_rounds_asked_for() -> None:
+    paraphrases = _script("bench_paraphrase_plans")
+    held = paraphrases.chosen_rows({"dev-implicit-4"}, None, False, {11, 12})
+    assert len(held) == 2 and {r["round"] for r in held} == {11, 12}
+    every = paraphrases.chosen_rows({"dev-implicit-4"}, None, False)
+    assert len(every) > len(held) and all(r["split"] == "paraphrase" for r in every)
+    assert any(r["split"] == "original" for r in paraphrases.chosen_rows({"dev-implicit-4"}, None, True))
