@@ -417,11 +417,6 @@ class GoalPlanner:
                 continue
             others = [o for o in scene.pickable if o != target.name and o not in named_anywhere]
             observer.progress(f"Decide: which objects go to the {target.name} ({len(others)} objects)")
-            # One of two or more needs is decided on its own words, as if it were the whole request:
-            # with the whole request beside it, the other need sways the answers, and the name
-            # ranking (calibrated against a neutral request that carried the part) favoured the
-            # other need's objects: the TV remote "for 'I'm chilly'" (dev, 2026-12-05).
-            said, part = (target.need, "") if target.need else (request, target.part)
             if target.criterion:
                 # Sorting by a property: "is the foxglove poisonous?" is a question the model answers
                 # far better than "should the robot put the foxglove on the toxic tray?".
@@ -433,11 +428,14 @@ class GoalPlanner:
                 # said?", without graph facts (on the dev scenes' needs the move question with the
                 # facts ranked the stapler first for "I can't make out this tiny print"), ranked
                 # with what the graph states each object is for (docs/planning.md, needs).
-                judgements, used = self.decider.helps(said, others)
+                # One of two or more needs is asked about on its own words, as if it were the whole
+                # request: with the whole request beside it, the other need swayed the answers
+                # towards its own objects (the TV remote for "I'm chilly", dev, 2026-12-05).
+                judgements, used = self.decider.helps(target.need or request, others)
                 context = ()
             else:
-                move = move_words(target.name, "{object}", part)
-                judgements, context, used = self.decider.moves(said, target.name, move, others, scene)
+                move = move_words(target.name, "{object}", target.part)
+                judgements, context, used = self.decider.moves(request, target.name, move, others, scene)
             usage = usage + used
             order = {j.subject: j.score for j in judgements}
             names: dict[str, float] = {}
@@ -457,8 +455,8 @@ class GoalPlanner:
                 # Which N objects: rank by the yes/no decision and the name ranking together (each
                 # standardised; the name ranking weighted by ``name_weight``); the floor still
                 # applies to the decision's own score.
-                pick = move_words(target.name, part=part)  # without the object: "give to ..."
-                names, used = self.decider.name_scores(said, pick, others)
+                pick = move_words(target.name, part=target.part)  # without the object: "give to ..."
+                names, used = self.decider.name_scores(request, pick, others)
                 usage = usage + used
                 yes_no, named_z = _standardised(order), _standardised(names)
                 order = {o: yes_no[o] + self.thresholds.name_weight * named_z[o] for o in order}
