@@ -665,6 +665,24 @@ def test_the_simulated_person_replies_to_both_kinds_of_question() -> None:
     assert gold_reply(task, alone) == "none"
 
 
+def test_the_simulated_person_names_what_the_gold_needs_before_what_it_only_allows() -> None:
+    from conceptbot.bench.grading import Task, gold_needs, gold_reply
+    from conceptbot.core.trace import ClarifyingQuestion
+
+    # A spill: the sponge is needed, the spilt can may come along.
+    gold = {"type": "assign", "assign": {"sponge": ["user"]}, "optional": {"can": ["user"]}}
+    task = Task("t-5", "implicit", "spill", "kitchen", gold, "")
+    assert gold_needs(task, "sponge", "user") and not gold_needs(task, "can", "user")
+    one = ClarifyingQuestion("Which one ...?", "user", ("can", "sponge", "cup"), (0.5, 0.3, 0.2), "one")
+    assert gold_reply(task, one) == "sponge"
+    # ... also when the needed one is only among the others the person may name.
+    missed = ClarifyingQuestion("Which one ...?", "user", ("can", "cup"), (0.6, 0.4), "one", others=("sponge",))
+    assert gold_reply(task, missed) == "sponge"
+    # With nothing needed on offer, what is allowed is still named.
+    allowed = ClarifyingQuestion("Which one ...?", "user", ("cup", "can"), (0.6, 0.4), "one")
+    assert gold_reply(task, allowed) == "can"
+
+
 def test_the_simulated_person_names_the_reading_whose_plan_does_what_they_want() -> None:
     from conceptbot.bench.grading import Task, gold_reading
     from conceptbot.core.plan import Done, PickAndPlace, Plan

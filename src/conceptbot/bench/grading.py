@@ -753,13 +753,31 @@ def gold_reading(task: Task, question: ClarifyingQuestion, plan_as: Callable[[st
     return question.objects[0]
 
 
+def gold_needs(task: Task, obj: str, destination: str) -> bool:
+    """Whether the gold *requires* ``obj`` at ``destination``, not only allows it: an ``assign``
+    gold's ``assign`` or ``choose`` entry (an ``optional`` one may move or stay); for an
+    ``any_of`` gold, any accepted plan's move (each is a complete answer)."""
+    gold = task.gold
+    if gold["type"] == "assign":
+        wanted = list(gold.get("assign", {}).get(obj, []))
+        for group in gold.get("choose", []):
+            wanted += group["objects"].get(obj, [])
+        return destination in wanted
+    return gold_answer(task, obj, destination) == "yes"
+
+
 def gold_reply(task: Task, question: ClarifyingQuestion) -> str:
     """The reply of a person who wants the gold (:func:`gold_answer` for each object): ``yes`` or
     ``no`` to a ``confirm`` question, the objects that go (or ``none``) to a ``choose`` one; to a
-    ``one`` question the first listed that goes, else the first of its ``others`` that goes (the
-    person names what they meant), else ``none``."""
-    chosen = tuple(o for o in question.objects if gold_answer(task, o, question.target) == "yes")
+    ``one`` question the first listed that the gold requires there (:func:`gold_needs`), else the
+    first listed that may go, then the same among its ``others`` (the person names what they
+    meant), else ``none``. Asked "which one should I give you?" after a spill, a person names the
+    sponge the gold needs, not the spilt can it merely lets the robot bring along."""
+    to = question.target
+    chosen = tuple(o for o in question.objects if gold_answer(task, o, to) == "yes")
     if question.kind != "one":
         return question.normalised(chosen)
-    named = chosen or tuple(o for o in question.others if gold_answer(task, o, question.target) == "yes")
+    others = tuple(o for o in question.others if gold_answer(task, o, to) == "yes")
+    needed = tuple(o for o in (*chosen, *others) if gold_needs(task, o, to))
+    named = needed or chosen or others
     return question.normalised(named[:1])
