@@ -676,7 +676,9 @@ def test_the_simulated_person_names_what_the_gold_needs_before_what_it_only_allo
     one = ClarifyingQuestion("Which one ...?", "user", ("can", "sponge", "cup"), (0.5, 0.3, 0.2), "one")
     assert gold_reply(task, one) == "sponge"
     # ... also when the needed one is only among the others the person may name.
-    missed = ClarifyingQuestion("Which one ...?", "user", ("can", "cup"), (0.6, 0.4), "one", others=("sponge",))
+    missed = ClarifyingQuestion(
+        "Which one ...?", "user", ("can", "cup"), (0.6, 0.4), "one", others=("sponge",)
+    )
     assert gold_reply(task, missed) == "sponge"
     # With nothing needed on offer, what is allowed is still named.
     allowed = ClarifyingQuestion("Which one ...?", "user", ("cup", "can"), (0.6, 0.4), "one")
