@@ -137,15 +137,90 @@ def _groups(doc: Doc, scene: Scene, spelled: dict[str, list[str]], used: list[bo
     return found
 
 
+def _unnamed(
+    doc: Doc,
+    scene: Scene,
+    spelled: dict[str, list[str]],
+    used: list[bool],
+    spatial: Sequence[str],
+    generic: Sequence[str],
+    same_kind: Callable[[str, str], bool] | None,
+) -> list[Mention]:
+    """Places said with a word the scene does not use for them, in a sort: "into the right
+    baskets" where the scene has bins, "the mixed basket" for the mixed bin.
+
+    A person does not know what the robot calls its places. Where the scene has one group of two
+    or more destinations sharing a last word ("glass bin", "paper bin", ...), a plural noun after a
+    place preposition ("in", "into", "on") that names nothing in the scene names that group, and a
+    singular one whose modifiers spell exactly one member's other words names that member ("the
+    mixed basket": "mixed bin"), where ``same_kind`` makes the word and the group's one the same
+    kind of thing ("basket", "bin": both containers; "shelves" are not bins). Nothing is guessed
+    where the scene has no such group, or two, or without ``same_kind``."""
+    if same_kind is None:
+        return []
+    heads: dict[str, list[str]] = {}
+    for name in scene.destinations:
+        if len(spelled.get(name, [])) > 0:
+            heads.setdefault(spelled[name][-1], []).append(name)
+    groups = [names for names in heads.values() if len(names) > 1]
+    if len(groups) != 1:
+        return []
+    group = groups[0]
+    head = spelled[group[0]][-1]
+    known = {w for words in spelled.values() for w in words}
+    found = []
+    for token in doc:
+        word = token.lemma_.lower()
+        if used[token.i] or token.pos_ != "NOUN" or {word, token.text.lower()} & (known | set(generic)):
+            continue
+        if not _ends_phrase(doc, token.i + 1):
+            continue
+        start = token.i
+        while start > 0 and not used[start - 1] and _modifies(doc[start - 1]):
+            start -= 1
+        # after a place preposition, by the words rather than the parse, which misattaches such
+        # phrases ("go in the paper basket and plastic things ..." hung "basket" on "things")
+        before = start - 1
+        while before >= 0 and doc[before].tag_ in ("DT", "PRP$", "PDT"):
+            before -= 1
+        if before < 0 or doc[before].text.lower() not in spatial or not same_kind(word, head):
+            continue
+        modifiers = {t.text.lower() for t in doc[start : token.i]}
+        described = [n for n in group if len(spelled[n]) > 1 and set(spelled[n][:-1]) <= modifiers]
+        plural = token.tag_ in ("NNS", "NNPS")
+        if plural and not (modifiers & known - {w for n in group for w in spelled[n][:-1]}):
+            names = tuple(described or group)
+        elif not plural and len(described) == 1:
+            names = (described[0],)
+        elif not plural and not modifiers - _FITTING and _each_its_own(doc, token):
+            names = tuple(group)  # "the right container for what it's made of": each its own
+        else:
+            continue
+        found.append(Mention(names, start, token.i + 1, "place"))
+        used[start : token.i + 1] = [True] * (token.i + 1 - start)
+    return found
+
+
 #: Verbs that make a singular head each object's own place ("the tray where it belongs").
 OWN_PLACE = frozenset({"belong", "match", "go", "fit", "suit", "correspond"})
 
 
+#: Adjectives saying only that a place fits ("the right container"): no place is named by them.
+_FITTING = frozenset(
+    {"right", "correct", "proper", "appropriate", "matching", "respective", "own", "relevant"}
+)
+
+
 def _each_its_own(doc: Doc, token: Token) -> bool:
     """Whether a singular head names each object's own place, so every place it could be: "the bin
-    for its material", "the tray where it belongs", "the bin that matches it"."""
+    for its material", "the bin for what it is made of", "the tray where it belongs", "the bin that
+    matches it"."""
     after = doc[token.i + 1 : token.i + 3]
-    if len(after) == 2 and after[0].text.lower() == "for" and after[1].text.lower() in ("its", "their"):
+    if (
+        len(after) == 2
+        and after[0].text.lower() == "for"
+        and after[1].text.lower() in ("its", "their", "what")
+    ):
         return True
     if any(c.dep_ == "relcl" and c.lemma_.lower() in OWN_PLACE for c in token.children):
         return True
@@ -227,6 +302,9 @@ def scene_mentions(
     people: dict[str, list[str]],
     pronouns: Sequence[str],
     is_person: Callable[[str], bool],
+    spatial: Sequence[str] = (),
+    generic: Sequence[str] = (),
+    same_kind: Callable[[str, str], bool] | None = None,
 ) -> list[Mention]:
     """Every mention of the scene in the parsed request, in text order (see the module docstring).
 
@@ -237,10 +315,18 @@ def scene_mentions(
         people: Person destination name -> the words that name such a person.
         pronouns: The pronouns that refer back to a person ("her", "him").
         is_person: Whether a destination is a person or an animal.
+        spatial: Place prepositions ("in", "into", "on"): after one, a word the scene does not use
+            can name its places (``_unnamed``: "the right baskets" for the bins); none: it cannot.
+        generic: Words that name no place ("things", "ones"), whatever follows a preposition.
+        same_kind: Whether two nouns name the same kind of thing (a graph check), for those places;
+            None: only the scene's own words name places.
     """
     used = [False] * len(doc)
     found = _groups(doc, scene, spelled, used)  # before single names: "the paper and plastic bins"
     found += _names(doc, scene, spelled, used)
+    found += _unnamed(
+        doc, scene, spelled, used, spatial, generic, same_kind
+    )  # last: only words no name claimed
     found += _people(doc, scene, people, used)
     found = sorted(found, key=lambda m: m.start)
     found += _pronouns(doc, found, pronouns, is_person)

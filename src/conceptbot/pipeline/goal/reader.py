@@ -86,6 +86,9 @@ class GoalReader:
         find_dish: The graph's dish for a phrase (the phrase and the scene's pickable objects in, the
             dish's concept or None out), for a request the rules read no placed target in ("Could
             we get started on some guacamole?"); None: no such reading.
+        same_kind: Whether two nouns name the same kind of thing (a graph check: "basket" and
+            "bin"), for places the person calls by a word the scene does not use ("the right
+            baskets" where the scene has bins); None: only the scene's own words name places.
     """
 
     def __init__(
@@ -94,8 +97,10 @@ class GoalReader:
         is_dish: Callable[[str], bool] | None = None,
         is_person: Callable[[str], bool] = default_is_person,
         find_dish: Callable[[str, Sequence[str]], str | None] | None = None,
+        same_kind: Callable[[str, str], bool] | None = None,
     ) -> None:
         self._nlp = nlp
+        self.same_kind = same_kind
         self.is_dish = is_dish
         self.is_person = is_person
         self.find_dish = find_dish
@@ -142,7 +147,16 @@ class GoalReader:
         doc = parsed(self.nlp, re.sub(r"(?<=[^\s.!?])([.!?]+)\s*$", r" \1", request))
         spelled = self._spell(scene.names)
         mentions = scene_mentions(
-            doc, scene, spelled, vocab["people"], vocab["recipient_pronouns"], self.is_person
+            doc,
+            scene,
+            spelled,
+            vocab["people"],
+            vocab["recipient_pronouns"],
+            self.is_person,
+            # "by" also keys a sort ("by material"): no place follows it there
+            [w for w in vocab["spatial"] if w not in vocab["key"]],
+            [*vocab["generic"], *vocab["whole"], *vocab["remainder"]],
+            self.same_kind,
         )
         clauses = [analyse(doc, c, mentions, self.is_person) for c in chunks(doc, mentions)]
         stack = is_stacking(doc)
