@@ -20,6 +20,7 @@ Parts by planner (a part a planner does not produce is ``None`` and left out of 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any
@@ -460,6 +461,39 @@ class StackTrace:
 
 
 @dataclass(frozen=True)
+class UnderlayCheck:
+    """Whether a mat or stand of the scene went under a moved object to protect its place ("the cork
+    mat under the casserole dish on the dining table").
+
+    Attributes:
+        object: The object moved.
+        place: Where it was going.
+        pad: The scene object asked about (pickable, and a place itself).
+        p_yes: The model's P(Yes) to "should the pad go under it?" (4 decimals; NaN: not read).
+        score: Its log-odds against a content-free object's (3 decimals).
+        used: Whether the plan puts the pad on the place and the object on the pad.
+    """
+
+    object: str
+    place: str
+    pad: str
+    p_yes: float
+    score: float
+    used: bool
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (NaN as null)."""
+        return {
+            "object": self.object,
+            "place": self.place,
+            "pad": self.pad,
+            "p_yes": round(self.p_yes, 4) if math.isfinite(self.p_yes) else None,
+            "score": round(self.score, 3) if math.isfinite(self.score) else None,
+            "used": self.used,
+        }
+
+
+@dataclass(frozen=True)
 class Veto:
     """A move dropped because its own evidence names a hazard for its recipient
     (:mod:`conceptbot.pipeline.hazards`), or because its risk decision could not be made.
@@ -731,7 +765,7 @@ _HEADER = ("config", "planner_kind", "request", "scene")
 _STEP_PARTS = ("ope", "urp", "goal", "decisions", "stack", "risk", "vetoes", "planner")
 # The goal planner's OPE runs on the moves it checks, after the rest; its trace has always listed
 # OPE last, and the JSON keeps that order.
-_GOAL_PARTS = ("urp", "goal", "decisions", "stack", "risk", "vetoes", "planner", "ope")
+_GOAL_PARTS = ("urp", "goal", "decisions", "stack", "risk", "underlay", "vetoes", "planner", "ope")
 
 
 @dataclass(frozen=True)
@@ -749,6 +783,8 @@ class PlanTrace:
         decisions: The goal planner's per-target decisions.
         stack: The goal planner's pile order.
         risk: The goal planner's risk checks, one per move considered.
+        underlay: The goal planner's mat checks: whether a mat or stand of the scene went under a
+            moved object first (None: the scene has none to ask about).
         vetoes: Moves dropped because their evidence names a hazard for the recipient, or because
             their risk decision could not be made (both planners; None: no move was vetoed).
         planner: How the steps were chosen.
@@ -769,6 +805,7 @@ class PlanTrace:
     decisions: tuple[DecisionTrace, ...] | None = None
     stack: StackTrace | None = None
     risk: tuple[RiskCheck, ...] | None = None
+    underlay: tuple[UnderlayCheck, ...] | None = None
     vetoes: tuple[Veto, ...] | None = None
     planner: PlannerSummary | None = None
     household: HouseholdTrace | None = None

@@ -51,6 +51,7 @@ from conceptbot.core.trace import (
     RiskCheck,
     RiskEvent,
     StackTrace,
+    UnderlayCheck,
     Veto,
 )
 from conceptbot.core.usage import Usage
@@ -66,6 +67,8 @@ from conceptbot.pipeline.ope_answers import RiskIndex
 from conceptbot.pipeline.tracing import judgement_trace, target_trace
 
 METHOD = "decide"
+#: What a pad under a hot object is for, in the graph's words of use (the pads are ranked by it).
+HOT_PAD = "put a hot pot or dish on it to protect the table"
 
 
 class TargetReader(Protocol):
@@ -124,6 +127,10 @@ class Thresholds:
             scores it above this, whatever OPE rates (on the labelled risk set,
             ``benchmarks/data/risk_set.jsonl``, 35 of 40 dangerous hand-overs to children and
             animals are above it and 2 of 40 safe ones; ``docs/asking.md``).
+        underlay: A mat or stand of the scene goes under a moved object when "is it too hot to put
+            straight on the place?" has P(Yes) above this: on the 24 dev-written moves of
+            ``benchmarks/data/underlay_set.jsonl`` those that need a mat have 0.47-0.75 and the
+            others 0.16-0.35 (``benchmarks/bench_underlay.py``).
     """
 
     fit: float = -0.5
@@ -139,6 +146,7 @@ class Thresholds:
     need_sharpness: float = 2.0
     combined: float = 0.0
     unsafe_vulnerable: float = 0.3
+    underlay: float = 0.4
 
 
 @dataclass
@@ -356,13 +364,21 @@ class GoalPlanner:
             replace(d, confidence=round(factors[n], 4)) if n in factors else d
             for n, d in enumerate(decisions)
         )
+        confidence = clarified.confidence(moves)
+        # A mat or stand of the scene goes under what needs one (a hot dish on a wooden table);
+        # the decisions and their confidence are about the moves the request asked for, before.
+        underlay: tuple[UnderlayCheck, ...] | None = None
+        if not stack:
+            moves, underlay, usage["underlay"] = self._underlay(request, scene, moves, observer)
         steps = self._steps(moves, candidates, scene, properties, asked[-1] if asked else "")
         for step in steps:
             observer.event("step", step)
         refused = not moves and bool(blocked)
         reason = "; ".join(_why(c) for c in risk if c.dropped) if refused else None
         actions: list[Action] = [*(PickAndPlace(o, t) for o, t in moves), Done()]
-        trace = PlanTrace(goal=goal, decisions=decisions, stack=pile, risk=risk, vetoes=vetoes or None)
+        trace = PlanTrace(
+            goal=goal, decisions=decisions, stack=pile, risk=risk, underlay=underlay, vetoes=vetoes or None
+        )
         return GoalPlanResult(
             actions,
             steps,
@@ -374,7 +390,7 @@ class GoalPlanner:
             (*about_reading, *clarified.questions),
             # From the final moves: what the plan does after the risk checks (asking.py), and the
             # odds that the reading acted on is the one meant (1 once the person said so).
-            _times(clarified.confidence(moves), meant),
+            _times(confidence, meant),
         )
 
     def _reading(
@@ -526,6 +542,52 @@ class GoalPlanner:
         order = {t.name: i for i, t in enumerate(targets)}
         moves = sorted(wanted.items(), key=lambda item: (order[item[1][0]], -item[1][1]))
         return [(obj, target) for obj, (target, _) in moves]
+
+    def _underlay(
+        self, request: str, scene: Scene, moves: list[tuple[str, str]], observer: Observer
+    ) -> tuple[list[tuple[str, str]], tuple[UnderlayCheck, ...] | None, Usage]:
+        """Put a mat or stand under a moved object too hot for its place.
+
+        The pads are the scene's objects that are both pickable and a place (a cork mat, a trivet)
+        and that no move touches. Each move onto a thing (not to a person or an animal) is asked
+        "is the X too hot to put straight on the Y?" (:meth:`Decider.underneath`, with the object's
+        state and the request); above ``Thresholds.underlay`` (P(Yes)) the move becomes two, in
+        order: a pad onto the place, then the object onto the pad. The pad is the one whose
+        graph statements of use are nearest to holding hot pots (:meth:`FactFinder.uses`), else
+        the first in the scene; each pad serves one object. A question that cannot be answered (a
+        backend error, NaN) adds no pad: the move stays as asked, since a mat protects a thing,
+        not a person. Without pads nothing is asked."""
+        spent = Usage(calls=0)
+        touched = {o for o, _ in moves} | {t for _, t in moves}
+        pads = [o.name for o in scene.objects if o.pickable and o.destination and o.name not in touched]
+        if not pads:
+            return moves, None, spent
+        use = self.decider.facts.uses(pads, HOT_PAD)
+        pads.sort(key=lambda p: -use[p][0] if math.isfinite(use[p][0]) else math.inf)
+        out: list[tuple[str, str]] = []
+        checks: list[UnderlayCheck] = []
+        for obj, place in moves:
+            free = [p for p in pads if p not in touched and p != place]
+            if not free or is_person(place) or is_vulnerable(place):
+                out.append((obj, place))
+                continue
+            observer.progress(f"Underlay: is the {obj} too hot for the {place}?")
+            found = scene.get(obj)
+            state = found.state if found is not None and found.state else ""
+            try:
+                judgement, used = self.decider.underneath(request, obj, state, place)
+                spent = spent + used
+                p_yes, score = judgement.p_yes, judgement.score
+            except (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError):
+                p_yes = score = math.nan  # shown as null in the trace; no pad is added
+            hot = math.isfinite(p_yes) and math.isfinite(score) and p_yes > self.thresholds.underlay
+            checks.append(UnderlayCheck(obj, place, free[0], p_yes, score, hot))
+            if not hot:
+                out.append((obj, place))
+                continue
+            touched.add(free[0])
+            out += [(free[0], place), (obj, free[0])]
+        return out, tuple(checks) or None, spent
 
     def _properties(
         self,
