@@ -161,6 +161,8 @@ def make_worker(systems: SystemFactory, can_simulate: bool) -> Worker:
                         for d in plan.trace.decisions or ()
                         if d.confidence is not None
                     ],
+                    # The mat checks: whether a mat went under something too hot for its place.
+                    "underlay": [c.to_dict() for c in plan.trace.underlay or ()],
                 },
             )
             return plan

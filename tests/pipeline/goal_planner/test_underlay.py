@@ -11,10 +11,26 @@ from jsonschema import Draft202012Validator
 from conceptbot.core.plan import format_actions, plan_schema
 from conceptbot.core.scene import Scene, scene_from_dict
 from conceptbot.core.usage import Usage
-from conceptbot.models.fake import FakeLLM
+from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.goal_planner.decide import Decider, FactFinder
 from conceptbot.pipeline.goal_planner.planner import GoalPlanner
 from conceptbot.pipeline.goal_planner.targets import Target, TargetsRead
+from conceptbot.pipeline.retrieval import RelationRetriever
+from tests.pipeline.fakes import DictGraph
+
+#: The graph's word on the places: a table heat can mark; an oven, which is an appliance.
+GRAPH = DictGraph(
+    {
+        "dining table": [("dining table", "IsA", "table")],
+        "oven": [("oven", "IsA", "kitchen appliance")],
+        "cork mat": [("cork mat", "UsedFor", "put a hot pot on")],
+    }
+)
+
+
+def _facts() -> FactFinder:
+    return FactFinder(RelationRetriever(GRAPH, FakeEmbedder(), 0.2))
+
 
 DINNER = scene_from_dict(
     {
@@ -42,7 +58,7 @@ class Named:
 
 def _plan(answer: list[float], scene: Scene = DINNER, obj: str = "casserole dish"):
     llm = FakeLLM(scores=[PRIOR, SAFE, PRIOR, answer])  # risk question, then the mat question
-    planner = GoalPlanner(Named([Target("dining table", 1, "named", [obj])]), Decider(llm, FactFinder(None)))
+    planner = GoalPlanner(Named([Target("dining table", 1, "named", [obj])]), Decider(llm, _facts()))
     return planner.plan(f"Put the {obj} on the dining table.", scene), llm
 
 
@@ -107,7 +123,7 @@ def test_each_pad_serves_one_hot_object_and_is_never_its_own_place() -> None:
     )
     targets = [Target("dining table", 2, "named", ["pie dish", "casserole dish"])]
     llm = FakeLLM(scores=[PRIOR, SAFE, PRIOR, SAFE, PRIOR, YES])
-    result = GoalPlanner(Named(targets), Decider(llm, FactFinder(None))).plan("Serve both dishes.", two)
+    result = GoalPlanner(Named(targets), Decider(llm, _facts())).plan("Serve both dishes.", two)
     # the first hot dish takes the one mat; the second has none left and is not asked about
     assert format_actions(result.actions) == [
         "pick_and_place(cork mat, dining table)",
@@ -116,3 +132,20 @@ def test_each_pad_serves_one_hot_object_and_is_never_its_own_place() -> None:
         "done()",
     ]
     assert [c.object for c in result.trace.underlay] == ["pie dish"] and len(llm.score_requests) == 6
+
+
+@pytest.mark.parametrize(("place", "facts"), [("oven", _facts), ("dining table", lambda: FactFinder(None))])
+def test_no_mat_is_asked_about_where_the_graph_names_no_surface_heat_can_mark(place: str, facts) -> None:
+    # an oven is an appliance; without a graph (the ablation) no place is known to be a surface
+    scene = scene_from_dict(
+        {
+            "pickable_objects": ["casserole dish", "cork mat"],
+            "destinations": [place, "cork mat"],
+            "entity_states": {"casserole dish": "very hot"},
+        }
+    )
+    llm = FakeLLM(scores=[PRIOR, SAFE])
+    planner = GoalPlanner(Named([Target(place, 1, "named", ["casserole dish"])]), Decider(llm, facts()))
+    result = planner.plan(f"Put the casserole dish on the {place}.", scene)
+    assert format_actions(result.actions) == [f"pick_and_place(casserole dish, {place})", "done()"]
+    assert not result.trace.underlay and len(llm.score_requests) == 2

@@ -549,14 +549,17 @@ class GoalPlanner:
         """Put a mat or stand under a moved object too hot for its place.
 
         The pads are the scene's objects that are both pickable and a place (a cork mat, a trivet)
-        and that no move touches. Each move onto a thing (not to a person or an animal) is asked
+        and that no move touches. Each move onto a surface heat can mark (the graph's word:
+        :meth:`FactFinder.is_surface`; a table or a counter, not an oven, a sink or a bowl) is asked
         "is the X too hot to put straight on the Y?" (:meth:`Decider.underneath`, with the object's
-        state and the request); above ``Thresholds.underlay`` (P(Yes)) the move becomes two, in
+        state and the request): the model judges heat well and places badly (on the labelled set,
+        "hot pan into the sink" scored as hot as on a table). Above ``Thresholds.underlay`` (P(Yes))
+        the move becomes two, in
         order: a pad onto the place, then the object onto the pad. The pad is the one whose
         graph statements of use are nearest to holding hot pots (:meth:`FactFinder.uses`), else
         the first in the scene; each pad serves one object. A question that cannot be answered (a
         backend error, NaN) adds no pad: the move stays as asked, since a mat protects a thing,
-        not a person. Without pads nothing is asked."""
+        not a person. Without pads, or without a graph (the no-graph ablation), nothing is asked."""
         spent = Usage(calls=0)
         touched = {o for o, _ in moves} | {t for _, t in moves}
         pads = [o.name for o in scene.objects if o.pickable and o.destination and o.name not in touched]
@@ -566,9 +569,11 @@ class GoalPlanner:
         pads.sort(key=lambda p: -use[p][0] if math.isfinite(use[p][0]) else math.inf)
         out: list[tuple[str, str]] = []
         checks: list[UnderlayCheck] = []
+        surfaces: dict[str, bool] = {}
         for obj, place in moves:
             free = [p for p in pads if p not in touched and p != place]
-            if not free or is_person(place) or is_vulnerable(place):
+            surface = surfaces.setdefault(place, self.decider.facts.is_surface(place))
+            if not free or not surface or is_person(place) or is_vulnerable(place):
                 out.append((obj, place))
                 continue
             observer.progress(f"Underlay: is the {obj} too hot for the {place}?")

@@ -271,6 +271,10 @@ function showPlan(e) {
   const shares = (e.confidence_by_target || []).map((t) => `the ${t.to} ${t.confidence.toFixed(2)}`).join(", ");
   $("confidence").textContent = typeof e.confidence === "number"
     ? `Confidence ${e.confidence.toFixed(2)} that its calibrated decisions are all right${shares ? " (" + shares + ")" : ""}` : "";
+  // The mat checks: "is the X too hot to put straight on the Y?" and whether a mat went under it.
+  $("risk-checks").append(...(e.underlay || []).map((c) => el("li", { class: "kept" },
+    `too hot for the ${c.place}? the ${c.object}: ${c.p_yes === null ? "no answer" : "P(yes) " + c.p_yes.toFixed(2)}` +
+    (c.used ? ` — the ${c.pad} goes under it` : " — no mat"))));
   if (e.refused) showRefusal(e.reason || "judged unsafe");
 }
 
