@@ -801,3 +801,19 @@ def test_a_sampled_reading_the_person_chooses_is_planned() -> None:
     assert [q.objects for q in asked] == [("give the user the chips", "give the user the glue")]
     assert format_actions(result.actions) == ["pick_and_place(glue, user)", "done()"]
     assert result.trace.goal.reading == "sampled" and result.usage["goal"].calls == 1
+
+
+def test_an_object_the_request_leaves_out_is_never_a_candidate() -> None:
+    # "Pass me a drink other than the juice box": the juice box is not asked about, nor taken
+    scene = scene_from_dict(
+        {"pickable_objects": ["juice box", "bottle of water", "sandwich"], "destinations": ["user"]}
+    )
+    targets = [Target("user", 1, "named", criterion="drink", excluded=["juice box"])]
+    # "is it a drink?" for the content-free object, the bottle of water and the sandwich; then the
+    # name ranking is not asked for a criterion; the risk question of the move
+    llm = FakeLLM(scores=[PRIOR, [-0.1, -3.0], [-3.0, -0.1], PRIOR, SAFE])
+    result = GoalPlanner(FixedTargets(targets), Decider(llm, FactFinder(None))).plan("a drink", scene)
+    assert format_actions(result.actions) == ["pick_and_place(bottle of water, user)", "done()"]
+    [decision] = result.trace.decisions
+    assert [j.object for j in decision.objects] == ["bottle of water", "sandwich"]
+    assert len(llm.score_requests) == 5  # nothing was asked about the juice box

@@ -372,7 +372,12 @@ def _indefinite(doc: Doc, run: Sequence[int]) -> bool:
 def _to(users: list[str], reading: Reading) -> GoalTarget:
     """A wished-for thing, to the user (None where the scene has no user)."""
     return GoalTarget(
-        users[0] if users else None, reading.takes, reading.named, reading.criterion, reading.count
+        users[0] if users else None,
+        reading.takes,
+        reading.named,
+        reading.criterion,
+        reading.count,
+        reading.excluded,
     )
 
 
@@ -445,7 +450,9 @@ def _stacked(doc: Doc, clauses: list[Clause], mentions: list[Mention]) -> GoalTa
                 "pile",
                 "stack",
             ):
-                return GoalTarget(None, reading.takes, reading.named, reading.criterion, reading.count)
+                return GoalTarget(
+                    None, reading.takes, reading.named, reading.criterion, reading.count, reading.excluded
+                )
     return GoalTarget(None, "all")
 
 
@@ -726,15 +733,20 @@ def _targets(doc: Doc, items: list[_Item], mentions: list[Mention]) -> list[Goal
             # "the pear, the stapler and something to write with": each phrase of a list goes there
             readings = read_themes(doc, theme, mentions)
             if len(readings) > 1:
-                targets += [GoalTarget(to, r.takes, r.named, r.criterion, r.count) for r in readings]
+                targets += [
+                    GoalTarget(to, r.takes, r.named, r.criterion, r.count, r.excluded) for r in readings
+                ]
                 continue
         reading = read_theme(doc, theme, mentions) if theme else Reading("all")
         if group[0].remainder:
-            reading = Reading("remainder")
+            reading = Reading("remainder", excluded=reading.excluded)
         elif group[0].generic and reading.takes == "criterion":
-            reading = Reading("criterion", (), reading.criterion, ALL)  # whatever meets the condition
+            # whatever meets the condition
+            reading = Reading("criterion", (), reading.criterion, ALL, reading.excluded)
         criterion = reading.criterion or (criterion_text(doc, theme) if reading.takes == "criterion" else "")
-        targets.append(GoalTarget(to, reading.takes, reading.named, criterion, reading.count))
+        targets.append(
+            GoalTarget(to, reading.takes, reading.named, criterion, reading.count, reading.excluded)
+        )
     return _merged_named(targets)
 
 

@@ -4,7 +4,7 @@ describes, and how many."""
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 from conceptbot.pipeline.goal.mentions import Mention
@@ -26,6 +26,7 @@ class Reading:
     named: tuple[str, ...] = ()
     criterion: str = ""
     count: Count = ALL
+    excluded: tuple[str, ...] = ()
 
 
 #: Words that stand in for the phrase's noun in a second conjunct ("a tool to measure with and one
@@ -194,16 +195,59 @@ def criterion_text(doc: Doc, run: Sequence[int]) -> str:
     return text.strip(" ,;:.!?")
 
 
+#: Relative pronouns and the verbs that carry a negated relative clause ("that isn't", "which is
+#: not"): the exception starts at the pronoun.
+_RELATIVE = frozenset({"that", "which", "who"})
+_CARRIERS = frozenset({"is", "'s", "are", "was", "were", "be", "does", "do", "has", "have"})
+
+
+def exception(doc: Doc, run: Sequence[int]) -> int:
+    """Where a phrase's exception begins, as an index into ``run``, or ``len(run)`` without one:
+    "a drink | that isn't the juice box", "any drink | except the juice box", "a snack | other than
+    the crisps", "anything | but the vase". Not "nothing but the X" or "nothing except the X",
+    which say *only* the X (``only_phrases`` in ``words.json``)."""
+    vocab = vocabulary()
+    words = [_lower(doc[i]) for i in run]
+    for k in range(len(words)):
+        for phrase in vocab["exception"]:
+            if words[k : k + len(phrase)] != phrase:
+                continue
+            before = words[max(0, k - 2) : k]
+            if (before[-1:] and before[-1] in ("nothing", "none")) or before == ["no", "one"]:
+                continue  # "nothing but the plum": only the plum
+            if phrase == ["but"] and not (before[-1:] and before[-1] in vocab["quantifiers"]):
+                continue  # "but" excepts only after "anything", "everything", "all"
+            start = k
+            if phrase in (["not"], ["n't"]) and start >= 1 and words[start - 1] in _CARRIERS:
+                start -= 1
+                if start >= 1 and words[start - 1] in _RELATIVE:
+                    start -= 1
+            elif phrase in (["not"], ["n't"]) and start >= 1 and words[start - 1] == "but":
+                start -= 1  # "a drink, but not the juice box"
+            while start >= 1 and words[start - 1] == ",":
+                start -= 1
+            return start
+    return len(words)
+
+
 def read_theme(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> Reading:
-    """What a theme phrase sends (named objects, a remainder, everything, or a criterion)."""
-    named = objects_in(run, mentions)
+    """What a theme phrase sends (named objects, a remainder, everything, or a criterion). Objects
+    named in an exception ("a drink that isn't the juice box") are not sent: the phrase before it
+    is read on its own, and they are its ``excluded``."""
+    cut = exception(doc, run)
+    excluded = objects_in(run[cut:], mentions)
+    if excluded and cut > 0:  # an exception names what it leaves out ("not poisonous" names none)
+        run = run[:cut]
+    else:
+        excluded = ()
+    named = tuple(n for n in objects_in(run, mentions) if n not in excluded)
     if named:
         return Reading("named", named, "", len(named))
     if _remainder(doc, run):
-        return Reading("remainder")
+        return Reading("remainder", excluded=excluded)
     if _whole(doc, run):
-        return Reading("all")
-    return Reading("criterion", (), criterion_text(doc, run), count_of(doc, run))
+        return Reading("all", excluded=excluded)
+    return Reading("criterion", (), criterion_text(doc, run), count_of(doc, run), excluded)
 
 
 def _listed(token: Token) -> list[Token]:
@@ -327,6 +371,27 @@ def read_themes(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> li
     """What a theme sends, one reading per coordinated phrase: the named objects as one reading,
     each phrase describing objects as one of its own ("the pear and something to write with"); a list
     of plural or mass criteria ("apples and pears") stays one criterion."""
+    cut = exception(doc, run)
+    excluded = objects_in(run[cut:], mentions)
+    if excluded and cut > 0:
+        # "a drink that isn't the juice box, and a fruit": the exception ends with the last object
+        # it names; the phrases before it and after it are read on their own, and what the
+        # exception names is sent by none of them and left out of each described one
+        last = max(m.end for m in mentions if m.start >= run[cut] and set(m.names) & set(excluded))
+        after = [i for i in run if i >= last]
+        while after and (doc[after[0]].is_punct or _lower(doc[after[0]]) in ("and", "or", "plus")):
+            after = after[1:]
+        readings = read_themes(doc, run[:cut], mentions) + (
+            read_themes(doc, after, mentions) if after else []
+        )
+        out = []
+        for r in readings:
+            if r.takes == "named":
+                kept = tuple(n for n in r.named if n not in excluded)
+                out += [replace(r, named=kept, count=len(kept))] if kept else []
+            else:
+                out.append(replace(r, excluded=tuple(dict.fromkeys((*r.excluded, *excluded)))))
+        return out
     parts = conjuncts(doc, run)
     if len(parts) < 2:
         return [read_theme(doc, run, mentions)]

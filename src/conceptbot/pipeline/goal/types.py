@@ -35,6 +35,8 @@ class GoalTarget:
             material"), a need's part for one of several needs ("I'm chilly"), "" otherwise (a
             place in a sort the words give nothing else for: its name decides).
         count: How many objects the words ask for, or ``"all"``.
+        excluded: Scene objects the request leaves out of it ("a drink that isn't the juice box",
+            "everything except the vase"): never sent there. In the JSON form only when set.
     """
 
     to: str | None
@@ -42,6 +44,7 @@ class GoalTarget:
     named: tuple[str, ...] = ()
     criterion: str = ""
     count: Count = ALL
+    excluded: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if self.takes not in TAKES:
@@ -51,13 +54,16 @@ class GoalTarget:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (the goal set's)."""
-        return {
+        data: dict[str, Any] = {
             "to": self.to,
             "takes": self.takes,
             "named": list(self.named),
             "criterion": self.criterion,
             "count": self.count,
         }
+        if self.excluded:
+            data["excluded"] = list(self.excluded)
+        return data
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> GoalTarget:
@@ -73,6 +79,7 @@ class GoalTarget:
                 named=tuple(data.get("named", ())),
                 criterion=data.get("criterion", ""),
                 count=data.get("count", ALL),
+                excluded=tuple(data.get("excluded", ())),
             )
         except KeyError as exc:
             raise ValueError(f"goal target without {exc.args[0]!r}: {dict(data)}") from exc
