@@ -80,7 +80,7 @@ def test_a_hot_dish_goes_on_its_mat_and_the_mat_first() -> None:
         True,
     )
     trace = result.trace.to_dict()
-    assert trace["underlay"][0]["used"] is True
+    assert trace["underlay"][0]["used"] is True and result.usage["underlay"].calls == 2
     schema = plan_schema()
     Draft202012Validator({**schema["properties"]["trace"], "$defs": schema.get("$defs", {})}).validate(
         {"underlay": trace["underlay"]}
@@ -112,6 +112,7 @@ def test_nothing_is_asked_in_a_scene_without_a_mat() -> None:
     result = planner.plan("Put the casserole dish on the dining table.", bare)
     assert format_actions(result.actions) == ["pick_and_place(casserole dish, dining table)", "done()"]
     assert result.trace.underlay is None and len(llm.score_requests) == 2
+    assert "underlay" not in result.usage  # the usage keys are a contract: only where asked
 
 
 def test_each_pad_serves_one_hot_object_and_is_never_its_own_place() -> None:

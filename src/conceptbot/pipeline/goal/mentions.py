@@ -168,6 +168,10 @@ def _unnamed(
     group = groups[0]
     head = spelled[group[0]][-1]
     known = {w for words in spelled.values() for w in words}
+    from conceptbot.pipeline.goal.parse import vocabulary  # parse imports this module
+
+    # adjectives saying only that a place fits ("the right container"): they name no place
+    fitting = set(vocabulary()["fitting"])
     found = []
     for token in doc:
         word = token.lemma_.lower()
@@ -192,7 +196,7 @@ def _unnamed(
             names = tuple(described or group)
         elif not plural and len(described) == 1:
             names = (described[0],)
-        elif not plural and not modifiers - _FITTING and _each_its_own(doc, token):
+        elif not plural and not modifiers - fitting and _each_its_own(doc, token):
             names = tuple(group)  # "the right container for what it's made of": each its own
         else:
             continue
@@ -203,12 +207,6 @@ def _unnamed(
 
 #: Verbs that make a singular head each object's own place ("the tray where it belongs").
 OWN_PLACE = frozenset({"belong", "match", "go", "fit", "suit", "correspond"})
-
-
-#: Adjectives saying only that a place fits ("the right container"): no place is named by them.
-_FITTING = frozenset(
-    {"right", "correct", "proper", "appropriate", "matching", "respective", "own", "relevant"}
-)
 
 
 def _each_its_own(doc: Doc, token: Token) -> bool:

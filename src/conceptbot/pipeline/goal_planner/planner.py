@@ -369,7 +369,9 @@ class GoalPlanner:
         # the decisions and their confidence are about the moves the request asked for, before.
         underlay: tuple[UnderlayCheck, ...] | None = None
         if not stack:
-            moves, underlay, usage["underlay"] = self._underlay(request, scene, moves, observer)
+            moves, underlay, spent = self._underlay(request, scene, moves, observer)
+            if underlay is not None:  # only where something was asked: the usage keys are a contract
+                usage["underlay"] = spent
         steps = self._steps(moves, candidates, scene, properties, asked[-1] if asked else "")
         for step in steps:
             observer.event("step", step)
