@@ -300,9 +300,11 @@ def test_the_goal_set_is_read(reader: GoalReader) -> None:
     # Round 13 (places called by another word than the scene's, for the dev tasks added on
     # 2026-12-05) is held out: 4/6 when first measured, 5/6 after a fix made for the originals
     assert sum(results["round 13"]) >= 5
-    # Round 14 (an object named to be left out, for the dev tasks added on 2026-12-05) is held
-    # out: 2/6 when first measured (an exception after the place, fronted, or after "but")
-    assert sum(results["round 14"]) >= 2
+    # Round 14 (an object named to be left out, for the dev tasks added on 2026-12-05) was tuned
+    # on after its blind run (2/6: exceptions after the place, fronted, or after "but"; 5/6 after);
+    # round 15, written then, is held out: 3/6 when first measured
+    assert sum(results["round 14"]) >= 5
+    assert sum(results["round 15"]) >= 3
 
 
 @pytest.mark.parametrize(
@@ -325,6 +327,30 @@ def test_an_object_named_in_an_exception_is_left_out_not_sent(
         count,
     )
     assert target.excluded == excluded
+
+
+@pytest.mark.parametrize(
+    "request_",
+    [
+        "Excluding the thermos, put the drinks in the picnic basket.",
+        "Put the drinks in the picnic basket, apart from the thermos.",
+        "Put the drinks in the picnic basket, but not the thermos.",
+    ],
+)
+def test_an_exception_outside_the_object_phrase_is_the_request_s(reader: GoalReader, request_: str) -> None:
+    [target] = reader.read(request_, load_dev_scene("dev-picnic")).targets
+    assert (target.to, target.takes, target.criterion, target.excluded) == (
+        "picnic basket",
+        "criterion",
+        "drinks",
+        ("thermos",),
+    )
+
+
+def test_a_list_an_exception_opens_is_left_out_whole(reader: GoalReader) -> None:
+    request_ = "Put everything except the thermos and the sandwich in the picnic basket."
+    [target] = reader.read(request_, load_dev_scene("dev-picnic")).targets
+    assert (target.takes, target.excluded) == ("all", ("thermos", "sandwich"))
 
 
 def test_only_phrases_and_negated_criteria_are_no_exceptions(reader: GoalReader) -> None:

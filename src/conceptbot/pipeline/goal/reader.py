@@ -33,7 +33,7 @@ from __future__ import annotations
 import logging
 import re
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 from conceptbot.core.scene import Scene
@@ -43,9 +43,12 @@ from conceptbot.pipeline.goal.needs import need_parts
 from conceptbot.pipeline.goal.parse import Clause, chunks, vocabulary
 from conceptbot.pipeline.goal.repair import parsed
 from conceptbot.pipeline.goal.themes import (
+    EXCEPTED,
     Reading,
     conjuncts,
     criterion_text,
+    excepted_mentions,
+    exception,
     head_of,
     objects_in,
     read_theme,
@@ -158,6 +161,17 @@ class GoalReader:
             [*vocab["generic"], *vocab["whole"], *vocab["remainder"]],
             self.same_kind,
         )
+        # Objects an exception names ("a drink other than the juice box", "excluding the
+        # highlighter, ...") are no mentions of things to send: each target leaves them out.
+        excepted = excepted_mentions(doc, mentions)
+        doc.user_data[EXCEPTED] = {i for m in excepted for i in range(m.start, m.end)}
+        excluded = tuple(dict.fromkeys(n for m in excepted for n in m.names))
+        comma = _fronted_exception(doc, excepted)
+        if comma is not None:
+            # "Excluding the highlighter, put the writing tools ...": the rest is the request
+            goal = self._read(doc[comma + 1 :].text, scene)
+            return replace(goal, targets=tuple(_leaving_out(t, excluded) for t in goal.targets))
+        mentions = [m for m in mentions if m not in excepted]
         clauses = [analyse(doc, c, mentions, self.is_person) for c in chunks(doc, mentions)]
         stack = is_stacking(doc)
         users = [d for d in scene.destinations if d.lower() == "user"]
@@ -182,6 +196,8 @@ class GoalReader:
             targets = [GoalTarget(None, "need", (), part) for part in need_parts(doc)] or [
                 GoalTarget(None, "need")
             ]
+        if excluded:
+            targets = [_leaving_out(t, excluded) for t in targets]
         return Goal(stack, dish, need, tuple(targets))
 
     def _wished(
@@ -369,6 +385,28 @@ def _indefinite(doc: Doc, run: Sequence[int]) -> bool:
     return doc[first].text.lower() in ("something", "anything", "someone", "somebody")
 
 
+def _fronted_exception(doc: Doc, excepted: list[Mention]) -> int | None:
+    """The comma that ends an exception opening the request ("Excluding the highlighter, put
+    ...", "Apart from the thermos, ..."), or None: the exception's words start the request, and
+    every object mention before the comma is excepted."""
+    if not excepted or exception(doc, range(min(3, len(doc)))) != 0:
+        return None
+    end = max(m.end for m in excepted)
+    comma = next((t.i for t in doc[end:] if t.text == ","), None)
+    if comma is None or comma != end or comma + 1 >= len(doc):
+        return None
+    return comma
+
+
+def _leaving_out(target: GoalTarget, excluded: tuple[str, ...]) -> GoalTarget:
+    """A target less the objects the request's exception names (an excepted object is no mention,
+    so no target names it): one that takes what fits (a criterion, every object, the rest, a need,
+    a dish's ingredients) gets them as its ``excluded``."""
+    if target.takes == "named":
+        return target
+    return replace(target, excluded=tuple(dict.fromkeys((*target.excluded, *excluded))))
+
+
 def _to(users: list[str], reading: Reading) -> GoalTarget:
     """A wished-for thing, to the user (None where the scene has no user)."""
     return GoalTarget(
@@ -377,7 +415,6 @@ def _to(users: list[str], reading: Reading) -> GoalTarget:
         reading.named,
         reading.criterion,
         reading.count,
-        reading.excluded,
     )
 
 
@@ -450,9 +487,7 @@ def _stacked(doc: Doc, clauses: list[Clause], mentions: list[Mention]) -> GoalTa
                 "pile",
                 "stack",
             ):
-                return GoalTarget(
-                    None, reading.takes, reading.named, reading.criterion, reading.count, reading.excluded
-                )
+                return GoalTarget(None, reading.takes, reading.named, reading.criterion, reading.count)
     return GoalTarget(None, "all")
 
 
@@ -733,20 +768,16 @@ def _targets(doc: Doc, items: list[_Item], mentions: list[Mention]) -> list[Goal
             # "the pear, the stapler and something to write with": each phrase of a list goes there
             readings = read_themes(doc, theme, mentions)
             if len(readings) > 1:
-                targets += [
-                    GoalTarget(to, r.takes, r.named, r.criterion, r.count, r.excluded) for r in readings
-                ]
+                targets += [GoalTarget(to, r.takes, r.named, r.criterion, r.count) for r in readings]
                 continue
         reading = read_theme(doc, theme, mentions) if theme else Reading("all")
         if group[0].remainder:
-            reading = Reading("remainder", excluded=reading.excluded)
+            reading = Reading("remainder")
         elif group[0].generic and reading.takes == "criterion":
             # whatever meets the condition
-            reading = Reading("criterion", (), reading.criterion, ALL, reading.excluded)
+            reading = Reading("criterion", (), reading.criterion, ALL)
         criterion = reading.criterion or (criterion_text(doc, theme) if reading.takes == "criterion" else "")
-        targets.append(
-            GoalTarget(to, reading.takes, reading.named, criterion, reading.count, reading.excluded)
-        )
+        targets.append(GoalTarget(to, reading.takes, reading.named, criterion, reading.count))
     return _merged_named(targets)
 
 

@@ -4,7 +4,7 @@ describes, and how many."""
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from conceptbot.pipeline.goal.mentions import Mention
@@ -26,7 +26,6 @@ class Reading:
     named: tuple[str, ...] = ()
     criterion: str = ""
     count: Count = ALL
-    excluded: tuple[str, ...] = ()
 
 
 #: Words that stand in for the phrase's noun in a second conjunct ("a tool to measure with and one
@@ -230,24 +229,60 @@ def exception(doc: Doc, run: Sequence[int]) -> int:
     return len(words)
 
 
-def read_theme(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> Reading:
-    """What a theme phrase sends (named objects, a remainder, everything, or a criterion). Objects
-    named in an exception ("a drink that isn't the juice box") are not sent: the phrase before it
-    is read on its own, and they are its ``excluded``."""
+#: ``Doc.user_data`` key of the token indices of objects named in an exception (set by the reader).
+EXCEPTED = "conceptbot_excepted"
+
+
+def excepted_mentions(doc: Doc, mentions: Sequence[Mention]) -> list[Mention]:
+    """The object mentions an exception names, wherever it stands: "a drink other than the juice
+    box", "excluding the highlighter, put ...", "..., but not the juice box", "except the thermos
+    and the napkins" (a list an exception opens is excepted whole). The exception's words
+    (:func:`exception`) come right before the mention, determiners aside; "nothing but the plum"
+    is no exception."""
+    found: list[Mention] = []
+    for mention in sorted((m for m in mentions if m.kind in ("object", "both")), key=lambda m: m.start):
+        before = mention.start
+        while before > 0 and doc[before - 1].tag_ in ("DT", "PRP$", "PDT"):
+            before -= 1
+        window = list(range(max(0, before - 4), before))
+        cue = exception(doc, window)
+        # the exception's words must end right before the mention ("not the X", "other than the X")
+        if window and cue < len(window) and _ends_exception(doc, window, cue):
+            found.append(mention)
+        elif found and window and _lower(doc[window[-1]]) in ("and", "or") and found[-1].end >= before - 1:
+            found.append(mention)  # "except the thermos and the napkins"
+    return found
+
+
+def _ends_exception(doc: Doc, window: Sequence[int], cue: int) -> bool:
+    """Whether the exception found at ``cue`` in ``window`` reaches its end: nothing but the
+    exception's own words (and a relative clause's "that isn't") between it and the mention."""
+    words = [_lower(doc[i]) for i in window[cue:]]
+    own = {w for phrase in vocabulary()["exception"] for w in phrase} | _RELATIVE | _CARRIERS | {",", "for"}
+    return all(w in own for w in words)
+
+
+def _excepted_after(doc: Doc, run: Sequence[int]) -> int:
+    """Where the run's exception begins if it names an object the reader marked as excepted, else
+    ``len(run)`` ("not poisonous" names none and stays in the criterion)."""
+    marked = doc.user_data.get(EXCEPTED, set())
     cut = exception(doc, run)
-    excluded = objects_in(run[cut:], mentions)
-    if excluded and cut > 0:  # an exception names what it leaves out ("not poisonous" names none)
-        run = run[:cut]
-    else:
-        excluded = ()
-    named = tuple(n for n in objects_in(run, mentions) if n not in excluded)
+    return cut if cut > 0 and any(i in marked for i in run[cut:]) else len(run)
+
+
+def read_theme(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> Reading:
+    """What a theme phrase sends (named objects, a remainder, everything, or a criterion). An
+    exception that names an object ("a drink that isn't the juice box") is cut off: the phrase
+    before it is read on its own; what it leaves out is the request's (the reader adds it)."""
+    run = run[: _excepted_after(doc, run)]
+    named = objects_in(run, mentions)
     if named:
         return Reading("named", named, "", len(named))
     if _remainder(doc, run):
-        return Reading("remainder", excluded=excluded)
+        return Reading("remainder")
     if _whole(doc, run):
-        return Reading("all", excluded=excluded)
-    return Reading("criterion", (), criterion_text(doc, run), count_of(doc, run), excluded)
+        return Reading("all")
+    return Reading("criterion", (), criterion_text(doc, run), count_of(doc, run))
 
 
 def _listed(token: Token) -> list[Token]:
@@ -371,27 +406,16 @@ def read_themes(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> li
     """What a theme sends, one reading per coordinated phrase: the named objects as one reading,
     each phrase describing objects as one of its own ("the pear and something to write with"); a list
     of plural or mass criteria ("apples and pears") stays one criterion."""
-    cut = exception(doc, run)
-    excluded = objects_in(run[cut:], mentions)
-    if excluded and cut > 0:
-        # "a drink that isn't the juice box, and a fruit": the exception ends with the last object
-        # it names; the phrases before it and after it are read on their own, and what the
-        # exception names is sent by none of them and left out of each described one
-        last = max(m.end for m in mentions if m.start >= run[cut] and set(m.names) & set(excluded))
+    cut = _excepted_after(doc, run)
+    if cut < len(run):
+        # "a drink that isn't the juice box and a fruit": the exception ends with the last object
+        # it names; the phrases before it and after it are read on their own
+        marked = doc.user_data.get(EXCEPTED, set())
+        last = max(i for i in run[cut:] if i in marked) + 1
         after = [i for i in run if i >= last]
         while after and (doc[after[0]].is_punct or _lower(doc[after[0]]) in ("and", "or", "plus")):
             after = after[1:]
-        readings = read_themes(doc, run[:cut], mentions) + (
-            read_themes(doc, after, mentions) if after else []
-        )
-        out = []
-        for r in readings:
-            if r.takes == "named":
-                kept = tuple(n for n in r.named if n not in excluded)
-                out += [replace(r, named=kept, count=len(kept))] if kept else []
-            else:
-                out.append(replace(r, excluded=tuple(dict.fromkeys((*r.excluded, *excluded)))))
-        return out
+        return read_themes(doc, run[:cut], mentions) + (read_themes(doc, after, mentions) if after else [])
     parts = conjuncts(doc, run)
     if len(parts) < 2:
         return [read_theme(doc, run, mentions)]
