@@ -100,3 +100,13 @@ def test_without_samples_nothing_is_sampled() -> None:
         "Put the conch shell in the shoe box.", SHELLS
     )
     assert (reading.sampled, reading.pool, len(llm.requests)) == ((), 0, 1)
+
+
+def test_what_the_words_leave_out_stays_out_of_the_plain_reading() -> None:
+    # the model's plain form drops the exception, or names the excluded object itself
+    request = "Excluding the conch shell, put the shells in the shoe box."
+    dropped = _aided("Put the shells in the shoe box.").read(request, SHELLS)
+    assert [t.excluded for t in dropped.goal.targets] == [("conch shell",)]
+    named = _aided("Put the conch shell and the sand dollar in the shoe box.").read(request, SHELLS)
+    assert all("conch shell" not in t.named for t in named.goal.targets)
+    assert all("conch shell" in t.excluded for t in named.goal.targets if t.takes != "named")
