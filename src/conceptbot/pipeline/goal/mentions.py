@@ -125,16 +125,25 @@ def _groups(doc: Doc, scene: Scene, spelled: dict[str, list[str]], used: list[bo
             continue
         if not _ends_phrase(doc, token.i + 1):
             continue
-        start = token.i
-        while start > 0 and not used[start - 1] and _modifies(doc[start - 1]):
-            start -= 1
-        modifiers = {t.text.lower() for t in doc[start : token.i]}
-        described = [n for n in group if len(spelled[n]) > 1 and set(spelled[n][:-1]) <= modifiers]
+        start, modifiers, described = _described(doc, token, used, group, spelled)
         if not described and modifiers & {w for n in group for w in spelled[n][:-1]}:
             continue  # "the red bins" where no bin is red: not these bins
         found.append(Mention(tuple(described or group), start, token.i + 1, "place"))
         used[start : token.i + 1] = [True] * (token.i + 1 - start)
     return found
+
+
+def _described(
+    doc: Doc, token: Token, used: list[bool], group: list[str], spelled: dict[str, list[str]]
+) -> tuple[int, set[str], list[str]]:
+    """A head noun's modifiers before it ("the wood, metal and fabric | bins"): where its phrase
+    starts, the modifier words, and the places of ``group`` whose other words they all are."""
+    start = token.i
+    while start > 0 and not used[start - 1] and _modifies(doc[start - 1]):
+        start -= 1
+    modifiers = {t.text.lower() for t in doc[start : token.i]}
+    described = [n for n in group if len(spelled[n]) > 1 and set(spelled[n][:-1]) <= modifiers]
+    return start, modifiers, described
 
 
 def _unnamed(
@@ -179,9 +188,7 @@ def _unnamed(
             continue
         if not _ends_phrase(doc, token.i + 1):
             continue
-        start = token.i
-        while start > 0 and not used[start - 1] and _modifies(doc[start - 1]):
-            start -= 1
+        start, modifiers, described = _described(doc, token, used, group, spelled)
         # after a place preposition, by the words rather than the parse, which misattaches such
         # phrases ("go in the paper basket and plastic things ..." hung "basket" on "things")
         before = start - 1
@@ -189,8 +196,6 @@ def _unnamed(
             before -= 1
         if before < 0 or doc[before].text.lower() not in spatial or not same_kind(word, head):
             continue
-        modifiers = {t.text.lower() for t in doc[start : token.i]}
-        described = [n for n in group if len(spelled[n]) > 1 and set(spelled[n][:-1]) <= modifiers]
         plural = token.tag_ in ("NNS", "NNPS")
         if plural and not (modifiers & known - {w for n in group for w in spelled[n][:-1]}):
             names = tuple(described or group)
