@@ -6,7 +6,9 @@ each split would get a question about a calibrated decision, how many have every
 holding the gold's answer, and the mean log-likelihood on dev of drawing an object the gold accepts
 (the honest sharpness maximises it; a sharper one claims more than it knows).
 
-Reading questions are not simulated (they do not depend on ``p_one``), so "asked" counts only the
+The power applies on top of the shipped ``Thresholds.one_sharpness`` (1.5 since 2026-12-05, chosen
+with this script when the shipped scale was 1: s = 1.5 then had the best likelihood). Reading
+questions are not simulated (they do not depend on ``p_one``), so "asked" counts only the
 calibrated decisions' questions.
 
     .venv/bin/python benchmarks/bench_one_sharpness.py

@@ -817,3 +817,25 @@ def test_an_object_the_request_leaves_out_is_never_a_candidate() -> None:
     [decision] = result.trace.decisions
     assert [j.object for j in decision.objects] == ["bottle of water", "sandwich"]
     assert len(llm.score_requests) == 5  # nothing was asked about the juice box
+
+
+def test_which_one_shares_are_sharpened_and_the_ranking_kept() -> None:
+    from conceptbot.pipeline.goal_planner.planner import Thresholds
+
+    scene = scene_from_dict({"pickable_objects": ["pencil", "pen", "glue"], "destinations": ["user"]})
+
+    def shares(sharpness: float) -> dict[str, float]:
+        scores = [PRIOR, [-0.2, -2.0], [-0.4, -1.5], [-3.0, -0.1]]  # "should I give ...?"
+        scores += [[-1.0, -1.5, -4.0], [-2.0, -2.0, -2.0], PRIOR, SAFE]  # names, neutral, risk
+        llm = FakeLLM(scores=scores)
+        planner = GoalPlanner(
+            FixedTargets([Target("user", 1, "named")]),
+            Decider(llm, FactFinder(None)),
+            thresholds=Thresholds(one_sharpness=sharpness),
+        )
+        [decision] = planner.plan("something to write with", scene).trace.decisions
+        return {j.object: j.p_one for j in decision.objects}
+
+    plain, sharp = shares(1.0), shares(1.5)
+    assert sorted(plain, key=plain.get) == sorted(sharp, key=sharp.get)  # the same ranking
+    assert sharp["pencil"] > plain["pencil"] and sharp["glue"] < plain["glue"]

@@ -118,6 +118,12 @@ class Thresholds:
             orders as before, but its share is sharper (2.1 maximised the likelihood of the gold's
             objects over the 19 dev need decisions; at 1 their shares were too flat, and needs
             right without a question were asked which one).
+        one_sharpness: The scale of every which-one softmax (``p_one``; a need's on top of
+            ``need_sharpness``): the ranking is unchanged, the shares sharper. Over the 47 dev
+            which-one decisions the mean log-likelihood of drawing an object the gold accepts was
+            -0.345 at 1, -0.335 at 1.5 (the best), -0.372 at 2, -0.616 at 4
+            (``benchmarks/bench_one_sharpness.py``); sharper would claim more than the rankings
+            know.
         combined: A target that takes every object fitting a criterion, or a dish's ingredients,
             takes an object whose combined score (:mod:`conceptbot.pipeline.goal_planner.combine`: a fitted
             log-odds, so 0 is P = 0.5) is above this; ``fit`` and ``ingredients`` apply where the
@@ -144,6 +150,7 @@ class Thresholds:
     name_weight: float = 1.0
     use_weight: float = 0.25
     need_sharpness: float = 2.0
+    one_sharpness: float = 1.5
     combined: float = 0.0
     unsafe_vulnerable: float = 0.3
     underlay: float = 0.4
@@ -485,7 +492,10 @@ class GoalPlanner:
             if target.count == 1 and len(others) > 1:
                 # Which one: the ranking as a distribution over the candidates, for the conformal
                 # set of which one (asking.py).
-                chances = _softmax(judgements, order)
+                # sharpened by ``one_sharpness`` (the ranking unchanged): the likelihood of the
+                # gold's objects over the dev which-one decisions peaks there
+                sharp = self.thresholds.one_sharpness
+                chances = _softmax(judgements, {o: sharp * v for o, v in order.items()})
                 judgements = [replace(j, p_one=p) for j, p in zip(judgements, chances, strict=True)]
             ranked[number] = named + sorted(judgements, key=lambda j: -order[j.subject])
             decisions.append(
