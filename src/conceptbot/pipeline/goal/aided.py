@@ -184,21 +184,6 @@ class AidedReader:
         return read_twice(self.reader.read, self.restater, request, scene, self.policy, self.samples)
 
 
-def leaving_out(goal: Goal, excluded: tuple[str, ...]) -> Goal:
-    """``goal`` less the objects ``excluded``: never named (a target left naming none is dropped),
-    and left out of every target that takes what fits."""
-    targets = []
-    for target in goal.targets:
-        if target.takes == "named":
-            kept = tuple(n for n in target.named if n not in excluded)
-            if kept:
-                count = target.count if target.count == "all" else len(kept)
-                targets.append(replace(target, named=kept, count=count))
-            continue
-        targets.append(replace(target, excluded=tuple(dict.fromkeys((*target.excluded, *excluded)))))
-    return replace(goal, targets=tuple(targets))
-
-
 def read_twice(
     read: Callable[[str, Scene], Goal],
     restater: Restater,
@@ -216,9 +201,8 @@ def read_twice(
     restated = read(said.text, scene) if said.text else None
     # What the person's own words leave out stays out whatever reading is taken: the plain form
     # drops exceptions ("Excluding the highlighter, put ..." said as "Put the writing tools ...").
-    excluded = tuple(dict.fromkeys(n for t in own.targets for n in t.excluded))
-    if restated is not None and excluded:
-        restated = leaving_out(restated, excluded)
+    if restated is not None:
+        restated = restated.leaving_out(tuple(dict.fromkeys(n for t in own.targets for n in t.excluded)))
     chosen = replace(choose(own, restated, policy, request, said.text), plain=said.text, usage=said.usage)
     if samples < 1:
         return chosen

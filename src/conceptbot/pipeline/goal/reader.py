@@ -33,7 +33,7 @@ from __future__ import annotations
 import logging
 import re
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from conceptbot.core.scene import Scene
@@ -169,8 +169,7 @@ class GoalReader:
         comma = _fronted_exception(doc, excepted)
         if comma is not None:
             # "Excluding the highlighter, put the writing tools ...": the rest is the request
-            goal = self._read(doc[comma + 1 :].text, scene)
-            return replace(goal, targets=tuple(_leaving_out(t, excluded) for t in goal.targets))
+            return self._read(doc[comma + 1 :].text, scene).leaving_out(excluded)
         mentions = [m for m in mentions if m not in excepted]
         clauses = [analyse(doc, c, mentions, self.is_person) for c in chunks(doc, mentions)]
         stack = is_stacking(doc)
@@ -196,9 +195,7 @@ class GoalReader:
             targets = [GoalTarget(None, "need", (), part) for part in need_parts(doc)] or [
                 GoalTarget(None, "need")
             ]
-        if excluded:
-            targets = [_leaving_out(t, excluded) for t in targets]
-        return Goal(stack, dish, need, tuple(targets))
+        return Goal(stack, dish, need, tuple(targets)).leaving_out(excluded)
 
     def _wished(
         self, doc: Doc, clauses: list[Clause], mentions: list[Mention], scene: Scene
@@ -398,23 +395,10 @@ def _fronted_exception(doc: Doc, excepted: list[Mention]) -> int | None:
     return comma
 
 
-def _leaving_out(target: GoalTarget, excluded: tuple[str, ...]) -> GoalTarget:
-    """A target less the objects the request's exception names (an excepted object is no mention,
-    so no target names it): one that takes what fits (a criterion, every object, the rest, a need,
-    a dish's ingredients) gets them as its ``excluded``."""
-    if target.takes == "named":
-        return target
-    return replace(target, excluded=tuple(dict.fromkeys((*target.excluded, *excluded))))
-
-
 def _to(users: list[str], reading: Reading) -> GoalTarget:
     """A wished-for thing, to the user (None where the scene has no user)."""
     return GoalTarget(
-        users[0] if users else None,
-        reading.takes,
-        reading.named,
-        reading.criterion,
-        reading.count,
+        users[0] if users else None, reading.takes, reading.named, reading.criterion, reading.count
     )
 
 
@@ -774,8 +758,7 @@ def _targets(doc: Doc, items: list[_Item], mentions: list[Mention]) -> list[Goal
         if group[0].remainder:
             reading = Reading("remainder")
         elif group[0].generic and reading.takes == "criterion":
-            # whatever meets the condition
-            reading = Reading("criterion", (), reading.criterion, ALL)
+            reading = Reading("criterion", (), reading.criterion, ALL)  # whatever meets the condition
         criterion = reading.criterion or (criterion_text(doc, theme) if reading.takes == "criterion" else "")
         targets.append(GoalTarget(to, reading.takes, reading.named, criterion, reading.count))
     return _merged_named(targets)

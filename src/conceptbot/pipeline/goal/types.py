@@ -8,7 +8,7 @@ for (``"all"``: as many as it takes).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 #: How a target's objects are chosen (see :class:`GoalTarget`).
@@ -101,6 +101,25 @@ class Goal:
     dish: str | None = None
     need: str | None = None
     targets: tuple[GoalTarget, ...] = field(default_factory=tuple)
+
+    def leaving_out(self, excluded: tuple[str, ...]) -> Goal:
+        """The goal less the objects ``excluded``: never named (a named target left naming none is
+        dropped), and left out of every target that takes what fits (a criterion, every object,
+        the rest, a need, a dish's ingredients)."""
+        if not excluded:
+            return self
+        targets = []
+        for target in self.targets:
+            if target.takes != "named":
+                targets.append(replace(target, excluded=tuple(dict.fromkeys((*target.excluded, *excluded)))))
+                continue
+            kept = tuple(n for n in target.named if n not in excluded)
+            if kept == target.named:
+                targets.append(target)
+            elif kept:
+                count = target.count if target.count == ALL else len(kept)
+                targets.append(replace(target, named=kept, count=count))
+        return replace(self, targets=tuple(targets))
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (the goal set's)."""

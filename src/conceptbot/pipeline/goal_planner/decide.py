@@ -293,12 +293,7 @@ class FactFinder:
             # set's order depends on the hash seed, and so did which parents were kept).
             parents: dict[str, None] = {}
             for node in level:
-                found = self.retriever.graph.edges(node, ["IsA"], 40)
-                if found.match not in ("exact", "lemma"):
-                    continue
-                head = (found.matched or node).lower()
-                tails = (e.tail.lower() for e in found.edges if e.head.lower() in (node, head))
-                parents.update(dict.fromkeys(tails))
+                parents.update(dict.fromkeys(self._parents(node)))
             if classes.intersection(parents):
                 return True
             level = [p for p in parents if p not in seen][:12]
