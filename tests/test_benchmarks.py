@@ -94,7 +94,7 @@ def test_a_plan_fit_of_one_system_keeps_the_other_system_s_thresholds() -> None:
     from conceptbot.bench.conformal_fit import PlanFit
 
     def found(q: float) -> PlanFit:
-        return PlanFit(qhat={0.9: q}, held_out={0.9: 0.9}, tasks=70, decisions=500)
+        return PlanFit(qhat={0.9: q}, held_out={0.9: 0.9}, tasks=70, decisions=500, qhat_one={0.9: q / 2})
 
     data = {
         "qhat": {"graph": {"0.9": 0.2}},
@@ -105,6 +105,10 @@ def test_a_plan_fit_of_one_system_keeps_the_other_system_s_thresholds() -> None:
     out = plans.merged(data, {"graph": {"softmax": found(0.6), "fits": found(0.5)}}, "softmax")
     assert out["plan_qhat"] == {"graph": {"0.9": 0.6}, "nograph": {"0.9": 0.85}}
     assert out["plan_qhat_fits"] == {"graph": {"0.9": 0.5}, "nograph": {"0.9": 0.75}}
+    # The which-one decisions' own thresholds, beside each rule's.
+    assert out["plan_qhat_one"] == {"graph": {"0.9": 0.3}} and out["plan_qhat_one_fits"] == {
+        "graph": {"0.9": 0.25}
+    }
     assert out["qhat"] == data["qhat"] and "graph 70" in out["plan_fitted_on"]
     assert data["plan_qhat"]["graph"] == {"0.9": 0.8}  # the file read is not changed in place
 

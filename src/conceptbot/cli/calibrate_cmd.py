@@ -204,12 +204,18 @@ def _conformal(app: AppContext, as_json: bool) -> None:
     if as_json:
         click.echo(json.dumps({**document, "path": str(path)}, indent=2))
         return
-    table = Table("combination", "coverage", "qhat", "held-out plan coverage", "tasks")
+    table = Table("combination", "coverage", "qhat", "qhat (which one)", "held-out plan coverage", "tasks")
     for combination, by_rule in fits.items():
         found = by_rule[rule]
+        ones = found.qhat_one or found.qhat
         for coverage, q in found.qhat.items():
             table.add_row(
-                combination, f"{coverage:g}", f"{q:.3f}", f"{found.held_out[coverage]:.1%}", str(found.tasks)
+                combination,
+                f"{coverage:g}",
+                f"{q:.3f}",
+                f"{ones[coverage]:.3f}",
+                f"{found.held_out[coverage]:.1%}",
+                str(found.tasks),
             )
     Console(width=max(Console().width, 80)).print(table)
     click.echo(terminal_safe(f"wrote {path}; `conceptbot plan` with {backend}:{model} now asks by it"))

@@ -201,6 +201,17 @@ def test_a_sure_choice_is_not_asked_and_an_unreadable_one_is() -> None:
     assert unreadable.confidence([("coke", "user")]) == 0.0
 
 
+def test_a_which_one_decision_takes_its_own_threshold_where_the_calibration_has_one() -> None:
+    # A plan-level threshold that keeps a candidate 20% likely asks; the which-one decisions' own
+    # (0.5: keep what is at least half likely) acts on the coke; a yes/no decision keeps its own.
+    ranked, decisions = _one_of(("coke", 0.6), ("water", 0.3), ("sponge", 0.1))
+    assert [q.objects for q in clarify([USER], ranked, decisions, 0.8).questions] == [("coke", "water")]
+    own = clarify([USER], ranked, decisions, 0.8, qhat_one=0.5)
+    assert own.questions == () and own.decisions[0].candidates == ("coke",)
+    flat = clarify([USER], *_one_of(("coke", 0.45), ("water", 0.45), ("sponge", 0.1)), 0.8, qhat_one=0.5)
+    assert flat.questions[0].objects == ("coke", "water", "sponge")  # none half likely: ask
+
+
 def _fits(*rows: tuple[str, float, float]) -> tuple[dict[int, list[Judgement]], tuple[DecisionTrace, ...]]:
     """A target taking one object: each candidate's (object, p_one, P(it fits))."""
     judgements = [Judgement(o, "user", p, 0.0, scoring="logprob", p_one=one) for o, one, p in rows]

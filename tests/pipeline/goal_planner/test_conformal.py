@@ -61,13 +61,19 @@ def test_the_shipped_calibration_has_every_coverage_in_order() -> None:
     # Both which-one rules are fitted on the same plans; the default is the softmax's.
     fits = shipped(rule="fits")
     assert calibration.rule == "softmax" and fits.rule == "fits" and set(fits.qhat) == set(COVERAGES)
-    assert fits.qhat != calibration.qhat and shipped("nograph", rule="fits").qhat != fits.qhat
+    # The rules score which-one decisions apart, so their thresholds differ (yes/no ones may not).
+    assert fits.qhat_one != calibration.qhat_one and shipped("nograph", rule="fits").qhat_one != fits.qhat_one
     with pytest.raises(ValueError, match="no plan-level conformal calibration"):
         shipped("other")
     with pytest.raises(ValueError, match="no conformal level"):
         shipped(level="task")
     thresholds = [calibration.threshold(c) for c in COVERAGES]
     assert thresholds == sorted(thresholds) and all(0.5 <= q <= 1.0 for q in thresholds)
+    # The which-one decisions' own thresholds (conformal per kind): at 0.9 the shipped one keeps
+    # fewer candidates than the plan-level threshold would.
+    ones = [calibration.threshold_one(c) for c in COVERAGES]
+    assert ones == sorted(ones) and all(0.0 < q <= 1.0 for q in ones)
+    assert calibration.threshold_one(0.9) < calibration.threshold(0.9)
     with pytest.raises(ValueError, match=r"no conformal threshold for coverage 0\.7"):
         calibration.threshold(0.7)
 
@@ -82,6 +88,13 @@ def test_a_models_own_calibration_is_read_before_the_shipped_one(tmp_path) -> No
     path.write_text(json.dumps({"plan_qhat": own, "fitted_on": "mine"}))
     found = calibration_for(tmp_path, "openai-compatible", "my/model:7b", "nograph")
     assert found.qhat == {0.8: 0.4, 0.9: 0.5, 0.95: 0.6} and found.fitted_on == "mine" and found.which_one
+    # A file written before the which-one decisions had their own thresholds: the plan-level ones.
+    assert found.qhat_one is None and found.threshold_one(0.9) == 0.5
+    ones = {"nograph": {"0.8": 0.3, "0.9": 0.35, "0.95": 0.9}}
+    path.write_text(json.dumps({"plan_qhat": own, "plan_qhat_one": ones, "fitted_on": "mine"}))
+    found = calibration_for(tmp_path, "openai-compatible", "my/model:7b", "nograph")
+    assert found.threshold_one(0.9) == 0.35 and found.threshold(0.9) == 0.5
+    assert found.threshold_one(1.0) == 1.0  # every decision asked
     assert calibration_for(tmp_path, "llamacpp", "other") == shipped()  # another model's file is not it
     assert calibration_for(tmp_path, "openai-compatible", "my/model:7b", level="decision") == shipped(
         level="decision"
@@ -131,6 +144,13 @@ def test_a_threshold_out_of_range_is_refused(tmp_path) -> None:
     bad = {"graph": {"0.8": 0.5, "0.9": float("nan"), "0.95": 0.7}}
     user_file(tmp_path, "b", "m").write_text(json.dumps({"plan_qhat": bad, "fitted_on": "x"}))
     with pytest.raises(ConfigError, match=r"not a number in \[0, 1\]"):
+        calibration_for(tmp_path, "b", "m")
+    good = {"graph": {"0.8": 0.5, "0.9": 0.6, "0.95": 0.7}}
+    ones = {"graph": {"0.8": 0.5, "0.9": 1.5, "0.95": 0.7}}
+    user_file(tmp_path, "b", "m").write_text(
+        json.dumps({"plan_qhat": good, "plan_qhat_one": ones, "fitted_on": "x"})
+    )
+    with pytest.raises(ConfigError, match=r"plan_qhat_one: a threshold is not a number in \[0, 1\]"):
         calibration_for(tmp_path, "b", "m")
 
 

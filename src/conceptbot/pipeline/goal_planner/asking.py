@@ -15,7 +15,9 @@ decision get conformal prediction sets (:mod:`.conformal`):
   calibrated P(yes): any object that fits will do, so two that both fit ("a drink": the water or
   the juice) are no reason to ask. Sure that it fits, the set is that one; else it is every
   candidate at least ``1 - qhat`` likely to fit (two at least). On dev the two are level on
-  success against help (docs/asking.md), so the default stayed;
+  success against help (docs/asking.md), so the default stayed. Which-one decisions have their
+  own threshold where the calibration has one (``qhat_one``: conformal per kind of decision,
+  :mod:`conceptbot.bench.conformal_fit`), ``qhat`` otherwise;
 
 - which of two readings of the request was meant, where the rules read its words and the model's
   plain form of it differently (:class:`~conceptbot.pipeline.goal_planner.targets.ReadingDoubt`):
@@ -164,6 +166,7 @@ def clarify(
     ask: Ask | None = None,
     which_one: bool = True,
     rule: str = OLD_RULE,
+    qhat_one: float | None = None,
 ) -> Clarified:
     """Sets, questions and answers for the calibrated decisions (see the module docstring).
 
@@ -178,6 +181,7 @@ def clarify(
             else targets taking one object are not asked about.
         rule: How a which-one decision is judged (``fits`` or ``softmax``; the module docstring):
             the rule ``qhat`` was fitted for.
+        qhat_one: The which-one decisions' own threshold (None: ``qhat``).
     """
     sets: dict[tuple[int, str], DecisionSet] = {}
     unsure: dict[int, list[Judgement]] = {}
@@ -193,7 +197,7 @@ def clarify(
                 unsure.setdefault(number, []).append(judgement)
     # Targets taking one object: the set of which one.
     candidates = {
-        number: one_of(ranked.get(number, []), qhat, rule)
+        number: one_of(ranked.get(number, []), qhat if qhat_one is None else qhat_one, rule)
         for number, target in enumerate(targets)
         if which_one
         and target.count == 1

@@ -44,7 +44,9 @@ CALIBRATION_DOC = (
     "conceptbot.pipeline.goal_planner.conformal. qhat: decision level, on the combination's held-out "
     "P(yes) over the judgement set (benchmarks/fit_judgements.py --conformal --write). plan_qhat: plan "
     "level, a dev task's worst decision (benchmarks/fit_conformal_plans.py --write), for the which-one "
-    "rule plan_which_one names; plan_qhat_RULE: for another rule. Refit for another model."
+    "rule plan_which_one names; plan_qhat_RULE: for another rule; plan_qhat_one (plan_qhat_one_RULE): "
+    "the which-one decisions' own threshold (Mondrian conformal; the plan-level key's is used where "
+    "it is missing). Refit for another model."
 )
 #: The which-one rule of a plan-level calibration that names none (written before 2026-12-03), and
 #: of the sets where no rule is given.
@@ -114,6 +116,18 @@ class Calibration:
     fitted_on: str
     which_one: bool = True  # fitted on which-one decisions too (plan level), so they get sets
     rule: str = OLD_RULE
+    qhat_one: dict[float, float] | None = None  # which-one decisions' own (None: qhat's)
+
+    def threshold_one(self, coverage: float) -> float:
+        """The which-one decisions' threshold for ``coverage``: their own where it was fitted, else
+        :meth:`threshold`'s.
+
+        Raises:
+            ValueError: A coverage without a fitted threshold.
+        """
+        if coverage == ASK_ALL or not self.qhat_one or coverage not in self.qhat_one:
+            return self.threshold(coverage)
+        return self.qhat_one[coverage]
 
     def threshold(self, coverage: float) -> float:
         """``qhat`` for ``coverage`` (one of :data:`COVERAGES`; :data:`ASK_ALL` keeps every answer).
@@ -144,6 +158,29 @@ def plan_key(data: dict[str, Any], rule: str | None) -> tuple[str, str]:
     return ("plan_qhat" if rule == named else f"plan_qhat_{rule}"), rule
 
 
+def one_key(key: str) -> str:
+    """Where a calibration document keeps the which-one decisions' own thresholds beside the
+    plan-level ``key`` (``plan_qhat`` -> ``plan_qhat_one``, ``plan_qhat_fits`` ->
+    ``plan_qhat_one_fits``)."""
+    return key.replace("plan_qhat", "plan_qhat_one", 1)
+
+
+def _ones(data: dict[str, Any], key: str, combination: str) -> dict[float, float] | None:
+    """The which-one thresholds kept beside ``key`` for ``combination``, or None where there are
+    none (a file fitted before they were).
+
+    Raises:
+        ValueError: A threshold that is not a number in [0, 1].
+    """
+    found = data.get(one_key(key), {})
+    if not isinstance(found, dict) or combination not in found:
+        return None
+    ones = {float(k): float(v) for k, v in found[combination].items()}
+    if not all(0.0 <= q <= 1.0 for q in ones.values()):  # NaN fails too
+        raise ValueError(f"{one_key(key)}: a threshold is not a number in [0, 1]")
+    return ones
+
+
 @cache
 def shipped(combination: str = "graph", level: str = "plan", rule: str | None = None) -> Calibration:
     """The calibration shipped with the package (``conformal.json``) for a combination's
@@ -169,7 +206,8 @@ def shipped(combination: str = "graph", level: str = "plan", rule: str | None = 
         )
     fitted = data[key][combination]
     qhat = {float(k): float(v) for k, v in fitted.items()}
-    return Calibration(qhat, str(data[where]), level == "plan", rule)
+    ones = _ones(data, key, combination) if level == "plan" else None
+    return Calibration(qhat, str(data[where]), level == "plan", rule, ones)
 
 
 def user_file(directory: Path, backend: str, model: str) -> Path:
@@ -204,10 +242,11 @@ def calibration_for(
         fitted = data[key][combination]
         qhat = {float(c): float(fitted[str(c)]) for c in COVERAGES}
         where = str(data["fitted_on"])
+        ones = _ones(data, key, combination)
     except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError, AttributeError) as exc:
         raise ConfigError(
             f"{path} is not a conformal calibration for this rule ({type(exc).__name__}: {exc})", hint=fix
         ) from None
     if not all(0.0 <= q <= 1.0 for q in qhat.values()):  # NaN fails too
         raise ConfigError(f"{path}: a threshold is not a number in [0, 1]", hint=fix)
-    return Calibration(qhat, where, True, rule)
+    return Calibration(qhat, where, True, rule, ones)

@@ -314,7 +314,14 @@ class GoalPlanner:
         asked = [j.scoring for js in ranked.values() for j in js if j.scoring]
         # Where a calibrated decision is unsure, a question (asked if someone answers): asking.py.
         clarified = clarify(
-            targets, ranked, decisions, qhat, ask, self.calibration.which_one, self.calibration.rule
+            targets,
+            ranked,
+            decisions,
+            qhat,
+            ask,
+            self.calibration.which_one,
+            self.calibration.rule,
+            self.calibration.threshold_one(self.coverage),
         )
         ranked, decisions = clarified.ranked, clarified.decisions
         observer.event("decisions", DecisionsEvent(tuple(decisions)))
