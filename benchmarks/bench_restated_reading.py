@@ -36,6 +36,7 @@ import json
 import sys
 import time
 from collections.abc import Sequence
+from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -143,8 +144,15 @@ def report(records: Sequence[dict[str, Any]]) -> None:
 def _policy_ok(record: dict[str, Any], policy: str) -> bool:
     words = Goal.from_dict(record["words_goal"])
     plain = Goal.from_dict(record["plain_goal"]) if record["plain_goal"] else None
-    chosen = choose(words, plain, policy, record["request"], record["plain"]).goal
+    chosen = choose(words, plain, policy, record["request"], record["plain"], _names(record["task"])).goal
     return same_goal(chosen, Goal.from_dict(record["gold"])).ok
+
+
+@cache
+def _names(task_id: str) -> tuple[str, ...]:
+    """The objects of a dev task's scene, as the planner gives them to the choice of reading."""
+    found = {t.id: t for t in load_tasks(split="dev")}.get(task_id)
+    return tuple(task_scene(found).names) if found is not None else ()
 
 
 ODDS = Path("src/conceptbot/pipeline/goal/reading_odds.json")
@@ -160,7 +168,7 @@ def step_counts(records: Sequence[dict[str, Any]]) -> dict[str, list[int]]:
         words = Goal.from_dict(record["words_goal"])
         plain = Goal.from_dict(record["plain_goal"]) if record["plain_goal"] else None
         gold = Goal.from_dict(record["gold"])
-        chosen = choose(words, plain, "grounded", record["request"], record["plain"])
+        chosen = choose(words, plain, "grounded", record["request"], record["plain"], _names(record["task"]))
         row = counts.setdefault(chosen.step or "words only", [0, 0, 0])
         row[0] += 1
         row[1] += same_goal(chosen.goal, gold).ok

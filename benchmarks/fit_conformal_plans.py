@@ -14,8 +14,9 @@ every dev task once without asking (through the cache; the probabilities do not 
 coverage: ``qhat`` and the leave-one-task-out coverage of whole tasks (how often a task's every
 decision would be covered by a ``qhat`` fitted without it). ``--write`` stores the thresholds in
 ``src/conceptbot/pipeline/conformal.json``, which the planner reads: ``plan_qhat`` for the rule
-``--which-one`` names (the default), ``plan_qhat_RULE`` for the other, and beside each the which-one
-decisions' own thresholds (``plan_qhat_one``, ``plan_qhat_one_RULE``: conformal per kind of decision).
+``--which-one`` names (the default), ``plan_qhat_RULE`` for the other: one threshold for every decision
+(the reading questions take it), and beside each the pair per kind of decision the calibrated
+decisions take (``plan_qhat_yes_no``, ``plan_qhat_one``, and ``_RULE`` for the other rule).
 
     .venv/bin/python benchmarks/fit_conformal_plans.py [--write] [--which-one fits|softmax]
 """
@@ -46,10 +47,13 @@ def fit_system(system_name: str) -> dict[str, PlanFit]:
             f"\n{system_name}, which-one rule {rule}: {found.tasks} dev tasks with calibrated decisions "
             f"({found.decisions} decisions)"
         )
-        print(f"{'coverage':>8} {'qhat':>6} {'qhat_one':>8} {'leave-one-out':>13}")
-        ones = found.qhat_one or found.qhat
+        print(f"{'coverage':>8} {'yes/no':>6} {'one':>6} {'single':>6} {'asked':>5} {'leave-one-out':>13}")
+        ones, single, asked = found.qhat_one or found.qhat, found.single or found.qhat, found.asked or {}
         for coverage, q in found.qhat.items():
-            print(f"{coverage:>8.2f} {q:>6.3f} {ones[coverage]:>8.3f} {found.held_out[coverage]:>13.1%}")
+            print(
+                f"{coverage:>8.2f} {q:>6.3f} {ones[coverage]:>6.3f} {single[coverage]:>6.3f} "
+                f"{asked.get(coverage, 0):>5} {found.held_out[coverage]:>13.1%}"
+            )
     return fits
 
 
@@ -58,7 +62,8 @@ def merged(data: dict[str, Any], fits: dict[str, dict[str, PlanFit]], rule: str)
     replaced (the other combinations' kept, so that a long fit can be split by system), ``rule``
     the default which-one rule."""
     data = {**data, "_doc": CALIBRATION_DOC}
-    for stale in (f"plan_qhat_{rule}", f"plan_qhat_one_{rule}"):  # the default rule's are plan_qhat(_one)
+    # The default rule's thresholds are plan_qhat and its kinds' keys, not plan_qhat_RULE.
+    for stale in (f"plan_qhat_{rule}", f"plan_qhat_one_{rule}", f"plan_qhat_yes_no_{rule}"):
         data.pop(stale, None)
     for key, value in thresholds_document(fits, rule).items():
         kept = data.get(key) if isinstance(data.get(key), dict) else {}

@@ -105,10 +105,12 @@ def test_a_plan_fit_of_one_system_keeps_the_other_system_s_thresholds() -> None:
     out = plans.merged(data, {"graph": {"softmax": found(0.6), "fits": found(0.5)}}, "softmax")
     assert out["plan_qhat"] == {"graph": {"0.9": 0.6}, "nograph": {"0.9": 0.85}}
     assert out["plan_qhat_fits"] == {"graph": {"0.9": 0.5}, "nograph": {"0.9": 0.75}}
-    # The which-one decisions' own thresholds, beside each rule's.
+    # Each kind's own thresholds beside each rule's (the plan-level key is the single threshold,
+    # here none was fitted, so the yes/no one stands in).
     assert out["plan_qhat_one"] == {"graph": {"0.9": 0.3}} and out["plan_qhat_one_fits"] == {
         "graph": {"0.9": 0.25}
     }
+    assert out["plan_qhat_yes_no"] == {"graph": {"0.9": 0.6}}
     assert out["qhat"] == data["qhat"] and "graph 70" in out["plan_fitted_on"]
     assert data["plan_qhat"]["graph"] == {"0.9": 0.8}  # the file read is not changed in place
 

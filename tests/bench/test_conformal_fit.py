@@ -66,22 +66,25 @@ def test_the_thresholds_are_quantiles_of_each_tasks_worst_decision() -> None:
         fit([])
 
 
-def test_which_one_decisions_get_their_own_threshold() -> None:
-    # Twenty tasks: yes/no decisions as sure as 0.05 * i wrong, each with a which-one decision
-    # whose acceptable candidate had a share of at least 0.6 (nonconformity 0.4 or less), but for
-    # two that were confidently wrong (0.95).
-    tasks = [TaskScores((0.05 * i,), (0.4 if i > 2 else 0.95,)) for i in range(1, 21)]
+def test_the_pair_of_thresholds_asks_the_fewest_tasks_that_keep_the_coverage() -> None:
+    # Twenty tasks: a sure yes/no decision (2% wrong) and a which-one decision. In eighteen the
+    # likeliest candidate (0.7) is acceptable, the next 0.25; in two the likeliest (0.9) is wrong
+    # and the acceptable one 5% likely.
+    good = TaskScores((0.02,), (0.3,), ((0.7, 0.25),))
+    wrong = TaskScores((0.02,), (0.95,), ((0.9, 0.05),))
+    tasks = [wrong, wrong] + [good] * 18
+    assert good.covered(0.5, 0.3) and not good.asked(0.5, 0.3) and good.asked(0.5, 0.8)
+    assert not wrong.covered(0.5, 0.3) and wrong.covered(0.5, 0.95)
     found = fit(tasks)
-    # The which-one decisions' own 0.8 quantile: rank ceil(21 * 0.8) = 17 of 20, a 0.4.
-    assert found.qhat_one is not None and found.qhat_one[0.8] == pytest.approx(0.4)
-    # Then the yes/no threshold that covers 17 whole tasks of the 18 the which-one threshold does.
-    assert found.qhat[0.8] == pytest.approx(0.05 * 19)
-    # One threshold for both would have had to keep a candidate 5% likely.
-    single = fit([TaskScores((*t.yes_no, *t.one)) for t in tasks])
-    assert single.qhat[0.8] == pytest.approx(0.95) and single.qhat_one == single.qhat
-    # At 0.95 the confidently wrong which-one decisions must be covered too: rank 20 of 20.
-    assert found.qhat_one[0.95] == pytest.approx(0.95) and found.qhat[0.95] == pytest.approx(1.0)
-    few = fit(tasks[:5])  # too few tasks for 0.9: the single threshold for both, keep everything
+    assert found.qhat_one is not None and found.asked is not None
+    # At 0.8, 17 of 20 tasks must be covered: acting on every likeliest candidate covers 18 and
+    # asks nothing (a which-one threshold from 0.3 to 0.74: the middle is kept).
+    assert (found.qhat[0.8], found.qhat_one[0.8], found.asked[0.8]) == (0.5, 0.52, 0)
+    # At 0.9, 19 must be: the wrong two only by keeping what is 5% likely, which asks every task;
+    # by sets that keep the likely candidates, not by empty ones that offer the likeliest dozen.
+    assert found.asked[0.9] == 20 and found.qhat_one[0.9] >= 0.95
+    assert found.held_out[0.8] == pytest.approx(0.9)  # the two wrong ones are missed, held out too
+    few = fit(tasks[:5])  # too few tasks for 0.9: keep everything
     assert few.qhat_one is not None and few.qhat_one[0.9] == few.qhat[0.9] == 1.0
 
 

@@ -63,9 +63,14 @@ def test_calibrate_conformal_writes_the_models_thresholds_for_the_planner(
     # Both which-one rules are fitted from the same plans; the default is the shipped one's.
     assert data["plan_which_one"] == found.rule == "softmax"
     assert set(data["plan_qhat_fits"]) == {"graph", "nograph"}
-    # The which-one decisions' own thresholds are written and read back (here there are none in
-    # the plans, so they are the plan-level ones).
-    assert set(data["plan_qhat_one"]) == {"graph", "nograph"} and found.qhat_one == found.qhat
+    # Each kind's own thresholds are written and read back (the plans here have no which-one
+    # decision, so its threshold is the yes/no one).
+    assert set(data["plan_qhat_one"]) == set(data["plan_qhat_yes_no"]) == {"graph", "nograph"}
+    assert (
+        found.qhat_one
+        == found.qhat_yes_no
+        == {float(k): v for k, v in data["plan_qhat_yes_no"]["graph"].items()}
+    )
     fits = calibration_for(load_settings().calibration_dir, "openai-compatible", "my-model", rule="fits")
     assert fits.rule == "fits" and set(fits.qhat) == set(found.qhat)
 

@@ -10,15 +10,22 @@ out either way: the request was read wrong, and no set of that target's objects 
 Both rules' scores come from the same plans, so one pass over the tasks fits both; the tasks without
 a calibrated decision take no part.
 
-Two thresholds per coverage, one per kind of decision (Mondrian, or class-conditional, conformal
-prediction: Vovk et al. 2005). ``qhat_one``, for which-one decisions, is the split-conformal
-quantile of the which-one decisions' own nonconformities; ``qhat``, for yes/no decisions, is then the
-smallest threshold with which the chosen share of tasks has every decision covered. One threshold
-for both (the tasks' worst decision, as before 2026-12-05) let the yes/no decisions of sorts set
-the which-one threshold too: at 0.9 a candidate 13% likely was kept, so a which-one question was
-asked wherever a second object was at all plausible, though the likeliest was acceptable in 44 of
-the 48 dev which-one decisions. Where the kinds cannot reach the coverage apart (too few tasks),
-both take the single threshold.
+Two thresholds per coverage, one per kind of decision: ``qhat`` for yes/no decisions and
+``qhat_one`` for which-one decisions. They are the pair, on a grid, with which the fewest dev tasks
+get a question while the chosen share of tasks (split conformal's ``ceil((n + 1) * coverage)``)
+still has every decision in its prediction set; on a tie, the least yes/no threshold, then the
+fewest which-one sets that keep no candidate, and the which-one threshold in the middle of those
+tied. A task asks where a yes/no decision keeps both answers, or
+a which-one decision keeps two or more candidates or none (then the likeliest are offered).
+
+One threshold for both (the tasks' worst decision, as before 2026-12-05) let the yes/no decisions
+of sorts set the which-one threshold too: at 0.9 a candidate 13% likely was kept, so "which one"
+was asked wherever a second object was at all plausible, though the likeliest was acceptable in 44
+of the 48 dev which-one decisions. The which-one decisions' own 90% quantile (Mondrian conformal,
+tried first) falls on the few confidently wrong ones: it kept nearly every candidate as soon as
+four dev tasks were added. Choosing the pair on dev fits two numbers to the calibration tasks; the
+leave-one-task-out coverage printed beside each (the pair chosen without the task, then the task
+checked) says how well the promise holds on a task the fit has not seen.
 """
 
 from __future__ import annotations
@@ -28,10 +35,12 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from conceptbot.bench.grading import Task, gold_answer, task_scene
 from conceptbot.core.plan import Plan
 from conceptbot.core.system import COVERAGES, WHICH_ONE, PlannerSystem
-from conceptbot.pipeline.goal_planner.conformal import OLD_RULE, conformal_threshold, one_key
+from conceptbot.pipeline.goal_planner.conformal import OLD_RULE, conformal_threshold, kind_key
 
 SYSTEMS = (("graph", "conceptbot"), ("nograph", "nokg"))
 """Each combination the calibration ships, and the system whose plans it is fitted on."""
@@ -54,6 +63,8 @@ class Labelled:
         p_yes: A yes/no decision's P(yes) (None for which-one).
         yes: A yes/no decision's gold answer (None for which-one).
         one: A which-one decision (its own threshold: ``qhat_one``).
+        tops: A which-one decision's two largest probabilities by its rule (``p_one`` by
+            ``softmax``; by ``fits`` the likeliest's P(yes) and P(no)): where its set keeps one.
     """
 
     p_right: float
@@ -61,6 +72,7 @@ class Labelled:
     p_yes: float | None = None
     yes: bool | None = None
     one: bool = False
+    tops: tuple[float, float] = (1.0, 0.0)
 
 
 def labelled(task: Task, plan: Plan, rule: str = OLD_RULE) -> list[Labelled]:
@@ -82,16 +94,22 @@ def labelled(task: Task, plan: Plan, rule: str = OLD_RULE) -> list[Labelled]:
         if d.candidates is None or not accepted:
             continue
         covered = bool(accepted.keys() & set(d.candidates))
-        if rule == "softmax":
-            found.append(Labelled(max(accepted.values()), covered, one=True))
-            continue
         scored = [j for j in d.objects if j.p_one is not None]
-        if not all(j.p_one == j.p_one for j in scored):  # the ranking cannot be read: no score
-            found.append(Labelled(float("nan"), covered, one=True))
+        readable = all(j.p_one == j.p_one for j in scored)
+        shares = sorted((j.p_one or 0.0 for j in scored), reverse=True) if readable else []
+        # Unreadable: a set that always asks (no candidate is likely enough, and two are).
+        tops = (shares[0], shares[1] if len(shares) > 1 else 0.0) if shares else (0.0, 1.0)
+        if rule == "softmax":
+            found.append(Labelled(max(accepted.values()), covered, one=True, tops=tops))
+            continue
+        if not readable:  # the ranking cannot be read: no score
+            found.append(Labelled(float("nan"), covered, one=True, tops=(0.0, 1.0)))
             continue
         top = max(scored, key=lambda j: j.p_one or 0.0)
         fits = top.object in accepted
-        found.append(Labelled(top.p_yes if fits else 1.0 - top.p_yes, covered, top.p_yes, fits, True))
+        right = top.p_yes if fits else 1.0 - top.p_yes
+        sure = (max(top.p_yes, 1.0 - top.p_yes), min(top.p_yes, 1.0 - top.p_yes))
+        found.append(Labelled(right, covered, top.p_yes, fits, True, sure))
     return found
 
 
@@ -103,17 +121,36 @@ def task_scores(task: Task, plan: Plan, rule: str = OLD_RULE) -> list[float]:
 
 @dataclass(frozen=True)
 class TaskScores:
-    """A task's decision nonconformities by kind: yes/no decisions and which-one decisions."""
+    """A task's decision nonconformities by kind: yes/no decisions and which-one decisions, and
+    each which-one decision's two largest probabilities (``tops``; absent: its right answer the
+    likeliest, nothing else likely)."""
 
     yes_no: tuple[float, ...] = ()
     one: tuple[float, ...] = ()
+    tops: tuple[tuple[float, float], ...] = ()
 
     def __len__(self) -> int:
         return len(self.yes_no) + len(self.one)
 
+    def _tops(self) -> tuple[tuple[float, float], ...]:
+        return self.tops if len(self.tops) == len(self.one) else tuple((1.0 - s, 0.0) for s in self.one)
+
     def covered(self, qhat: float, qhat_one: float) -> bool:
-        """Whether every decision is in its prediction set with these thresholds."""
-        return all(s <= qhat for s in self.yes_no) and all(s <= qhat_one for s in self.one)
+        """Whether every decision's prediction set holds the right answer with these thresholds (a
+        which-one set that keeps nothing offers the likeliest, so it does). Compared as the planner
+        does: a probability at least ``1 - qhat`` is kept."""
+        floor, floor_one = round(1.0 - qhat, 4), round(1.0 - qhat_one, 4)
+        return all(round(1.0 - s, 4) >= floor for s in self.yes_no) and all(
+            round(1.0 - s, 4) >= floor_one or round(top, 4) < floor_one
+            for s, (top, _) in zip(self.one, self._tops(), strict=True)
+        )
+
+    def asked(self, qhat: float, qhat_one: float) -> bool:
+        """Whether a decision's set keeps both answers (yes/no) or other than one candidate."""
+        floor, floor_one = round(1.0 - qhat, 4), round(1.0 - qhat_one, 4)
+        return any(round(min(s, 1.0 - s), 4) >= floor for s in self.yes_no) or any(
+            round(top, 4) < floor_one or round(second, 4) >= floor_one for top, second in self._tops()
+        )
 
 
 def split_scores(task: Task, plan: Plan, rule: str = OLD_RULE) -> TaskScores:
@@ -122,6 +159,7 @@ def split_scores(task: Task, plan: Plan, rule: str = OLD_RULE) -> TaskScores:
     return TaskScores(
         tuple(nonconformity(f.p_right) for f in found if not f.one),
         tuple(nonconformity(f.p_right) for f in found if f.one),
+        tuple(f.tops for f in found if f.one),
     )
 
 
@@ -136,6 +174,9 @@ class PlanFit:
         tasks: Tasks with a calibrated decision (those fitted on).
         decisions: Their calibrated decisions.
         qhat_one: The threshold per coverage of which-one decisions (None: ``qhat``'s).
+        asked: Per coverage, the fitted tasks that get a question with the thresholds.
+        single: Per coverage, one threshold for every decision: the split-conformal quantile of
+            the tasks' worst decisions (the reading questions take it; None: ``qhat``'s).
     """
 
     qhat: dict[float, float]
@@ -143,6 +184,8 @@ class PlanFit:
     tasks: int
     decisions: int
     qhat_one: dict[float, float] | None = None
+    asked: dict[float, int] | None = None
+    single: dict[float, float] | None = None
 
 
 def collect(
@@ -163,56 +206,117 @@ def collect(
     return found
 
 
-def thresholds(tasks: Sequence[TaskScores], coverage: float) -> tuple[float, float]:
-    """``(qhat, qhat_one)`` for ``coverage`` (see the module docstring): the which-one decisions'
-    own quantile, then the least yes/no threshold that covers every decision of the chosen share of
-    tasks; both the single threshold of the tasks' worst decisions where that share cannot be
-    reached so."""
-    worst = [max((*t.yes_no, *t.one)) for t in tasks]
-    single = conformal_threshold(worst, coverage)
-    ones = [s for t in tasks for s in t.one]
-    if not ones:
-        return single, single
-    qhat_one = conformal_threshold(ones, coverage)
-    need = math.ceil((len(tasks) + 1) * coverage)
-    eligible = sorted(max(t.yes_no, default=0.0) for t in tasks if all(s <= qhat_one for s in t.one))
-    if need > len(eligible) or qhat_one >= 1.0:
-        return single, single
-    return float(eligible[need - 1]), qhat_one
+#: The grids the pair of thresholds is chosen on (a yes/no threshold under one half keeps no answer
+#: of some decisions, so it starts there).
+GRID_YES_NO = np.round(np.arange(0.5, 1.0 + 1e-9, 0.0025), 4)
+GRID_ONE = np.round(np.arange(0.0, 1.0 + 1e-9, 0.01), 4)
+
+
+def _grids(tasks: Sequence[TaskScores]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per task and pair of grid thresholds: whether the task is covered, and whether it asks; and
+    per task and which-one threshold, how many of its which-one sets keep no candidate."""
+    covered = np.zeros((len(tasks), len(GRID_YES_NO), len(GRID_ONE)), dtype=bool)
+    asked = np.zeros_like(covered)
+    empties = np.zeros((len(tasks), len(GRID_ONE)), dtype=np.int64)
+    floors, floors_one = np.round(1.0 - GRID_YES_NO, 4), np.round(1.0 - GRID_ONE, 4)
+    # Probabilities are kept to 4 decimals in the traces, and so are these, so that a threshold
+    # equal to a score keeps it (1 - 0.05 * 19 is a hair under 0.05).
+    for i, task in enumerate(tasks):
+        # As the planner compares: a probability at least the floor, 1 - threshold, is kept.
+        right = round(min((1.0 - s for s in task.yes_no), default=1.0), 4)
+        yes_no_covered = right >= floors
+        unsure = [round(min(s, 1.0 - s), 4) for s in task.yes_no]  # the less likely answer
+        yes_no_asked = max(unsure) >= floors if unsure else np.zeros(len(floors), dtype=bool)
+        one_covered = np.ones(len(floors_one), dtype=bool)
+        one_asked = np.zeros(len(floors_one), dtype=bool)
+        for s, (top, second) in zip(task.one, task._tops(), strict=True):
+            empty = round(top, 4) < floors_one
+            empties[i] += empty
+            one_covered &= (round(1.0 - s, 4) >= floors_one) | empty
+            one_asked |= empty | (round(second, 4) >= floors_one)
+        covered[i] = yes_no_covered[:, None] & one_covered[None, :]
+        asked[i] = yes_no_asked[:, None] | one_asked[None, :]
+    return covered, asked, empties
+
+
+def _choose(
+    covered: np.ndarray, asked: np.ndarray, empty: np.ndarray, n: int, coverage: float
+) -> tuple[int, int]:
+    """The grid pair for ``coverage`` from the summed counts of ``n`` tasks (``empty``: per
+    which-one threshold, the which-one decisions whose set keeps no candidate); see the module
+    docstring. The last pair (keep everything) where too few tasks reach the coverage."""
+    need = math.ceil((n + 1) * coverage)
+    if need > n:
+        return len(GRID_YES_NO) - 1, len(GRID_ONE) - 1
+    # Fewest asked, then the least yes/no threshold (the shortest questions: of the pairs that ask
+    # as little, covering more than the chosen share buys nothing the person asked for, and on dev
+    # it doubled the reading questions, which take the yes/no threshold), then the fewest which-one
+    # sets that keep no candidate (those offer the likeliest dozen, a poor question): one key,
+    # smallest wins.
+    big = np.iinfo(np.int64).max
+    rows = np.arange(covered.shape[0])[:, None]
+    width = int(empty.max()) + 1
+    key = (asked * covered.shape[0] + rows) * width + empty[None, :]
+    key = np.where(covered >= need, key, big)
+    best = np.argwhere(key == key.min())
+    # Of the pairs tied on it, the which-one threshold in the middle (the farthest from a set that
+    # changes).
+    y = int(best[:, 0].min())
+    tied = sorted(int(o) for yy, o in best if yy == y)
+    return y, tied[len(tied) // 2]
 
 
 def fit(tasks: Sequence[TaskScores]) -> PlanFit:
-    """The thresholds per coverage from the tasks' decision nonconformities (see the module
-    docstring), with each coverage's leave-one-task-out check.
+    """The thresholds per coverage from the tasks' decisions (see the module docstring), with each
+    coverage's leave-one-task-out check.
 
     Raises:
         ValueError: No task with a calibrated decision.
     """
     if not tasks:
         raise ValueError("no task has a calibrated decision: nothing to calibrate on")
-    qhat, qhat_one, held = {}, {}, {}
+    covered, asked, empties = _grids(tasks)
+    cover_sum, ask_sum, empty_sum = covered.sum(axis=0), asked.sum(axis=0), empties.sum(axis=0)
+    n = len(tasks)
+    qhat, qhat_one, held, count = {}, {}, {}, {}
+    worst = [max((*t.yes_no, *t.one)) for t in tasks]
+    single = {coverage: conformal_threshold(worst, coverage) for coverage in COVERAGES}
     for coverage in COVERAGES:
-        qhat[coverage], qhat_one[coverage] = thresholds(tasks, coverage)
-        kept = [
-            t.covered(*thresholds([*tasks[:i], *tasks[i + 1 :]], coverage)) if len(tasks) > 1 else True
-            for i, t in enumerate(tasks)
-        ]
+        y, o = _choose(cover_sum, ask_sum, empty_sum, n, coverage)
+        qhat[coverage], qhat_one[coverage] = float(GRID_YES_NO[y]), float(GRID_ONE[o])
+        if not any(t.one for t in tasks):  # nothing to fit it on: the yes/no threshold stands in
+            qhat_one[coverage] = qhat[coverage]
+        count[coverage] = int(asked[:, y, o].sum())
+        kept = []
+        for i in range(n):
+            if n == 1:
+                kept.append(True)
+                continue
+            yi, oi = _choose(
+                cover_sum - covered[i], ask_sum - asked[i], empty_sum - empties[i], n - 1, coverage
+            )
+            kept.append(bool(covered[i, yi, oi]))
         held[coverage] = sum(kept) / len(kept)
-    return PlanFit(qhat, held, len(tasks), sum(map(len, tasks)), qhat_one)
+    return PlanFit(qhat, held, n, sum(map(len, tasks)), qhat_one, count, single)
 
 
 def thresholds_document(fits: dict[str, dict[str, PlanFit]], rule: str) -> dict[str, Any]:
     """The plan-level thresholds as a calibration file keeps them, for ``fits`` per combination and
     which-one rule: ``plan_which_one`` names the default ``rule``, whose thresholds are
     ``plan_qhat``; another rule's are ``plan_qhat_RULE`` (what
-    :func:`~conceptbot.pipeline.goal_planner.conformal.plan_key` reads); the which-one decisions'
-    own thresholds are under :func:`~conceptbot.pipeline.goal_planner.conformal.one_key` of each."""
+    :func:`~conceptbot.pipeline.goal_planner.conformal.plan_key` reads). That key holds the one
+    threshold for every decision; each kind's own are beside it
+    (:func:`~conceptbot.pipeline.goal_planner.conformal.kind_key`)."""
+
+    def rounded(found: dict[float, float]) -> dict[str, float]:
+        return {str(k): round(q, 4) for k, q in found.items()}
+
     document: dict[str, Any] = {"plan_which_one": rule}
     for each in WHICH_ONE:
         key = "plan_qhat" if each == rule else f"plan_qhat_{each}"
-        document[key] = {c: {str(k): round(q, 4) for k, q in f[each].qhat.items()} for c, f in fits.items()}
-        document[one_key(key)] = {
-            c: {str(k): round(q, 4) for k, q in (f[each].qhat_one or f[each].qhat).items()}
-            for c, f in fits.items()
+        document[key] = {c: rounded(f[each].single or f[each].qhat) for c, f in fits.items()}
+        document[kind_key(key, "yes_no")] = {c: rounded(f[each].qhat) for c, f in fits.items()}
+        document[kind_key(key, "one")] = {
+            c: rounded(f[each].qhat_one or f[each].qhat) for c, f in fits.items()
         }
     return document

@@ -204,7 +204,9 @@ def _conformal(app: AppContext, as_json: bool) -> None:
     if as_json:
         click.echo(json.dumps({**document, "path": str(path)}, indent=2))
         return
-    table = Table("combination", "coverage", "qhat", "qhat (which one)", "held-out plan coverage", "tasks")
+    table = Table(
+        "combination", "coverage", "qhat (yes/no)", "qhat (which one)", "held-out plan coverage", "tasks"
+    )
     for combination, by_rule in fits.items():
         found = by_rule[rule]
         ones = found.qhat_one or found.qhat

@@ -71,6 +71,34 @@ def test_the_words_stay_where_the_plain_form_drops_or_moves_what_they_place() ->
     assert choose(own, moved, "grounded", request, plain).source == "words"
 
 
+def test_the_words_stay_where_the_plain_form_gives_the_thing_to_someone_else() -> None:
+    # "Hand him the marker" said plainly as "Give me the marker": the model lost who it is for. Both
+    # readings call it "the marker" where the scene has two: no reason to doubt the words more.
+    request = "My son wants to colour in his picture: hand him the marker."
+    own = Goal(targets=(GoalTarget("child", "criterion", (), "marker", 1),))
+    lost = Goal(targets=(GoalTarget("user", "criterion", (), "him the marker", "all"),))
+    names = ("permanent marker", "washable marker", "user", "child")
+    found = choose(own, lost, "grounded", request, "Give him the marker.", names)
+    assert (found.source, found.step) == ("words", "moved")
+    # Without the scene's objects, "the marker" is a sign the words made a thing up, as before.
+    assert choose(own, lost, "grounded", request, "Give him the marker.").source == "plain"
+    # A sort's other place is another kind, not the same one sent elsewhere.
+    sort = Goal(
+        targets=(
+            GoalTarget("toxic tray", "criterion", (), "toxic plants", "all"),
+            GoalTarget("safe tray", "criterion", (), "non-toxic plants", "all"),
+        )
+    )
+    swapped = Goal(
+        targets=(
+            GoalTarget("safe tray", "criterion", (), "non-toxic plants", "all"),
+            GoalTarget("toxic tray", "criterion", (), "poisonous plants", "all"),
+        )
+    )
+    said = "Put the non-toxic plants on the safe tray and the poisonous plants on the toxic tray."
+    assert choose(sort, swapped, "grounded", "Sort the plants.", said).step != "moved"
+
+
 def test_only_a_criterion_s_wording_differing_keeps_the_person_s_words() -> None:
     request = "have you got something I could dry them with?"
     own = Goal(targets=(GoalTarget("user", "criterion", (), "something I could dry them with", 1),))

@@ -69,10 +69,11 @@ def test_the_shipped_calibration_has_every_coverage_in_order() -> None:
         shipped(level="task")
     thresholds = [calibration.threshold(c) for c in COVERAGES]
     assert thresholds == sorted(thresholds) and all(0.5 <= q <= 1.0 for q in thresholds)
-    # The which-one decisions' own thresholds (conformal per kind): at 0.9 the shipped one keeps
-    # fewer candidates than the plan-level threshold would.
-    ones = [calibration.threshold_one(c) for c in COVERAGES]
-    assert ones == sorted(ones) and all(0.0 < q <= 1.0 for q in ones)
+    # Each kind's own thresholds: at 0.9 the shipped which-one one keeps fewer candidates than the
+    # single plan-level threshold would; the yes/no ones rise with the coverage.
+    yes_no = [calibration.threshold_yes_no(c) for c in COVERAGES]
+    assert yes_no == sorted(yes_no) and all(0.5 <= q <= 1.0 for q in yes_no)
+    assert all(0.0 < calibration.threshold_one(c) <= 1.0 for c in COVERAGES)
     assert calibration.threshold_one(0.9) < calibration.threshold(0.9)
     with pytest.raises(ValueError, match=r"no conformal threshold for coverage 0\.7"):
         calibration.threshold(0.7)
@@ -88,13 +89,15 @@ def test_a_models_own_calibration_is_read_before_the_shipped_one(tmp_path) -> No
     path.write_text(json.dumps({"plan_qhat": own, "fitted_on": "mine"}))
     found = calibration_for(tmp_path, "openai-compatible", "my/model:7b", "nograph")
     assert found.qhat == {0.8: 0.4, 0.9: 0.5, 0.95: 0.6} and found.fitted_on == "mine" and found.which_one
-    # A file written before the which-one decisions had their own thresholds: the plan-level ones.
-    assert found.qhat_one is None and found.threshold_one(0.9) == 0.5
+    # A file written before each kind had its own thresholds: the plan-level ones for both.
+    assert found.qhat_one is None and found.threshold_one(0.9) == found.threshold_yes_no(0.9) == 0.5
     ones = {"nograph": {"0.8": 0.3, "0.9": 0.35, "0.95": 0.9}}
-    path.write_text(json.dumps({"plan_qhat": own, "plan_qhat_one": ones, "fitted_on": "mine"}))
+    yes_no = {"nograph": {"0.8": 0.6, "0.9": 0.7, "0.95": 0.8}}
+    kinds = {"plan_qhat_one": ones, "plan_qhat_yes_no": yes_no}
+    path.write_text(json.dumps({"plan_qhat": own, **kinds, "fitted_on": "mine"}))
     found = calibration_for(tmp_path, "openai-compatible", "my/model:7b", "nograph")
-    assert found.threshold_one(0.9) == 0.35 and found.threshold(0.9) == 0.5
-    assert found.threshold_one(1.0) == 1.0  # every decision asked
+    assert (found.threshold_one(0.9), found.threshold_yes_no(0.9), found.threshold(0.9)) == (0.35, 0.7, 0.5)
+    assert found.threshold_one(1.0) == found.threshold_yes_no(1.0) == 1.0  # every decision asked
     assert calibration_for(tmp_path, "llamacpp", "other") == shipped()  # another model's file is not it
     assert calibration_for(tmp_path, "openai-compatible", "my/model:7b", level="decision") == shipped(
         level="decision"

@@ -9,7 +9,7 @@ set by ``benchmarks/bench_restated_reading.py``). Where the two disagree the rea
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Literal
 
@@ -72,7 +72,14 @@ class Reading:
         return self.words if self.source == "plain" else self.restated
 
 
-def choose(own: Goal, restated: Goal | None, policy: Policy, request: str = "", plain: str = "") -> Reading:
+def choose(
+    own: Goal,
+    restated: Goal | None,
+    policy: Policy,
+    request: str = "",
+    plain: str = "",
+    names: Sequence[str] = (),
+) -> Reading:
     """The reading ``policy`` picks from the words' (``own``) and the plain form's (``restated``,
     read from the text ``plain``), without text or usage. ``words`` and ``plain`` always take that
     one; ``grounded`` (which needs ``request`` and ``plain``), in this order:
@@ -83,8 +90,11 @@ def choose(own: Goal, restated: Goal | None, policy: Policy, request: str = "", 
        ("It'd be lovely if the teddy bear were back in the toy chest" is a wish the rules take for
        a statement; "Heat up the leftovers" said as "make the leftovers hot" is not a need).
        Where the command is ungrounded, the need ("Give me the splinter" for "I've got a splinter").
-    4. Where the words are not ungrounded and the plain form's targets are some of theirs (the
-       model left one out), or it sends an object the words name to another place: the words.
+    4. Where the words are not ungrounded (but for signs the plain form shares) and the plain
+       form's targets are some of theirs (the model left one out), or it sends an object the words
+       name, or the kind of thing they ask for, to another place or person: the words.
+    ``names``: the scene's objects, for :func:`ungrounded`.
+
     5. Otherwise the reading with fewer signs of being made up (:func:`ungrounded`, and a criterion
        the plain form dropped where the words keep one for the same place: "put everything in the
        basket" for "all the clothing"), the plain form on a tie: the model reads talk better than
@@ -100,7 +110,7 @@ def choose(own: Goal, restated: Goal | None, policy: Policy, request: str = "", 
         return taken if policy == "plain" else kept
     if same_goal(structure(own), structure(restated)).ok:
         return replace(kept, step="wording")
-    mine, theirs = ungrounded(own, request, request), ungrounded(restated, request, plain)
+    mine, theirs = ungrounded(own, request, request, names), ungrounded(restated, request, plain, names)
     own_need, plain_need = _needs(own), _needs(restated)
     if own_need and plain_need:
         return replace(kept, step="needs")
@@ -109,9 +119,12 @@ def choose(own: Goal, restated: Goal | None, policy: Policy, request: str = "", 
         if command_ok:
             return replace(taken if own_need else kept, step="command")
         return replace(kept if own_need else taken, step="need")
-    if set(restated.targets) < set(own.targets) and not mine:
+    # A sign of being made up that both readings carry ("the marker" where the scene has two) is
+    # no reason to doubt the words more than the plain form.
+    mine_only = [sign for sign in mine if sign not in theirs]
+    if set(restated.targets) < set(own.targets) and not mine_only:
         return replace(kept, step="dropped")
-    if _moved_elsewhere(own, restated) and not mine:
+    if _moved_elsewhere(own, restated) and not mine_only:
         return replace(kept, step="moved")
     criteria = {t.to for t in own.targets if t.takes == "criterion" and t.criterion}
     theirs += [
@@ -120,7 +133,7 @@ def choose(own: Goal, restated: Goal | None, policy: Policy, request: str = "", 
     return replace(taken, step="fewer") if len(theirs) <= len(mine) else replace(kept, step="words fewer")
 
 
-def ungrounded(goal: Goal, request: str, text: str) -> list[str]:
+def ungrounded(goal: Goal, request: str, text: str, names: Sequence[str] = ()) -> list[str]:
     """What in ``goal``, read from ``text``, the request does not bear out:
 
     * a target of things with no place (the place the plain form named is not the scene's: "put
@@ -128,7 +141,9 @@ def ungrounded(goal: Goal, request: str, text: str) -> list[str]:
     * a criterion or dish with words the request does not have ("the toast in the toaster");
     * one thing that the text calls "the" and the scene does not have: the rules found no such
       object, so the model made a thing of the statement ("Give me the jam" for "I've got jam all
-      over my fingers");
+      over my fingers"); where ``names`` (the scene's objects) are given, not where two or more
+      of them have every content word of it ("the marker" where the scene has a permanent and a
+      washable one: the rules found two, not none);
     * the same criterion twice ("Give me a game. Put it on the table.").
     """
     said = set(words(request))
@@ -138,7 +153,13 @@ def ungrounded(goal: Goal, request: str, text: str) -> list[str]:
     found += [f"not said: {t.criterion}" for t in goal.targets
               if t.takes != "need" and set(words(t.criterion)) - said]  # fmt: skip
     definite = [t for t in goal.targets if t.takes == "criterion" and t.count == 1]
-    found += [f"no {t.criterion} here" for t in definite if f"the {t.criterion.lower()}" in lowered]
+    kinds = [set(words(n)) for n in names]
+    found += [
+        f"no {t.criterion} here"
+        for t in definite
+        if f"the {t.criterion.lower()}" in lowered
+        and sum(bool(words(t.criterion)) and set(words(t.criterion)) <= kind for kind in kinds) < 2
+    ]
     criteria = [t.criterion for t in goal.targets if t.takes == "criterion" and t.criterion]
     found += [
         f"twice: {c}" for c in sorted(set(criteria)) if criteria.count(c) > 1 and not c.startswith("by ")
@@ -149,11 +170,22 @@ def ungrounded(goal: Goal, request: str, text: str) -> list[str]:
 
 
 def _moved_elsewhere(own: Goal, restated: Goal) -> bool:
-    """The plain form sends an object the words name to another of the scene's places ("give me
-    the honey jar" said as "put the honey jar in the cutting board"): the model mixed up which
-    place goes with which."""
+    """The plain form sends an object the words name, or the kind of thing they ask for, to another
+    of the scene's places or people ("give me the honey jar" said as "put the honey jar in the
+    cutting board"; "hand my son the marker" said as "give me the marker"): the model mixed up
+    which place goes with which, or who the thing is for. A kind is the same where the plain form's
+    criterion has the same content words as the words' ("him the marker" for "marker"; not "non-toxic
+    plants" for "toxic plants", a sort's other place)."""
     placed = {n: t.to for t in own.targets if t.to for n in t.named}
-    return any(t.to and placed.get(n, t.to) != t.to for t in restated.targets for n in t.named)
+    if any(t.to and placed.get(n, t.to) != t.to for t in restated.targets for n in t.named):
+        return True
+    kinds = [(set(words(t.criterion)), t.to) for t in own.targets if t.to and t.criterion]
+    return any(
+        t.to and kind and kind == set(words(t.criterion)) and to != t.to
+        for t in restated.targets
+        if t.criterion
+        for kind, to in kinds
+    )
 
 
 def _needs(goal: Goal) -> bool:
@@ -203,7 +235,8 @@ def read_twice(
     # drops exceptions ("Excluding the highlighter, put ..." said as "Put the writing tools ...").
     if restated is not None:
         restated = restated.leaving_out(tuple(dict.fromkeys(n for t in own.targets for n in t.excluded)))
-    chosen = replace(choose(own, restated, policy, request, said.text), plain=said.text, usage=said.usage)
+    chosen = choose(own, restated, policy, request, said.text, scene.names)
+    chosen = replace(chosen, plain=said.text, usage=said.usage)
     if samples < 1:
         return chosen
     drawn = restater.variants(request, samples, temperature)

@@ -44,9 +44,10 @@ CALIBRATION_DOC = (
     "conceptbot.pipeline.goal_planner.conformal. qhat: decision level, on the combination's held-out "
     "P(yes) over the judgement set (benchmarks/fit_judgements.py --conformal --write). plan_qhat: plan "
     "level, a dev task's worst decision (benchmarks/fit_conformal_plans.py --write), for the which-one "
-    "rule plan_which_one names; plan_qhat_RULE: for another rule; plan_qhat_one (plan_qhat_one_RULE): "
-    "the which-one decisions' own threshold (Mondrian conformal; the plan-level key's is used where "
-    "it is missing). Refit for another model."
+    "rule plan_which_one names; plan_qhat_RULE: for another rule. plan_qhat is one threshold for "
+    "every decision (the tasks' worst), which the reading questions take; plan_qhat_yes_no and "
+    "plan_qhat_one (plan_qhat_yes_no_RULE, plan_qhat_one_RULE) are the pair per kind of decision "
+    "the calibrated decisions take (plan_qhat where they are missing). Refit for another model."
 )
 #: The which-one rule of a plan-level calibration that names none (written before 2026-12-03), and
 #: of the sets where no rule is given.
@@ -117,6 +118,7 @@ class Calibration:
     which_one: bool = True  # fitted on which-one decisions too (plan level), so they get sets
     rule: str = OLD_RULE
     qhat_one: dict[float, float] | None = None  # which-one decisions' own (None: qhat's)
+    qhat_yes_no: dict[float, float] | None = None  # yes/no decisions' own (None: qhat's)
 
     def threshold_one(self, coverage: float) -> float:
         """The which-one decisions' threshold for ``coverage``: their own where it was fitted, else
@@ -125,9 +127,21 @@ class Calibration:
         Raises:
             ValueError: A coverage without a fitted threshold.
         """
-        if coverage == ASK_ALL or not self.qhat_one or coverage not in self.qhat_one:
+        return self._own(self.qhat_one, coverage)
+
+    def threshold_yes_no(self, coverage: float) -> float:
+        """The yes/no decisions' threshold for ``coverage``: their own where it was fitted, else
+        :meth:`threshold`'s.
+
+        Raises:
+            ValueError: A coverage without a fitted threshold.
+        """
+        return self._own(self.qhat_yes_no, coverage)
+
+    def _own(self, found: dict[float, float] | None, coverage: float) -> float:
+        if coverage == ASK_ALL or not found or coverage not in found:
             return self.threshold(coverage)
-        return self.qhat_one[coverage]
+        return found[coverage]
 
     def threshold(self, coverage: float) -> float:
         """``qhat`` for ``coverage`` (one of :data:`COVERAGES`; :data:`ASK_ALL` keeps every answer).
@@ -158,27 +172,31 @@ def plan_key(data: dict[str, Any], rule: str | None) -> tuple[str, str]:
     return ("plan_qhat" if rule == named else f"plan_qhat_{rule}"), rule
 
 
-def one_key(key: str) -> str:
-    """Where a calibration document keeps the which-one decisions' own thresholds beside the
+#: The kinds of calibrated decision with thresholds of their own beside the plan-level one.
+KINDS = ("yes_no", "one")
+
+
+def kind_key(key: str, kind: str) -> str:
+    """Where a calibration document keeps one kind's thresholds (:data:`KINDS`) beside the
     plan-level ``key`` (``plan_qhat`` -> ``plan_qhat_one``, ``plan_qhat_fits`` ->
     ``plan_qhat_one_fits``)."""
-    return key.replace("plan_qhat", "plan_qhat_one", 1)
+    return key.replace("plan_qhat", f"plan_qhat_{kind}", 1)
 
 
-def _ones(data: dict[str, Any], key: str, combination: str) -> dict[float, float] | None:
-    """The which-one thresholds kept beside ``key`` for ``combination``, or None where there are
+def _kind(data: dict[str, Any], key: str, combination: str, kind: str) -> dict[float, float] | None:
+    """One kind's thresholds kept beside ``key`` for ``combination``, or None where there are
     none (a file fitted before they were).
 
     Raises:
         ValueError: A threshold that is not a number in [0, 1].
     """
-    found = data.get(one_key(key), {})
+    found = data.get(kind_key(key, kind), {})
     if not isinstance(found, dict) or combination not in found:
         return None
-    ones = {float(k): float(v) for k, v in found[combination].items()}
-    if not all(0.0 <= q <= 1.0 for q in ones.values()):  # NaN fails too
-        raise ValueError(f"{one_key(key)}: a threshold is not a number in [0, 1]")
-    return ones
+    own = {float(k): float(v) for k, v in found[combination].items()}
+    if not all(0.0 <= q <= 1.0 for q in own.values()):  # NaN fails too
+        raise ValueError(f"{kind_key(key, kind)}: a threshold is not a number in [0, 1]")
+    return own
 
 
 @cache
@@ -206,8 +224,10 @@ def shipped(combination: str = "graph", level: str = "plan", rule: str | None = 
         )
     fitted = data[key][combination]
     qhat = {float(k): float(v) for k, v in fitted.items()}
-    ones = _ones(data, key, combination) if level == "plan" else None
-    return Calibration(qhat, str(data[where]), level == "plan", rule, ones)
+    if level != "plan":
+        return Calibration(qhat, str(data[where]), False, rule)
+    ones, yes_no = (_kind(data, key, combination, kind) for kind in ("one", "yes_no"))
+    return Calibration(qhat, str(data[where]), True, rule, ones, yes_no)
 
 
 def user_file(directory: Path, backend: str, model: str) -> Path:
@@ -242,11 +262,11 @@ def calibration_for(
         fitted = data[key][combination]
         qhat = {float(c): float(fitted[str(c)]) for c in COVERAGES}
         where = str(data["fitted_on"])
-        ones = _ones(data, key, combination)
+        ones, yes_no = (_kind(data, key, combination, kind) for kind in ("one", "yes_no"))
     except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError, AttributeError) as exc:
         raise ConfigError(
             f"{path} is not a conformal calibration for this rule ({type(exc).__name__}: {exc})", hint=fix
         ) from None
     if not all(0.0 <= q <= 1.0 for q in qhat.values()):  # NaN fails too
         raise ConfigError(f"{path}: a threshold is not a number in [0, 1]", hint=fix)
-    return Calibration(qhat, where, True, rule, ones)
+    return Calibration(qhat, where, True, rule, ones, yes_no)

@@ -297,6 +297,8 @@ class GoalPlanner:
         observer.progress("Goal: where the request sends things")
         # A pile has no destination of its own (the objects are the destinations): no targets.
         read = self.targets.read(request, scene)
+        # The reading questions take the one plan-level threshold (they are not in the per-kind
+        # fit: their odds come from the goal set, not from dev plans).
         qhat = self.calibration.threshold(self.coverage)
         # Where the request reads two ways, which was meant comes first: it changes the targets.
         read, about_reading, meant = self._reading(read, qhat, ask)
@@ -317,7 +319,7 @@ class GoalPlanner:
             targets,
             ranked,
             decisions,
-            qhat,
+            self.calibration.threshold_yes_no(self.coverage),
             ask,
             self.calibration.which_one,
             self.calibration.rule,
