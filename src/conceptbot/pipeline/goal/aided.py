@@ -93,12 +93,12 @@ def choose(
     4. Where the words are not ungrounded (but for signs the plain form shares) and the plain
        form's targets are some of theirs (the model left one out), or it sends an object the words
        name, or the kind of thing they ask for, to another place or person: the words.
-    ``names``: the scene's objects, for :func:`ungrounded`.
-
     5. Otherwise the reading with fewer signs of being made up (:func:`ungrounded`, and a criterion
        the plain form dropped where the words keep one for the same place: "put everything in the
        basket" for "all the clothing"), the plain form on a tie: the model reads talk better than
        the rules where both stay within the request.
+
+    ``names``: the scene's objects, for :func:`ungrounded`.
     """
     if restated is None:
         return Reading(own, own)
