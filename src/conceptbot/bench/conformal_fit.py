@@ -1,24 +1,27 @@
 """Plan-level conformal calibration from labelled tasks (issue 35): what
 ``benchmarks/fit_conformal_plans.py`` and ``conceptbot calibrate --conformal`` fit.
 
-A plan is right only if every calibrated decision in it is, so a task's nonconformity is its worst
-decision's ``1 - p(right answer)`` (KnowNo's multi-step form): for a yes/no decision the gold's
-answer; for a which-one decision, by the ``fits`` rule the gold's answer to whether the likeliest
-candidate fits (its calibrated P(yes) or P(no)), by the ``softmax`` rule the ``p_one`` of the
-likeliest object the gold accepts (one where the gold accepts none of the target's objects is left
-out either way: the request was read wrong, and no set of that target's objects can cover it).
-Both rules' scores come from the same plans, so one pass over the tasks fits both; the tasks without
-a calibrated decision take no part.
+A plan is right only if every calibrated decision in it is (KnowNo's multi-step form), so a task is
+covered only where every decision's prediction set holds its right answer. A decision's
+nonconformity is ``1 - p(right answer)``: for a yes/no decision the gold's answer; for a which-one
+decision, by the ``fits`` rule the gold's answer to whether the likeliest candidate fits (its
+calibrated P(yes) or P(no)), by the ``softmax`` rule the ``p_one`` of the likeliest object the gold
+accepts (one where the gold accepts none of the target's objects is left out either way: the
+request was read wrong, and no set of that target's objects can cover it). Both rules' scores come
+from the same plans, so one pass over the tasks fits both; the tasks without a calibrated decision
+take no part.
 
-Two thresholds per coverage, one per kind of decision: ``qhat`` for yes/no decisions and
-``qhat_one`` for which-one decisions. They are the pair, on a grid, with which the fewest dev tasks
-get a question while the chosen share of tasks (split conformal's ``ceil((n + 1) * coverage)``)
-still has every decision in its prediction set; on a tie, the least yes/no threshold, then the
-fewest which-one sets that keep no candidate, and the which-one threshold in the middle of those
-tied. A task asks where a yes/no decision keeps both answers, or
-a which-one decision keeps two or more candidates or none (then the likeliest are offered).
+Three thresholds per coverage. ``single``: the split-conformal quantile of the tasks' worst
+decisions, one threshold for every decision (the reading questions take it). And a pair, one per
+kind of decision: ``qhat`` for yes/no decisions and ``qhat_one`` for which-one decisions, the grid
+pair with which the fewest dev tasks get a question while the chosen share of tasks (split
+conformal's ``ceil((n + 1) * coverage)``) still has every decision in its prediction set; on a tie,
+the least yes/no threshold, then the fewest which-one sets that keep no candidate, and the
+which-one threshold in the middle of those tied. A task asks where a yes/no decision keeps both
+answers, or a which-one decision keeps two or more candidates or none (then the likeliest are
+offered).
 
-One threshold for both (the tasks' worst decision, as before 2026-12-05) let the yes/no decisions
+The single threshold for both kinds (as before 2026-12-05) let the yes/no decisions
 of sorts set the which-one threshold too: at 0.9 a candidate 13% likely was kept, so "which one"
 was asked wherever a second object was at all plausible, though the likeliest was acceptable in 44
 of the 48 dev which-one decisions. The which-one decisions' own 90% quantile (Mondrian conformal,
