@@ -14,11 +14,14 @@ Four ways of asking, each counted right where it puts the safer object ahead:
 * ``pick``: "Which is safer to give to the child: the A or the B?", the two names scored as the
   answer, both orders averaged.
 
-    .venv/bin/python benchmarks/bench_safer_pairs.py
+    .venv/bin/python benchmarks/bench_safer_pairs.py [--set benchmarks/data/safer_pairs_heldout.jsonl]
+
+``safer_pairs_heldout.jsonl`` (10 pairs) was written before any of this was run, and is held out.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
 from pathlib import Path
@@ -29,6 +32,7 @@ from conceptbot.pipeline import prompts
 from conceptbot.systems import build_system
 
 SET = Path("benchmarks/data/safer_pairs.jsonl")
+HELD_OUT = Path("benchmarks/data/safer_pairs_heldout.jsonl")
 PICK_SYSTEM = (
     "You answer questions about everyday objects for a household robot. Answer with one of the options only."
 )
@@ -36,7 +40,12 @@ PICK_SYSTEM = (
 
 def main() -> None:
     """Print, per way of asking, each pair's probability that the safer object is safer, and the count."""
-    rows = [json.loads(line) for line in SET.read_text(encoding="utf-8").splitlines() if line.strip()]
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument(
+        "--set", type=Path, default=SET, help=f"the pairs (default {SET}; held out: {HELD_OUT})"
+    )
+    args = parser.parse_args()
+    rows = [json.loads(line) for line in args.set.read_text(encoding="utf-8").splitlines() if line.strip()]
     decider = build_system(load_settings(), "conceptbot").goal_planner.decider  # type: ignore[attr-defined]
     llm = decider.llm
 
