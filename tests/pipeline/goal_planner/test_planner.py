@@ -217,6 +217,43 @@ def test_an_unsafe_move_is_dropped_and_the_target_takes_its_next_best_object() -
     assert decision.confidence == pytest.approx(result.confidence, abs=1e-4)  # where it is lost
 
 
+def test_the_planner_takes_the_which_one_threshold_of_its_calibration() -> None:
+    from conceptbot.pipeline.goal_planner.conformal import Calibration
+
+    scores = [
+        [-1.0, -1.0],  # content-free object for "give ... to the child"
+        [-0.1, -3.0],  # scissors: best
+        [-0.2, -2.5],  # safety scissors: next
+        [-3.0, -0.1],  # glue
+        [-3.0, -0.1],  # chips
+        NAMES,
+        NEUTRAL,
+        PRIOR,  # risk: giving "the object" to the child
+        SAFE,  # scissors to the child
+        PRIOR,  # asked plainly
+        SAFE,
+    ]
+
+    def plan(calibration: Calibration) -> object:
+        llm = FakeLLM(scores=list(scores))
+        planner = GoalPlanner(
+            TargetFinder(llm, is_person), Decider(llm, FactFinder(None)), calibration=calibration
+        )
+        return planner.plan("Give my son something to cut paper", SCENE)
+
+    first = plan(Calibration({0.9: 1.0}, "test"))  # keep every candidate: read the shares
+    shares = sorted((j.p_one for j in first.trace.decisions[0].objects), reverse=True)
+    between = 1.0 - (shares[0] + shares[1]) / 2  # keeps the likeliest only
+    both = 1.0 - shares[1] / 2  # keeps the two likeliest
+    single = plan(Calibration({0.9: both}, "test"))
+    assert single.trace.decisions[0].candidates == ("scissors", "safety scissors")
+    assert [q.kind for q in single.questions] == ["one"]
+    # The which-one decisions' own threshold: acted on, nothing to ask; the yes/no one is unused.
+    own = plan(Calibration({0.9: both}, "test", qhat_one={0.9: between}, qhat_yes_no={0.9: 0.6}))
+    assert own.trace.decisions[0].candidates == ("scissors",) and own.questions == ()
+    assert format_actions(own.actions) == ["pick_and_place(scissors, child)", "done()"]
+
+
 class RatingOPE:
     """OPE that answers the Risk Index from a table (object -> (danger, partners)) and counts calls."""
 
