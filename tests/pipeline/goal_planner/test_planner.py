@@ -185,15 +185,21 @@ def _planner(scores: list[list[float]]) -> GoalPlanner:
     return GoalPlanner(TargetFinder(llm, is_person), Decider(llm, FactFinder(None)))
 
 
+#: The decisions of "Give my son something to cut paper" in SCENE, before any risk question.
+CUT_PAPER = [
+    [-1.0, -1.0],  # content-free object for "give ... to the child"
+    [-0.1, -3.0],  # scissors: best
+    [-0.2, -2.5],  # safety scissors: next
+    [-3.0, -0.1],  # glue
+    [-3.0, -0.1],  # chips
+    NAMES,  # "which object should the robot give to the child?": the request, then neutral
+    NEUTRAL,
+]
+
+
 def test_an_unsafe_move_is_dropped_and_the_target_takes_its_next_best_object() -> None:
     scores = [
-        [-1.0, -1.0],  # content-free object for "give ... to the child"
-        [-0.1, -3.0],  # scissors: best
-        [-0.2, -2.5],  # safety scissors: next
-        [-3.0, -0.1],  # glue
-        [-3.0, -0.1],  # chips
-        NAMES,  # "which object should the robot give to the child?": the request, then neutral
-        NEUTRAL,
+        *CUT_PAPER,
         PRIOR,  # risk: giving "the object" to the child
         UNSAFE,  # scissors to the child
         PRIOR,
@@ -221,13 +227,7 @@ def test_the_planner_takes_the_which_one_threshold_of_its_calibration() -> None:
     from conceptbot.pipeline.goal_planner.conformal import Calibration
 
     scores = [
-        [-1.0, -1.0],  # content-free object for "give ... to the child"
-        [-0.1, -3.0],  # scissors: best
-        [-0.2, -2.5],  # safety scissors: next
-        [-3.0, -0.1],  # glue
-        [-3.0, -0.1],  # chips
-        NAMES,
-        NEUTRAL,
+        *CUT_PAPER,
         PRIOR,  # risk: giving "the object" to the child
         SAFE,  # scissors to the child
         PRIOR,  # asked plainly

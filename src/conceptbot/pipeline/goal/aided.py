@@ -153,7 +153,7 @@ def ungrounded(goal: Goal, request: str, text: str, names: Sequence[str] = ()) -
     found += [f"not said: {t.criterion}" for t in goal.targets
               if t.takes != "need" and set(words(t.criterion)) - said]  # fmt: skip
     definite = [t for t in goal.targets if t.takes == "criterion" and t.count == 1]
-    kinds = [set(words(n)) for n in names]
+    kinds = [set(words(n)) for n in names] if definite else []  # the scene read only when needed
     found += [
         f"no {t.criterion} here"
         for t in definite
