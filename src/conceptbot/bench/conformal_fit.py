@@ -66,8 +66,9 @@ class Labelled:
         p_yes: A yes/no decision's P(yes) (None for which-one).
         yes: A yes/no decision's gold answer (None for which-one).
         one: A which-one decision (its own threshold: ``qhat_one``).
-        tops: A which-one decision's two largest probabilities by its rule (``p_one`` by
-            ``softmax``; by ``fits`` the likeliest's P(yes) and P(no)): where its set keeps one.
+        tops: What decides whether a which-one decision's set keeps one candidate: by
+            ``softmax`` its two largest ``p_one``; by ``fits`` the likeliest's P(yes) and P(no)
+            (it acts where the first is at least the floor and the second is not).
     """
 
     p_right: float
@@ -111,8 +112,9 @@ def labelled(task: Task, plan: Plan, rule: str = OLD_RULE) -> list[Labelled]:
         top = max(scored, key=lambda j: j.p_one or 0.0)
         fits = top.object in accepted
         right = top.p_yes if fits else 1.0 - top.p_yes
-        sure = (max(top.p_yes, 1.0 - top.p_yes), min(top.p_yes, 1.0 - top.p_yes))
-        found.append(Labelled(right, covered, top.p_yes, fits, True, sure))
+        # The planner acts on the likeliest only where "yes" alone is in its set (asking.one_of):
+        # P(yes) at least the floor and P(no) under it, the two "tops" in that order.
+        found.append(Labelled(right, covered, top.p_yes, fits, True, (top.p_yes, 1.0 - top.p_yes)))
     return found
 
 
