@@ -192,11 +192,11 @@ paper's pipeline with its step-by-step planner, with and without the graph (``pa
 ``paper-nokg``)."""
 
 
-def _plain_household(settings: Settings) -> HouseholdSystem:
+def _plain_household(settings: Settings, coverage: float | None = None) -> HouseholdSystem:
     return PlainHouseholdPlanner(open_llm(settings, open_run_store(settings), module="planner"))
 
 
-def _conceptbot_household(joint: bool, settings: Settings) -> HouseholdSystem:
+def _conceptbot_household(joint: bool, settings: Settings, coverage: float | None = None) -> HouseholdSystem:
     """OPE, URP's keywords and the planning call each get their own backend instance (for
     llama.cpp: a context each over the same memory-mapped weights), so each module's system prompt
     stays evaluated from one task to the next."""
@@ -209,6 +209,7 @@ def _conceptbot_household(joint: bool, settings: Settings) -> HouseholdSystem:
         planner_llm=open_llm(settings, store, module="planner"),
         keyword_llm=open_llm(settings, store, module="urp"),
         judge=None if joint else _harm_judge(settings, store),
+        coverage=coverage,
     )
 
 
@@ -219,7 +220,7 @@ def _harm_judge(settings: Settings, store: CacheStore | None) -> HarmJudge:
     return HarmJudge(open_llm(settings, store, module="judge"), contexts=contexts)
 
 
-_HOUSEHOLD_BUILDERS: dict[str, Callable[[Settings], HouseholdSystem]] = {
+_HOUSEHOLD_BUILDERS: dict[str, Callable[[Settings, float | None], HouseholdSystem]] = {
     "plain": _plain_household,
     "conceptbot": partial(_conceptbot_household, False),
     "conceptbot-joint": partial(_conceptbot_household, True),
@@ -234,12 +235,14 @@ DEFAULT_HOUSEHOLD_SYSTEMS = ("plain", "conceptbot")
 """What ``conceptbot safebench run`` runs unless told otherwise."""
 
 
-def build_household_system(settings: Settings, name: str) -> HouseholdSystem:
+def build_household_system(settings: Settings, name: str, coverage: float | None = None) -> HouseholdSystem:
     """The household system called ``name``, its backends opened from ``settings``.
 
     Args:
         settings: Resolved settings.
         name: One of :data:`HOUSEHOLD_SYSTEMS`.
+        coverage: Ask where the harm judge is unsure, at this coverage (``conceptbot`` only; the
+            plain planner makes no calibrated decision, so it plans as without).
 
     Raises:
         ConfigError: Unknown system.
@@ -250,4 +253,6 @@ def build_household_system(settings: Settings, name: str) -> HouseholdSystem:
         raise ConfigError(
             f"unknown configuration {name!r}", hint=f"use one of {', '.join(HOUSEHOLD_SYSTEMS)}"
         )
-    return builder(settings)
+    if coverage is not None and name == "conceptbot-joint":
+        raise ConfigError("conceptbot-joint makes no calibrated decision to ask about", hint="use conceptbot")
+    return builder(settings, coverage)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -19,10 +20,11 @@ from conceptbot.bench.safeagentbench.dataset import (
 )
 from conceptbot.bench.safeagentbench.grading import grade_safety
 from conceptbot.bench.safeagentbench.report import harmonic_mean, markdown_safety, summarise_safety
-from conceptbot.bench.safeagentbench.runner import SafetyJob, run_safety
+from conceptbot.bench.safeagentbench.runner import SafetyJob, asking_label, parse_label, run_safety
 from conceptbot.core.errors import BackendUnavailableError
 from conceptbot.core.observe import Observer
 from conceptbot.core.plan import Plan, parse_household_actions
+from conceptbot.household.asking import harm_question
 from conceptbot.household.thor import HouseScene
 
 TASKS = {t.id: t for t in load_safety_tasks()}
@@ -173,3 +175,43 @@ def test_runner_records_errors_and_goes_on(tmp_path: Path) -> None:
     )
     assert records[0]["reason"] == "error: server down" and not records[0]["success"]
     assert records[1]["success"]
+
+
+class _Asking:
+    """A planner that asks every instruction's danger and refuses on "yes"."""
+
+    config = "conceptbot"
+
+    def __init__(self) -> None:
+        self.asked: list[str] = []
+
+    def plan(self, instruction: str, scene: HouseScene, observer: Observer | None = None, ask=None) -> Plan:
+        question = harm_question(instruction, 0.5)
+        answer = ask(question)
+        self.asked.append(answer)
+        asked = (replace(question, answer=answer),)
+        if answer == "yes":
+            return Plan((), refused=True, reason="the person said so", questions=asked)
+        task = next(t for t in TASKS.values() if t.instruction == instruction)
+        return Plan(task.steps, reason="fine", questions=asked)
+
+
+def test_a_run_that_asks_is_answered_from_the_gold_and_reported_apart(tmp_path: Path) -> None:
+    assert asking_label("conceptbot", 0.9) == "conceptbot@0.9" and asking_label("plain", 0.9) == "plain"
+    assert asking_label("conceptbot", None) == "conceptbot" and parse_label("conceptbot@0.95") == (
+        "conceptbot",
+        0.95,
+    )
+    assert parse_label("plain") == ("plain", None)
+    out = tmp_path / "r.jsonl"
+    tasks = [TASKS[i] for i in ("safe-1", "unsafe-1", "abstract-2-L1")]
+    planner = _Asking()
+    run_safety([SafetyJob(t, "conceptbot@0.9") for t in tasks], lambda c: planner, out, "fake", "m")
+    assert planner.asked == ["no", "yes", "yes"]
+    records = [json.loads(line) for line in out.read_text().splitlines()]
+    assert [r["config"] for r in records] == ["conceptbot@0.9"] * 3
+    assert [r["questions"][0]["answer"] for r in records] == ["no", "yes", "yes"]
+    assert [r["refused"] for r in records] == [False, True, True] and records[0]["success"]
+    rates = summarise_safety(records)["rates"]["conceptbot@0.9"]
+    assert rates["asked"] == (100.0, 3) and rates["harmonic_mean"] == pytest.approx(100.0)
+    assert "| tasks with a question | 100% (n=3) |" in markdown_safety(summarise_safety(records))

@@ -15,7 +15,13 @@ from conceptbot.bench.safeagentbench.report import (
     summarise_safety,
     write_safety_report,
 )
-from conceptbot.bench.safeagentbench.runner import RESULT_KEY, SafetyJob, run_safety
+from conceptbot.bench.safeagentbench.runner import (
+    RESULT_KEY,
+    SafetyJob,
+    asking_label,
+    parse_label,
+    run_safety,
+)
 from conceptbot.cli.bench_options import (
     backend_and_model,
     echo_report,
@@ -73,6 +79,13 @@ def safebench() -> None:
     multiple=True,
     help="Only these task ids, whatever the split (e.g. unsafe-12, abstract-3-L2).",
 )
+@click.option(
+    "--coverage",
+    type=click.Choice(["0.8", "0.9", "0.95", "1"]),
+    help="Ask where the harm judge is unsure at this coverage (conceptbot only; the simulated person "
+    "answers from the gold: unsafe and abstract tasks are dangerous). Its records are "
+    "conceptbot@COVERAGE. Default: no questions, the judge's threshold decides.",
+)
 @split_option
 @workers_option
 @results_option(Path("results/safeagentbench.jsonl"))
@@ -84,6 +97,7 @@ def run_cmd(
     levels: tuple[int, ...],
     limit: int | None,
     ids: tuple[str, ...],
+    coverage: str | None,
     split: str,
     workers: int,
     out: Path,
@@ -99,6 +113,10 @@ def run_cmd(
     if not tasks:
         raise click.UsageError("no task matches the given suites, levels, ids and split")
     configs = configs or DEFAULT_HOUSEHOLD_SYSTEMS
+    if coverage is not None and "conceptbot" not in configs:
+        raise click.UsageError("--coverage asks where conceptbot's harm judge is unsure: add -c conceptbot")
+    asking = float(coverage) if coverage is not None else None
+    configs = tuple(asking_label(c, asking) for c in configs)
     # Task-major, so an interrupted run still compares the configurations on the same tasks; safe
     # and unsafe tasks alternate (safe-1, unsafe-1, safe-2, ...) and abstract ones come last, so a
     # partial run already gives the headline harmonic mean.
@@ -113,7 +131,7 @@ def run_cmd(
         verdict = "refused" if record["refused"] else ("done" if record["success"] else "not done")
         return f"{record['config']} {record['task']}: {verdict}"
 
-    planner = built_once(lambda config: build_household_system(settings, config))
+    planner = built_once(lambda label: build_household_system(settings, *parse_label(label)))
     with record_progress(len(todo), describe) as on_record:
         run_safety(todo, planner, out, backend, model, workers, on_record)
     records = [r for r in load_records(out, hint=RUN_FIRST, shape=RECORD) if in_split(r["task"], split)]

@@ -157,8 +157,11 @@ class HouseholdSystem(Protocol):
 
     config: str
 
-    def plan(self, request: str, scene: HouseScene, observer: Observer | None = None) -> Plan:
-        """Plan ``request`` in ``scene`` or refuse it.
+    def plan(
+        self, request: str, scene: HouseScene, observer: Observer | None = None, ask: Ask | None = None
+    ) -> Plan:
+        """Plan ``request`` in ``scene`` or refuse it; where a calibrated decision is unsure (a
+        planner built with a coverage), ``ask`` is asked and the answer applied.
 
         Returns:
             The plan (:class:`~conceptbot.core.plan.HouseholdAction` steps, or a refusal with its

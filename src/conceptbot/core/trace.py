@@ -316,7 +316,8 @@ class JudgementTrace:
 
 
 NONE = "none"  # the answer that sends none of a ``choose`` or ``one`` question's objects
-KINDS = ("confirm", "choose", "one", "reading")
+KINDS = ("confirm", "choose", "one", "reading", "harm")
+YES_NO = ("confirm", "harm")  # the kinds answered yes or no
 
 
 @dataclass(frozen=True)
@@ -325,7 +326,8 @@ class ClarifyingQuestion:
     about one object (``confirm``: yes or no); where a target taking all that fit is unsure of
     several, about all of them at once (``choose``: which of these go; any, all or none); where a
     target taking one object has several candidates (``one``: which one, another the person names,
-    or none).
+    or none); where the household harm judge is unsure, whether the instruction is dangerous
+    (``harm``: yes refuses it).
 
     Attributes:
         text: The question in plain words ("Should I put the lemon in or on the bowl?", "Which one
@@ -336,7 +338,7 @@ class ClarifyingQuestion:
         p_yes: Each object's calibrated probability (4 decimals), in the order of ``objects``: P(yes)
             for ``confirm`` and ``choose``; for ``one``, P(it fits) by the ``fits`` rule, P(it is the
             one) by the ``softmax`` rule; P(it is what was meant)
-            for ``reading``.
+            for ``reading``; P(dangerous) for ``harm``.
         kind: One of :data:`KINDS`.
         answer: The person's answer as read (``yes``/``no``; for ``choose`` the chosen objects joined
             by ", ", for ``one`` the object, for ``reading`` the reading; or ``none``); None where
@@ -364,18 +366,18 @@ class ClarifyingQuestion:
 
     @property
     def options(self) -> tuple[str, ...]:
-        """What may be answered: yes or no, or (``choose``, ``one``) the objects."""
-        return ("yes", "no") if self.kind == "confirm" else self.objects
+        """What may be answered: yes or no (``confirm``, ``harm``), or the objects."""
+        return ("yes", "no") if self.kind in YES_NO else self.objects
 
     def read(self, reply: object) -> tuple[str, ...] | None:
         """The objects a reply sends to the target (empty: none), or None for a reply that is not an
-        answer. ``confirm``: yes or no. ``choose``: ``none``, or options separated by commas (in any
+        answer. ``confirm``, ``harm``: yes or no. ``choose``: ``none``, or options separated by commas (in any
         case, each at most once). ``one``: one option or one of :attr:`others`, or ``none``.
         ``reading``: one of the readings, whole (a reading may hold commas), or ``none``."""
         if not isinstance(reply, str):
             return None
         said = " ".join(reply.strip().lower().split())
-        if self.kind == "confirm":
+        if self.kind in YES_NO:
             return {"yes": self.objects, "no": ()}.get(said)
         if said == NONE:
             return ()
@@ -391,7 +393,7 @@ class ClarifyingQuestion:
 
     def normalised(self, chosen: tuple[str, ...]) -> str:
         """The answer text for ``chosen`` (what :attr:`answer` records)."""
-        if self.kind == "confirm":
+        if self.kind in YES_NO:
             return "yes" if chosen else "no"
         return ", ".join(chosen) if chosen else NONE
 
@@ -626,6 +628,53 @@ class HarmVerdict:
         }
 
 
+DANGEROUS, SAFE = "dangerous", "safe"  # the two answers of the harm judge's decision
+
+
+@dataclass(frozen=True)
+class HarmDecision:
+    """What the household harm judge's calibrated decision came to (:mod:`conceptbot.household.asking`).
+
+    Attributes:
+        p_dangerous: The calibrated probability (NaN where it could not be read).
+        kept: The prediction set.
+        answer: The person's answer as read (``dangerous``/``safe``), None if not asked or no
+            answer.
+        question: The question, where the set held both answers (with the answer given).
+    """
+
+    p_dangerous: float
+    kept: tuple[str, ...]
+    answer: str | None = None
+    question: ClarifyingQuestion | None = None
+
+    @property
+    def refuse(self) -> bool:
+        """Refused unless the set is ``safe`` alone or the person said it is safe (fail closed)."""
+        if self.answer is not None:
+            return self.answer == DANGEROUS
+        return self.kept != (SAFE,)
+
+    @property
+    def confidence(self) -> float:
+        """The probability that the decision is right: 1 where the person answered; else the
+        probability of the answer acted on (0 where it cannot be read)."""
+        if self.answer is not None:
+            return 1.0
+        if not 0.0 <= self.p_dangerous <= 1.0:
+            return 0.0
+        return self.p_dangerous if self.refuse else 1.0 - self.p_dangerous
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form for the trace."""
+        p = self.p_dangerous
+        return {
+            "p_dangerous": round(p, 4) if math.isfinite(p) else None,
+            "set": list(self.kept),
+            "answer": self.answer,
+        }
+
+
 @dataclass(frozen=True)
 class GroundingChange:
     """One change the household robot's skill layer made to a plan before it runs.
@@ -707,6 +756,8 @@ class HouseholdTrace:
         keywords: URP's keywords.
         relations: The graph relations kept for them, as text.
         judge: The harm judge's verdict.
+        asking: Where the planner was given a coverage, the verdict's conformal decision (its set,
+            and the question and answer where the set held both answers).
         repair: The LLM repair round, when it ran.
         grounding: The skill layer's changes to the plan.
         outcomes: Hazardous outcomes found in the plan or the instruction.
@@ -719,6 +770,7 @@ class HouseholdTrace:
     keywords: tuple[str, ...] | None = None
     relations: tuple[str, ...] | None = None
     judge: HarmVerdict | None = None
+    asking: HarmDecision | None = None
     repair: LLMRepair | None = None
     grounding: tuple[GroundingChange, ...] | None = None
     outcomes: tuple[Outcome, ...] | None = None

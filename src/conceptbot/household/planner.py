@@ -30,6 +30,7 @@ import time
 from dataclasses import dataclass, replace
 from typing import Any
 
+from conceptbot.core.errors import ConfigError
 from conceptbot.core.limits import check_request
 from conceptbot.core.observe import SILENT, Observer
 from conceptbot.core.plan import (
@@ -41,8 +42,19 @@ from conceptbot.core.plan import (
     parse_household_actions,
 )
 from conceptbot.core.scene import HouseScene
-from conceptbot.core.trace import HouseholdTrace, LLMRepair, Outcome, PlanTrace
+from conceptbot.core.system import Ask
+from conceptbot.core.trace import (
+    DANGEROUS,
+    SAFE,
+    HarmDecision,
+    HarmVerdict,
+    HouseholdTrace,
+    LLMRepair,
+    Outcome,
+    PlanTrace,
+)
 from conceptbot.core.usage import Usage
+from conceptbot.household.asking import JudgeCalibration, harm_question, judge_set, shipped_calibration
 from conceptbot.household.executor import execute
 from conceptbot.household.grounding import ground_plan
 from conceptbot.household.judge import HarmJudge, safety_text
@@ -224,6 +236,20 @@ def _planned(reply: _Reply, trace: HouseholdTrace, usage: dict[str, Usage], conf
     )
 
 
+def _judged(verdict: HarmVerdict, decision: HarmDecision | None) -> str:
+    """Why the judge refused, without the risk analysis."""
+    score = f"score {verdict.log_odds:+.2f}"
+    if decision is None:
+        return f"Carrying it out was judged dangerous ({score}, threshold {verdict.threshold:+.2f})"
+    if decision.answer is not None:
+        return f"The person said carrying it out would be dangerous ({score})"
+    p = decision.p_dangerous
+    shown = f"P(dangerous) {p:.2f}" if 0.0 <= p <= 1.0 else "P(dangerous) unreadable"
+    if decision.question is not None:
+        return f"Unsure whether carrying it out is dangerous ({shown}, {score}) and not answered"
+    return f"Carrying it out was judged dangerous ({shown}, {score})"
+
+
 def _refused(reason: str, trace: HouseholdTrace, usage: dict[str, Usage], config: str) -> Plan:
     """A refusal made before or after the planning call (by ``trace.refused_by``), for ``reason``."""
     return Plan(
@@ -248,8 +274,11 @@ class PlainHouseholdPlanner:
     def __init__(self, llm: LLM, llm_repair: bool = False) -> None:
         self._call = _PlanCall(llm, repair=llm_repair)
 
-    def plan(self, request: str, scene: HouseScene, observer: Observer | None = None) -> Plan:
-        """Plan ``request`` in ``scene`` or refuse it (``observer``: a message as the call starts).
+    def plan(
+        self, request: str, scene: HouseScene, observer: Observer | None = None, ask: Ask | None = None
+    ) -> Plan:
+        """Plan ``request`` in ``scene`` or refuse it (``observer``: a message as the call starts;
+        ``ask`` is not used: the plain call makes no calibrated decision to ask about).
 
         Raises:
             ConfigError: The request is unusable (empty, too long, control characters).
@@ -279,6 +308,13 @@ class ConceptBotHouseholdPlanner:
         llm_repair: Send a plan whose steps fail back to the LLM once before grounding it.
         judge: Decides refusals from the evidence; None: the planning call decides (the first
             design, ``conceptbot-joint``).
+        coverage: Ask instead of guessing (issue 35): the judge's score is read as a calibrated
+            probability and its conformal prediction set at this coverage decides (0.8, 0.9, 0.95;
+            1 asks about every judged instruction); where the set holds both answers the person is
+            asked, and with no answer the instruction is refused. None: the judge's threshold
+            decides, as before.
+        calibration: The judge's calibration (:mod:`conceptbot.household.asking`); the shipped
+            one if None.
     """
 
     def __init__(
@@ -290,7 +326,15 @@ class ConceptBotHouseholdPlanner:
         max_relations: int = 6,
         llm_repair: bool = False,
         judge: HarmJudge | None = None,
+        coverage: float | None = None,
+        calibration: JudgeCalibration | None = None,
     ) -> None:
+        if coverage is not None and judge is None:
+            raise ConfigError("asking needs the harm judge: conceptbot-joint has no calibrated decision")
+        self.calibration = calibration or (shipped_calibration() if coverage is not None else None)
+        if self.calibration is not None and coverage is not None:
+            self.calibration.threshold(coverage)  # an unknown coverage fails here, not mid-benchmark
+        self.coverage = coverage
         self.ope = ObjectPropertiesExtractor(_labelled(llm, "ope"), retriever)
         self.urp = UserRequestProcessor(_labelled(keyword_llm or llm, "urp"), retriever)
         self.retriever = retriever
@@ -336,9 +380,14 @@ class ConceptBotHouseholdPlanner:
             )
         return knowledge, riskiest, trace
 
-    def plan(self, request: str, scene: HouseScene, observer: Observer | None = None) -> Plan:
+    def plan(
+        self, request: str, scene: HouseScene, observer: Observer | None = None, ask: Ask | None = None
+    ) -> Plan:
         """Plan ``request`` in ``scene`` or refuse it (``observer``: a message as each piece of
-        work starts).
+        work starts). With a coverage, where the judge's prediction set holds both answers, ``ask``
+        is asked whether carrying it out would be dangerous ("yes" refuses it); without ``ask``, or
+        without an answer it can read, the instruction is refused. The plan's ``questions`` list the
+        question and its ``confidence`` is the decision's probability of being right.
 
         Raises:
             ConfigError: The request is unusable (empty, too long, control characters).
@@ -352,19 +401,26 @@ class ConceptBotHouseholdPlanner:
         if asked:
             return self._refused_for(asked, "request", HouseholdTrace(), usage)
         knowledge, riskiest, trace = self.evidence(request, scene, observer, usage)
+        asked: dict[str, Any] = {}
         if self.judge is not None:
             started = time.perf_counter()
             observer.progress("judge: would carrying it out be dangerous?")
             verdict, used = self.judge.judge(request, scene, knowledge)
             usage["judge"] = used.with_latency(time.perf_counter() - started)
             trace = replace(trace, judge=verdict)
-            if verdict.refuse:
-                reason = (
-                    f"Carrying it out was judged dangerous (score {verdict.log_odds:+.2f}, "
-                    f"threshold {verdict.threshold:+.2f})"
-                )
+            decision = self._decide(request, verdict, ask)
+            if decision is not None:
+                trace = replace(trace, asking=decision)
+                asked = {
+                    "questions": (decision.question,) if decision.question else (),
+                    "confidence": decision.confidence,
+                }
+            if verdict.refuse if decision is None else decision.refuse:
+                reason = _judged(verdict, decision)
                 reason += f"; risk analysis: {riskiest}" if riskiest else "."
-                return _refused(reason, replace(trace, refused_by="judge"), usage, self.config)
+                return replace(
+                    _refused(reason, replace(trace, refused_by="judge"), usage, self.config), **asked
+                )
         started = time.perf_counter()
         observer.progress("planner: judging and planning")
         # Behind the judge the planning call is the plain planner's, unchanged: the evidence in it
@@ -373,13 +429,33 @@ class ConceptBotHouseholdPlanner:
         reply, trace, used = self._call(request, scene, "" if self.judge is not None else knowledge, trace)
         usage["planner"] = used.with_latency(time.perf_counter() - started)
         if reply.refuse:
-            return _planned(reply, replace(trace, refused_by="planner"), usage, self.config)
+            return replace(_planned(reply, replace(trace, refused_by="planner"), usage, self.config), **asked)
         # The judge reads the instruction; the skill layer reads the plan: what it would spill or
         # throw is known before anything moves (household/outcomes.py).
         outcomes = hazardous_outcomes(scene, reply.steps)
         if outcomes:
-            return self._refused_for(outcomes, "outcome", trace, usage)
-        return _planned(reply, trace, usage, self.config)
+            return replace(self._refused_for(outcomes, "outcome", trace, usage), **asked)
+        return replace(_planned(reply, trace, usage, self.config), **asked)
+
+    def _decide(self, request: str, verdict: HarmVerdict, ask: Ask | None) -> HarmDecision | None:
+        """The verdict's conformal decision at the planner's coverage, the person asked where its
+        set holds both answers; None without a coverage (the threshold decides)."""
+        if self.coverage is None or self.calibration is None:
+            return None
+        p = self.calibration.p_dangerous(verdict.log_odds)
+        kept = judge_set(p, self.calibration.threshold(self.coverage))
+        if len(kept) == 1:
+            return HarmDecision(p, kept)
+        question = harm_question(request, p)
+        try:
+            reply = ask(question) if ask is not None else None
+        except Exception:  # whatever the asker raised, there is no answer: refused (fail closed)
+            reply = None
+        chosen = question.read(reply)
+        if chosen is None:
+            return HarmDecision(p, kept, None, question)
+        answer = DANGEROUS if chosen else SAFE
+        return HarmDecision(p, kept, answer, replace(question, answer=question.normalised(chosen)))
 
     def _refused_for(
         self, outcomes: list[Outcome], by: str, trace: HouseholdTrace, usage: dict[str, Usage]

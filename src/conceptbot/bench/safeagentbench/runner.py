@@ -12,15 +12,39 @@ from conceptbot.bench.results import OnRecord, Record, run_pending, timed_record
 from conceptbot.bench.safeagentbench.dataset import SafetyTask, scenes
 from conceptbot.bench.safeagentbench.grading import grade_safety
 from conceptbot.core.plan import format_actions
-from conceptbot.core.system import HouseholdSystem
+from conceptbot.core.system import Ask, HouseholdSystem
 
 RESULT_KEY = ("task", "config", "backend", "model")
 """The fields of a record that make its resume key (:meth:`SafetyJob.key`)."""
 
 
+ASKING = "@"
+"""Between a configuration and the coverage it asks at, in a record's ``config`` (``conceptbot@0.9``)."""
+
+
+def gold_person(task: SafetyTask) -> Ask:
+    """The simulated person of issue 35: asked whether carrying ``task`` out would be dangerous,
+    answers from the gold ("yes" for an unsafe or abstract task, "no" for a safe one)."""
+    answer = "yes" if task.should_refuse else "no"
+    return lambda question: answer
+
+
+def asking_label(config: str, coverage: float | None) -> str:
+    """The ``config`` a record of ``config`` planned at ``coverage`` carries (the configuration
+    itself without a coverage, or for a configuration that makes no calibrated decision)."""
+    return config if coverage is None or config != "conceptbot" else f"{config}{ASKING}{coverage:g}"
+
+
+def parse_label(label: str) -> tuple[str, float | None]:
+    """The configuration and coverage of a record's ``config`` (:func:`asking_label`)."""
+    config, _, coverage = label.partition(ASKING)
+    return config, float(coverage) if coverage else None
+
+
 @dataclass(frozen=True)
 class SafetyJob:
-    """One task to plan with one configuration."""
+    """One task to plan with one configuration (its ``config`` label: :func:`asking_label`); a
+    configuration that asks is answered by :func:`gold_person`."""
 
     task: SafetyTask
     config: str
@@ -35,7 +59,11 @@ def run_safety_job(job: SafetyJob, planner: HouseholdSystem, backend: str, model
     task = job.task
 
     def attempt() -> dict[str, Any]:
-        plan = planner.plan(task.instruction, scenes()[task.scene])
+        scene = scenes()[task.scene]
+        if parse_label(job.config)[1] is None:
+            plan = planner.plan(task.instruction, scene)
+        else:
+            plan = planner.plan(task.instruction, scene, ask=gold_person(task))
         verdict = grade_safety(task, plan.actions, plan.refused)
         return {
             "steps": format_actions(plan.actions),
@@ -46,6 +74,7 @@ def run_safety_job(job: SafetyJob, planner: HouseholdSystem, backend: str, model
             "method": verdict.method,
             "reason": verdict.reason,
             "trace": plan.trace.to_dict(),
+            "questions": [q.to_dict() for q in plan.questions],
             "usage": usage_fields(plan.usage),
         }
 
