@@ -162,7 +162,7 @@ def reliability(
                 "dangerous": round(share, 4),
             }
         )
-    return {"split": SPLIT, "tasks": len(found), "ece": round(ece, 4), "bins": table}
+    return {"split": SPLIT, "system": "conceptbot", "tasks": len(found), "ece": round(ece, 4), "bins": table}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -222,7 +222,10 @@ def main(argv: list[str] | None = None) -> int:
             document["reliability_safeagentbench"] = calibrated
         OUT.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
         TASKS_OUT.write_text("".join(json.dumps(o) + "\n" for o in every), encoding="utf-8")
-        print(f"wrote {OUT} and {TASKS_OUT}")
+        from bench_asking import FIGURE, plot  # beside this script: the help curve with every split
+
+        plot(kept)
+        print(f"wrote {OUT}, {TASKS_OUT} and {FIGURE}")
     return 0
 
 

@@ -401,7 +401,7 @@ class ConceptBotHouseholdPlanner:
         if asked:
             return self._refused_for(asked, "request", HouseholdTrace(), usage)
         knowledge, riskiest, trace = self.evidence(request, scene, observer, usage)
-        asked: dict[str, Any] = {}
+        answered: dict[str, Any] = {}  # the judge's question and confidence, for the plan
         if self.judge is not None:
             started = time.perf_counter()
             observer.progress("judge: would carrying it out be dangerous?")
@@ -411,7 +411,7 @@ class ConceptBotHouseholdPlanner:
             decision = self._decide(request, verdict, ask)
             if decision is not None:
                 trace = replace(trace, asking=decision)
-                asked = {
+                answered = {
                     "questions": (decision.question,) if decision.question else (),
                     "confidence": decision.confidence,
                 }
@@ -419,7 +419,7 @@ class ConceptBotHouseholdPlanner:
                 reason = _judged(verdict, decision)
                 reason += f"; risk analysis: {riskiest}" if riskiest else "."
                 return replace(
-                    _refused(reason, replace(trace, refused_by="judge"), usage, self.config), **asked
+                    _refused(reason, replace(trace, refused_by="judge"), usage, self.config), **answered
                 )
         started = time.perf_counter()
         observer.progress("planner: judging and planning")
@@ -429,13 +429,15 @@ class ConceptBotHouseholdPlanner:
         reply, trace, used = self._call(request, scene, "" if self.judge is not None else knowledge, trace)
         usage["planner"] = used.with_latency(time.perf_counter() - started)
         if reply.refuse:
-            return replace(_planned(reply, replace(trace, refused_by="planner"), usage, self.config), **asked)
+            return replace(
+                _planned(reply, replace(trace, refused_by="planner"), usage, self.config), **answered
+            )
         # The judge reads the instruction; the skill layer reads the plan: what it would spill or
         # throw is known before anything moves (household/outcomes.py).
         outcomes = hazardous_outcomes(scene, reply.steps)
         if outcomes:
-            return replace(self._refused_for(outcomes, "outcome", trace, usage), **asked)
-        return replace(_planned(reply, trace, usage, self.config), **asked)
+            return replace(self._refused_for(outcomes, "outcome", trace, usage), **answered)
+        return replace(_planned(reply, trace, usage, self.config), **answered)
 
     def _decide(self, request: str, verdict: HarmVerdict, ask: Ask | None) -> HarmDecision | None:
         """The verdict's conformal decision at the planner's coverage, the person asked where its
