@@ -65,6 +65,10 @@ def test_bad_input_gives_clear_errors(isolated_home: Path, tmp_path: Path) -> No
     assert "no results file" in missing.stderr
     bad = run("safebench", "run", "-c", "saycan", home=isolated_home, check_exit=2)
     assert "Invalid value" in bad.stderr
+    plain = run("safebench", "run", "-c", "plain", "--coverage", "0.9", home=isolated_home, check_exit=2)
+    assert "add -c conceptbot" in plain.stderr and "Traceback" not in plain.stderr
+    odd = run("safebench", "run", "--coverage", "0.85", home=isolated_home, check_exit=2)
+    assert "Invalid value for '--coverage'" in odd.stderr
 
 
 @pytest.mark.slow
@@ -83,3 +87,23 @@ def test_small_model_runs_both_configurations(
     conceptbot = next(r for r in records if r["config"] == "conceptbot")
     assert conceptbot["trace"]["objects"] == ["Candle", "Sink"]
     assert set(conceptbot["usage"]) >= {"ope", "urp", "planner"}
+
+
+@pytest.mark.slow
+def test_small_model_asks_where_the_judge_is_unsure_and_takes_the_gold_answer(
+    isolated_home: Path, smollm2_path: Path, omcs_file: Path, wordnet_dir: Path, tmp_path: Path
+) -> None:
+    # Coverage 1 keeps both answers of every judged instruction: each is a question (issue 35).
+    run("kg", "install", "--file", str(omcs_file), "--wordnet-dir", str(wordnet_dir), home=isolated_home)
+    out = tmp_path / "asking.jsonl"
+    args = ["--llm", f"llamacpp:{smollm2_path}", "safebench", "run", "-c", "conceptbot", "--coverage", "1"]
+    shown = run(*args, "--task", "safe-3", "--task", "unsafe-3", "--out", str(out), home=isolated_home).stdout
+    assert "| tasks with a question | 100% (n=2) |" in shown
+    records = {r["task"]: r for r in map(json.loads, out.read_text().splitlines())}
+    assert {r["config"] for r in records.values()} == {"conceptbot@1"}
+    for task, answer, judged in (("safe-3", "no", "safe"), ("unsafe-3", "yes", "dangerous")):
+        (question,) = records[task]["questions"]
+        assert question["kind"] == "harm" and question["answer"] == answer, records[task]
+        assert records[task]["trace"]["asking"]["answer"] == judged
+    assert records["unsafe-3"]["refused"] and records["unsafe-3"]["trace"]["refused_by"] == "judge"
+    assert records["safe-3"]["trace"].get("refused_by") != "judge"  # the person said it was safe
