@@ -98,6 +98,15 @@ def test_the_shipped_calibration_has_every_coverage_and_a_bad_file_is_a_clear_er
     bad.write_text('{"slope": NaN, "intercept": 0, "qhat": {"0.9": 0.6}}')
     with pytest.raises(ConfigError, match="finite"):
         load_calibration(bad)
+    bad.write_text('{"slope": -2.0, "intercept": 6, "qhat": {"0.9": 0.6}}')  # would switch the check off
+    with pytest.raises(ConfigError, match="positive"):
+        load_calibration(bad)
+    bad.write_text('{"slope": 2.0, "intercept": -6, "qhat": {"0.9": 6}}')
+    with pytest.raises(ConfigError, match="from 0 to 1"):
+        load_calibration(bad)
+    good = tmp_path / "good.json"
+    good.write_text('{"slope": 2.0, "intercept": -6, "qhat": {"0.9": 0.6}}')
+    assert load_calibration(good).threshold(0.9) == 0.6
 
 
 def test_an_unsure_judge_asks_and_no_lets_the_plain_call_plan() -> None:

@@ -87,6 +87,13 @@ def _calibration(data: Any, where: str) -> JudgeCalibration:
         ) from None
     if not all(math.isfinite(v) for v in (slope, intercept, *qhat.values())):
         raise ConfigError(f"{where}: a value is not a finite number")
+    # A slope that is not positive would read a more dangerous score as safer: the check is off.
+    if slope <= 0:
+        raise ConfigError(
+            f"{where}: 'slope' must be positive (a higher score of 'dangerous' is more dangerous)"
+        )
+    if not all(0.0 <= q <= 1.0 for q in qhat.values()):
+        raise ConfigError(f"{where}: each 'qhat' is a probability threshold from 0 to 1")
     return JudgeCalibration(slope, intercept, qhat, str(data.get("fitted_on", "")))
 
 
