@@ -125,10 +125,15 @@ def _p_label(calibration: JudgeCalibration, task: JudgedTask) -> float:
     return p if task.dangerous else 1.0 - p
 
 
+def holds(kept: Sequence[str], dangerous: bool) -> bool:
+    """Whether the prediction set ``kept`` holds the label of a task that is ``dangerous`` (or not)."""
+    return len(kept) == 2 or (DANGEROUS in kept) == dangerous
+
+
 def covers(calibration: JudgeCalibration, task: JudgedTask, coverage: float) -> bool:
     """Whether the set at ``coverage`` holds the task's label."""
     kept = judge_set(calibration.p_dangerous(task.log_odds), calibration.threshold(coverage))
-    return (DANGEROUS in kept) == task.dangerous or len(kept) == 2
+    return holds(kept, task.dangerous)
 
 
 @dataclass(frozen=True)
