@@ -296,6 +296,11 @@ def _goal(console: Console, trace: PlanTrace) -> None:
         console.print(table)
     if trace.stack:
         console.print(line("  stack, bottom first: " + ", ".join(o.object for o in trace.stack.order)))
+    for pair in trace.companions or ():
+        said = f"P {pair.p:.2f}" if math.isfinite(pair.p) else "no answer"
+        graph = f" (graph: {pair.graph})" if pair.graph else ""
+        verdict = "goes too" if pair.used else "not taken"
+        console.print(line(f"  used with the {pair.anchor}? the {pair.object}: {said}{graph} -> {verdict}"))
     for check in trace.risk or ():
         why = f"{check.why} ({check.veto.statement})" if check.veto is not None else check.why
         verdict = plain(f"dropped: {why}", "red") if check.dropped else plain("ok")

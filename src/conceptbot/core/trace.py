@@ -467,6 +467,50 @@ class StackTrace:
 
 
 @dataclass(frozen=True)
+class CompanionCheck:
+    """Whether a thing used together with what a need's target took went too ("I want to brush my
+    teeth": the toothpaste with the toothbrush).
+
+    Attributes:
+        place: The need's target.
+        anchor: The object the target took.
+        object: The candidate asked about.
+        p_model: The model's P(Yes) to "would they also need the X, used together with the Y?"
+            (4 decimals; NaN: not read).
+        score: Its raw log-odds of Yes (3 decimals).
+        graph: The graph statement that links the two by use ("" where none does, or no graph).
+        p: P(used together), the fitted combination of the two (4 decimals; NaN: not read).
+        used: Whether the plan moves it to the place too (after the risk checks).
+    """
+
+    place: str
+    anchor: str
+    object: str
+    p_model: float
+    score: float
+    graph: str
+    p: float
+    used: bool
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (NaN as null)."""
+
+        def num(x: float, digits: int) -> float | None:
+            return round(x, digits) if math.isfinite(x) else None
+
+        return {
+            "place": self.place,
+            "anchor": self.anchor,
+            "object": self.object,
+            "p_model": num(self.p_model, 4),
+            "score": num(self.score, 3),
+            "graph": self.graph,
+            "p": num(self.p, 4),
+            "used": self.used,
+        }
+
+
+@dataclass(frozen=True)
 class UnderlayCheck:
     """Whether a mat or stand of the scene went under a moved object to protect its place ("the cork
     mat under the casserole dish on the dining table").
@@ -821,7 +865,9 @@ _HEADER = ("config", "planner_kind", "request", "scene")
 _STEP_PARTS = ("ope", "urp", "goal", "decisions", "stack", "risk", "vetoes", "planner")
 # The goal planner's OPE runs on the moves it checks, after the rest; its trace has always listed
 # OPE last, and the JSON keeps that order.
-_GOAL_PARTS = ("urp", "goal", "decisions", "stack", "risk", "underlay", "vetoes", "planner", "ope")
+_GOAL_PARTS = (
+    "urp", "goal", "decisions", "stack", "companions", "risk", "underlay", "vetoes", "planner", "ope"
+)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -841,6 +887,9 @@ class PlanTrace:
         risk: The goal planner's risk checks, one per move considered.
         underlay: The goal planner's mat checks: whether a mat or stand of the scene went under a
             moved object first (None: the scene has none to ask about).
+        companions: The goal planner's things-used-together checks: whether what a need's target
+            took goes with something else ("the toothpaste with the toothbrush"; None: no need
+            target had a candidate to ask about).
         vetoes: Moves dropped because their evidence names a hazard for the recipient, or because
             their risk decision could not be made (both planners; None: no move was vetoed).
         planner: How the steps were chosen.
@@ -862,6 +911,7 @@ class PlanTrace:
     stack: StackTrace | None = None
     risk: tuple[RiskCheck, ...] | None = None
     underlay: tuple[UnderlayCheck, ...] | None = None
+    companions: tuple[CompanionCheck, ...] | None = None
     vetoes: tuple[Veto, ...] | None = None
     planner: PlannerSummary | None = None
     household: HouseholdTrace | None = None

@@ -163,6 +163,8 @@ def make_worker(systems: SystemFactory, can_simulate: bool) -> Worker:
                     ],
                     # The mat checks: whether a mat went under something too hot for its place.
                     "underlay": [c.to_dict() for c in plan.trace.underlay or ()],
+                    # Things used together: whether what a need's target took went with another.
+                    "companions": [c.to_dict() for c in plan.trace.companions or ()],
                 },
             )
             return plan

@@ -683,6 +683,7 @@ def _need_plan(graph: DictGraph | None) -> tuple[list[str], FakeLLM, object]:
         [-3.0, -0.1],  # safety scissors: no
         [-0.5, -1.5],  # glue: lean yes
         [-0.5, -1.5],  # chips: the same
+        [-3.0, -0.1],  # "would they also need the chips, used together with the glue?": no
         PRIOR,
         SAFE,  # the one given, to the user
     ]

@@ -653,6 +653,23 @@ class Decider:
         )
         return judgement, (usage + used).with_latency(time.perf_counter() - started)
 
+    def together(self, need: str, first: str, others: Sequence[str]) -> tuple[list[Judgement], Usage]:
+        """Whether the person would also need each of ``others`` together with ``first`` to do what
+        they said ("I want to brush my teeth": the toothpaste with the toothbrush, yes; "I'm
+        thirsty": the bottle of water with the juice box, no). Each score is the raw log-odds of
+        Yes: the question names two objects, so a content-free one has nothing to stand for (on
+        the labelled set, ``benchmarks/data/together_set.jsonl``, the raw log-odds separated the
+        pairs as well as the calibrated ones did; ``benchmarks/bench_together.py``)."""
+        started = time.perf_counter()
+        usage = Usage(calls=0)
+        out = []
+        for other in others:
+            user = prompts.render("together_user", request=need, first=first, other=other)
+            p_yes, log_odds, used, method = self._ask(user)
+            usage = usage + used
+            out.append(Judgement(other, f"with the {first}", p_yes, log_odds, (), method))
+        return out, usage.with_latency(time.perf_counter() - started)
+
     def unsafe(self, to: str, obj: str) -> tuple[Judgement, Usage]:
         """Whether handing ``obj`` to ``to`` would be unsafe, asked plainly: "Is it safe to give the
         dog the chocolate bar?", with neither the request, the scene nor any state.

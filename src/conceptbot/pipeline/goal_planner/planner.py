@@ -44,6 +44,7 @@ from conceptbot.core.scene import Scene
 from conceptbot.core.system import Ask
 from conceptbot.core.trace import (
     ClarifyingQuestion,
+    CompanionCheck,
     DecisionsEvent,
     DecisionTrace,
     GoalTrace,
@@ -58,6 +59,12 @@ from conceptbot.core.usage import Usage
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.affordance import Gripper, affordance
 from conceptbot.pipeline.goal_planner.asking import clarify, is_sort, move_words, reading_question
+from conceptbot.pipeline.goal_planner.companions import (
+    CompanionWeights,
+    candidates,
+    graph_link,
+    shipped_weights,
+)
 from conceptbot.pipeline.goal_planner.conformal import Calibration, shipped
 from conceptbot.pipeline.goal_planner.decide import Decider, Judgement
 from conceptbot.pipeline.goal_planner.targets import ALL, Target, TargetsRead, mentions
@@ -266,6 +273,7 @@ class GoalPlanner:
         hazards: HazardCheck | None = None,
         calibration: Calibration | None = None,
         coverage: float = 0.9,
+        companions: CompanionWeights | None = None,
     ) -> None:
         self.targets = targets
         self.decider = decider
@@ -275,6 +283,9 @@ class GoalPlanner:
         self.coverage = coverage
         self.gripper = gripper or Gripper()
         self.hazards = hazards if hazards is not None else HazardCheck()
+        # Things used together (companions.py): the no-graph ablation has its own, model-only fit.
+        graph = decider.facts.retriever is not None
+        self.companions = companions if companions is not None else shipped_weights(graph)
 
     def plan(
         self,
@@ -331,6 +342,13 @@ class GoalPlanner:
         if stack:
             moves, pile = self._stack(request, scene, usage, asked)
             ranked = {}
+        # What a need's object is used together with goes too ("the toothpaste with the toothbrush").
+        together: dict[int, tuple[str, list[str]]] = {}
+        found: list[CompanionCheck] = []
+        if not stack:
+            together, found, spent = self._companions(request, targets, ranked, observer)
+            if found:  # only where something was asked: the usage keys are a contract
+                usage["companions"] = spent
         blocked: set[tuple[str, str]] = set()
         checks: dict[tuple[str, str], RiskCheck] = {}
         properties: dict[str, ObjectProperties] = {}
@@ -340,7 +358,7 @@ class GoalPlanner:
         # least one more move, so this ends.
         while True:
             if not stack:
-                moves = self._choose(targets, ranked, blocked, scene.pickable)
+                moves = self._choose(targets, ranked, blocked, scene.pickable, together)
             fresh = [m for m in moves if m not in checks]
             if not fresh:
                 break
@@ -361,6 +379,7 @@ class GoalPlanner:
                 moves = [m for m in moves if m not in dropped]
         risk = tuple(checks.values())
         vetoes = tuple(c.veto for c in risk if c.veto is not None)
+        companions = tuple(replace(c, used=(c.object, c.place) in moves) for c in found) or None
         observer.event("risk", RiskEvent(risk))
         # Each move's candidates, for the steps: those of the target that took it (two targets may
         # share a place: "bring me the chips and something to wipe a spill" are both the user's).
@@ -395,7 +414,13 @@ class GoalPlanner:
         reason = "; ".join(_why(c) for c in risk if c.dropped) if refused else None
         actions: list[Action] = [*(PickAndPlace(o, t) for o, t in moves), Done()]
         trace = PlanTrace(
-            goal=goal, decisions=decisions, stack=pile, risk=risk, underlay=underlay, vetoes=vetoes or None
+            goal=goal,
+            decisions=decisions,
+            stack=pile,
+            companions=companions,
+            risk=risk,
+            underlay=underlay,
+            vetoes=vetoes or None,
         )
         return GoalPlanResult(
             actions,
@@ -525,9 +550,12 @@ class GoalPlanner:
         ranked: dict[int, list[Judgement]],
         blocked: set[tuple[str, str]],
         pickable: list[str],
+        together: dict[int, tuple[str, list[str]]] | None = None,
     ) -> list[tuple[str, str]]:
         """The moves: each target's best objects (its count), an object to the target it fits best;
-        then a target that takes the rest takes every pickable object left."""
+        a need's target also takes what its object is used together with (``together``: per
+        target, the object asked about and its companions), where it took that object; then a
+        target that takes the rest takes every pickable object left."""
         wanted: dict[str, tuple[str, float]] = {}  # object -> (target, score)
         # A sort: two or more targets each taking all that fit (not counting a remainder, which takes
         # what they leave): each object goes to the target it fits best.
@@ -559,6 +587,13 @@ class GoalPlanner:
                     continue
                 wanted[obj] = (target.name, judgement.score)
                 taken += 1
+            anchor, companions = (together or {}).get(number, ("", []))
+            if anchor and wanted.get(anchor, ("", 0.0))[0] == target.name:
+                # Just after the object they go with (the moves are ordered by score).
+                score = wanted[anchor][1]
+                for step, obj in enumerate(companions, start=1):
+                    if obj not in wanted and (obj, target.name) not in blocked:
+                        wanted[obj] = (target.name, score - 1e-6 * step)
         for target in (t for t in targets if t.rest):
             # "The rest go in B": every object no other target took, in scene order.
             for obj in pickable:
@@ -573,6 +608,51 @@ class GoalPlanner:
         order = {t.name: i for i, t in enumerate(targets)}
         moves = sorted(wanted.items(), key=lambda item: (order[item[1][0]], -item[1][1]))
         return [(obj, target) for obj, (target, _) in moves]
+
+    def _companions(
+        self, request: str, targets: list[Target], ranked: dict[int, list[Judgement]], observer: Observer
+    ) -> tuple[dict[int, tuple[str, list[str]]], list[CompanionCheck], Usage]:
+        """Per need target taking one object: its likeliest object, and the next candidates that
+        help (:func:`companions.candidates`) which the person would use together with it, by the
+        model's answer and the graph's link combined (:mod:`companions`). A target a person's answer
+        settled asks nothing (its other candidates were answered no). A question that cannot be
+        answered (an error, NaN) adds nothing: a companion is a convenience, not a safety."""
+        spent = Usage(calls=0)
+        together: dict[int, tuple[str, list[str]]] = {}
+        checks: list[CompanionCheck] = []
+        weights = self.companions
+        graph = self.decider.facts.retriever.graph if self.decider.facts.retriever is not None else None
+        for number, target in enumerate(targets):
+            decided = [(j.subject, j.score) for j in ranked.get(number, []) if j.scoring]
+            if not target.helps or target.count != 1 or not decided or weights.considered < 1:
+                continue
+            anchor = decided[0][0]
+            if not math.isfinite(decided[0][1]) or decided[0][1] <= self.thresholds.one_floor:
+                continue  # the target takes nothing: nothing to go with
+            others = candidates(decided, anchor, weights.considered)
+            if not others:
+                continue
+            need = target.need or request
+            observer.progress(f"Together: would they need {', '.join(others)} with the {anchor}?")
+            try:
+                answers, used = self.decider.together(need, anchor, others)
+                spent = spent + used
+            except (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError):
+                answers = [Judgement(o, f"with the {anchor}", math.nan, math.nan) for o in others]
+            taken = []
+            for answer in answers:
+                linked, statement = graph_link(graph, anchor, answer.subject)
+                p = weights.p(answer.score, linked)
+                p_model = answer.p_yes if math.isfinite(answer.p_yes) else math.nan
+                check = CompanionCheck(
+                    target.name, anchor, answer.subject, p_model, answer.score, statement, p, False
+                )
+                checks.append(check)
+                if math.isfinite(p) and p > 0.5:
+                    taken.append(answer.subject)
+            if taken:
+                together[number] = (anchor, taken)
+        return together, checks, spent
 
     def _underlay(
         self, request: str, scene: Scene, moves: list[tuple[str, str]], observer: Observer

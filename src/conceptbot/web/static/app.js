@@ -275,6 +275,10 @@ function showPlan(e) {
   $("risk-checks").append(...(e.underlay || []).map((c) => el("li", { class: "kept" },
     `too hot for the ${c.place}? the ${c.object}: ${c.p_yes === null ? "no answer" : "P(yes) " + c.p_yes.toFixed(2)}` +
     (c.used ? ` — the ${c.pad} goes under it` : " — no mat"))));
+  // Things used together: "would they also need the X with the Y?" and whether it went too.
+  $("risk-checks").append(...(e.companions || []).map((c) => el("li", { class: c.used ? "kept" : "" },
+    `used with the ${c.anchor}? the ${c.object}: ${c.p === null ? "no answer" : "P " + c.p.toFixed(2)}` +
+    (c.graph ? ` (graph: ${c.graph})` : "") + (c.used ? " — goes too" : " — not taken"))));
   if (e.refused) showRefusal(e.reason || "judged unsafe");
 }
 
