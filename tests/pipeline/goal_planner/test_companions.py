@@ -128,3 +128,22 @@ def test_the_weights_combine_the_answer_and_the_link() -> None:
     assert math.isnan(weights.p(math.nan, True))
     shipped, ablation = shipped_weights(True), shipped_weights(False)
     assert shipped.model > 0 and ablation.model > 0 and ablation.graph == 0.0
+
+
+def test_after_a_which_one_answer_what_goes_with_the_chosen_object_is_still_asked() -> None:
+    llm = FakeLLM(scores=[*HELPS, YES, PRIOR, SAFE, PRIOR, SAFE])
+    finder = FactFinder(RelationRetriever(GRAPH, FakeEmbedder(), theta=0.1))
+    planner = GoalPlanner(_Need(), Decider(llm, finder), coverage=1.0)  # every decision asked
+    questions = []
+
+    def person(question) -> str:
+        questions.append(question)
+        return "toothbrush"
+
+    result = planner.plan("I want to brush my teeth", BATHROOM, ask=person)
+    assert [q.kind for q in questions] == ["one"]
+    assert format_actions(result.actions) == [
+        "pick_and_place(toothbrush, user)",
+        "pick_and_place(toothpaste, user)",
+        "done()",
+    ]

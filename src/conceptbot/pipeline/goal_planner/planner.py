@@ -326,6 +326,7 @@ class GoalPlanner:
         # object is shared between threads), the last question's method as before.
         asked = [j.scoring for js in ranked.values() for j in js if j.scoring]
         # Where a calibrated decision is unsure, a question (asked if someone answers): asking.py.
+        decided = ranked  # before any answer: the companions' candidates keep their own scores
         clarified = clarify(
             targets,
             ranked,
@@ -346,7 +347,7 @@ class GoalPlanner:
         together: dict[int, tuple[str, list[str]]] = {}
         found: list[CompanionCheck] = []
         if not stack:
-            together, found, spent = self._companions(request, targets, ranked, observer)
+            together, found, spent = self._companions(request, targets, ranked, decided, observer)
             if found:  # only where something was asked: the usage keys are a contract
                 usage["companions"] = spent
         blocked: set[tuple[str, str]] = set()
@@ -610,26 +611,34 @@ class GoalPlanner:
         return [(obj, target) for obj, (target, _) in moves]
 
     def _companions(
-        self, request: str, targets: list[Target], ranked: dict[int, list[Judgement]], observer: Observer
+        self,
+        request: str,
+        targets: list[Target],
+        ranked: dict[int, list[Judgement]],
+        decided: dict[int, list[Judgement]],
+        observer: Observer,
     ) -> tuple[dict[int, tuple[str, list[str]]], list[CompanionCheck], Usage]:
-        """Per need target taking one object: its likeliest object, and the next candidates that
-        help (:func:`companions.candidates`) which the person would use together with it, by the
-        model's answer and the graph's link combined (:mod:`companions`). A target a person's answer
-        settled asks nothing (its other candidates were answered no). A question that cannot be
-        answered (an error, NaN) adds nothing: a companion is a convenience, not a safety."""
+        """Per need target taking one object: its likeliest object (``ranked``, after any answer),
+        and the next candidates that help by the decisions before any answer (``decided``;
+        :func:`companions.candidates`) which the person would use together with it, by the model's
+        answer and the graph's link combined (:mod:`companions`). A which-one answer names the one
+        object; what is used with it is another question, so it is still asked. A question that
+        cannot be answered (an error, NaN) adds nothing: a companion is a convenience, not a
+        safety."""
         spent = Usage(calls=0)
         together: dict[int, tuple[str, list[str]]] = {}
         checks: list[CompanionCheck] = []
         weights = self.companions
         graph = self.decider.facts.retriever.graph if self.decider.facts.retriever is not None else None
         for number, target in enumerate(targets):
-            decided = [(j.subject, j.score) for j in ranked.get(number, []) if j.scoring]
-            if not target.helps or target.count != 1 or not decided or weights.considered < 1:
+            now = [j for j in ranked.get(number, []) if j.scoring]
+            if not target.helps or target.count != 1 or not now or weights.considered < 1:
                 continue
-            anchor = decided[0][0]
-            if not math.isfinite(decided[0][1]) or decided[0][1] <= self.thresholds.one_floor:
-                continue  # the target takes nothing: nothing to go with
-            others = candidates(decided, anchor, weights.considered)
+            anchor = now[0].subject
+            if not math.isfinite(now[0].score) or now[0].score <= self.thresholds.one_floor:
+                continue  # the target takes nothing (or the person said none): nothing to go with
+            before = [(j.subject, j.score) for j in decided.get(number, []) if j.scoring]
+            others = candidates(before, anchor, weights.considered)
             if not others:
                 continue
             need = target.need or request
