@@ -10,6 +10,10 @@ success rate like the dev split's, on requests no rule or prompt was written for
     .venv/bin/python benchmarks/bench_paraphrase_plans.py --category implicit --out FILE.jsonl
     .venv/bin/python benchmarks/bench_paraphrase_plans.py --category implicit --rounds 11,12
 
+Each plan is also graded without the moves of the things it took as used together with a need's
+object (``companions`` in the trace; :mod:`conceptbot.pipeline.goal_planner.companions`), as
+``without_companions``: the same plans with and without that step, on wording it was not built on.
+
 A results file (``--out``) is written a line per plan as it is made and read back on ``--resume``,
 so a long run can be stopped and continued. Answers come through the answer cache like any plan.
 """
@@ -24,7 +28,7 @@ from pathlib import Path
 
 from conceptbot.bench.grading import grade, load_tasks, task_scene
 from conceptbot.core.config import load_settings
-from conceptbot.core.plan import format_actions
+from conceptbot.core.plan import PickAndPlace, format_actions
 from conceptbot.core.system import SystemOptions
 from conceptbot.systems import build_system
 
@@ -45,6 +49,11 @@ def chosen_rows(
         and (originals or r["split"] == "paraphrase")
         and (rounds is None or r.get("round") in rounds)
     ]
+
+
+def _without(actions: list, moves: set[tuple[str, str]]) -> list:
+    """The plan's actions less ``moves`` (object, destination)."""
+    return [a for a in actions if not (isinstance(a, PickAndPlace) and (a.obj, a.destination) in moves)]
 
 
 def _key(row: dict) -> str:
@@ -88,6 +97,9 @@ def main() -> None:
             started = time.perf_counter()
             plan = system.plan(row["request"], task_scene(task))
             verdict = grade(task, plan.actions, plan.refused)
+            trace = plan.trace
+            extra = {(c.object, c.place) for c in (trace.companions if trace else None) or () if c.used}
+            without = grade(task, _without(plan.actions, extra), plan.refused).ok if extra else verdict.ok
             found = {
                 "key": _key(row),
                 "task": row["task"],
@@ -98,6 +110,8 @@ def main() -> None:
                 "refused": plan.refused,
                 "success": verdict.ok,
                 "why": verdict.reason,
+                "companions": sorted(o for o, _ in extra),
+                "without_companions": without,
                 "seconds": round(time.perf_counter() - started, 1),
             }
             results.append(found)
@@ -118,6 +132,9 @@ def main() -> None:
     times = [r["seconds"] for r in results if r["seconds"]]
     median = f", median {statistics.median(times):.1f} s a plan" if times else ""
     print(f"all: {right}/{len(results)} plans right{median}")
+    alone = sum(r.get("without_companions", r["success"]) for r in results)
+    took = sum(bool(r.get("companions")) for r in results)
+    print(f"without the things used together: {alone}/{len(results)} ({took} plans took one)")
 
 
 if __name__ == "__main__":
