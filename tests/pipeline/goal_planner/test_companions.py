@@ -147,3 +147,19 @@ def test_after_a_which_one_answer_what_goes_with_the_chosen_object_is_still_aske
         "pick_and_place(toothpaste, user)",
         "done()",
     ]
+
+
+@pytest.mark.slow
+def test_the_together_question_on_a_real_model(smollm2_path) -> None:
+    """The question through llama.cpp's scoring: a probability and a finite log-odds per companion,
+    the same on a second ask (plumbing; the 135M model is too weak to judge the pairs)."""
+    from conceptbot.models.llamacpp import LlamaCppLLM
+
+    llm = LlamaCppLLM(smollm2_path, model="smollm2-135m", n_ctx=1024)
+    decider = Decider(llm, FactFinder(None))
+    first, used = decider.together("I want to brush my teeth", "toothbrush", ["toothpaste", "hairbrush"])
+    again, _ = decider.together("I want to brush my teeth", "toothbrush", ["toothpaste", "hairbrush"])
+    assert [j.subject for j in first] == ["toothpaste", "hairbrush"]
+    assert all(0.0 < j.p_yes < 1.0 and math.isfinite(j.score) and j.scoring for j in first)
+    assert [j.score for j in first] == pytest.approx([j.score for j in again])
+    assert used.calls == 2
