@@ -25,53 +25,22 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 from conceptbot.core.config import load_settings
 from conceptbot.pipeline.goal_planner.companions import graph_link
 from conceptbot.systems import build_system
+from fit_judgements import fit  # the same Newton fit as the judgement set's combination
 
 SET = Path("benchmarks/data/together_set.jsonl")
 WEIGHTS = Path("src/conceptbot/pipeline/companion_weights.json")
 L2 = 0.1  # a little shrinkage: 24 pairs per round
 
 
-def fit(rows: list[tuple[list[float], bool]]) -> list[float]:
-    """Logistic regression by Newton's method (intercept first), with an L2 penalty on the weights."""
-    k = len(rows[0][0]) + 1
-    w = [0.0] * k
-    for _ in range(50):
-        grad = [0.0] * k
-        hess = [[0.0] * k for _ in range(k)]
-        for x, y in rows:
-            xs = [1.0, *x]
-            p = 1.0 / (1.0 + math.exp(-sum(a * b for a, b in zip(w, xs, strict=True))))
-            for i in range(k):
-                grad[i] += (p - y) * xs[i]
-                for j in range(k):
-                    hess[i][j] += p * (1 - p) * xs[i] * xs[j]
-        for i in range(1, k):
-            grad[i] += L2 * w[i]
-            hess[i][i] += L2
-        step = _solve(hess, grad)
-        w = [a - b for a, b in zip(w, step, strict=True)]
-        if max(abs(s) for s in step) < 1e-9:
-            break
-    return w
-
-
-def _solve(a: list[list[float]], b: list[float]) -> list[float]:
-    """Gaussian elimination with partial pivoting (k <= 3 here)."""
-    n = len(b)
-    m = [[*row, b[i]] for i, row in enumerate(a)]
-    for c in range(n):
-        pivot = max(range(c, n), key=lambda r: abs(m[r][c]))
-        m[c], m[pivot] = m[pivot], m[c]
-        for r in range(c + 1, n):
-            f = m[r][c] / m[c][c]
-            m[r] = [x - f * y for x, y in zip(m[r], m[c], strict=True)]
-    out = [0.0] * n
-    for r in range(n - 1, -1, -1):
-        out[r] = (m[r][n] - sum(m[r][j] * out[j] for j in range(r + 1, n))) / m[r][r]
-    return out
+def fit_rows(rows: list[tuple[list[float], bool]]) -> list[float]:
+    """The logistic fit of ``fit_judgements`` (Newton, L2 on the weights only), intercept first."""
+    weights, bias = fit(np.array([x for x, _ in rows]), np.array([float(y) for _, y in rows]), l2=L2)
+    return [bias, *weights.tolist()]
 
 
 def measure(w: list[float], rows: list[tuple[list[float], bool]]) -> tuple[float, float, float]:
@@ -122,7 +91,7 @@ def main(argv: list[str] | None = None) -> int:
                 r: [(features(s, g), p["together"]) for p, s, g, _ in read if p["round"] == r]
                 for r in ("tune", "held")
             }
-            w = fit(rows[train])
+            w = fit_rows(rows[train])
             if train == "tune":
                 fits[name] = w
             accuracy, loss, auc = measure(w, rows[test])

@@ -27,6 +27,7 @@ from importlib import resources
 
 from conceptbot.knowledge.base import KnowledgeGraph
 from conceptbot.knowledge.normalize import singular
+from conceptbot.pipeline.goal_planner.combine import sigmoid
 from conceptbot.pipeline.goal_planner.targets import tokens
 
 #: Relations by which the graph says two things are used together: one is for, needs, or goes with
@@ -70,8 +71,7 @@ class CompanionWeights:
         """P(used together); NaN where the model's answer is not a number."""
         if not math.isfinite(log_odds):
             return math.nan
-        z = self.intercept + self.model * log_odds + (self.graph if linked else 0.0)
-        return 1.0 / (1.0 + math.exp(-max(-50.0, min(50.0, z))))
+        return sigmoid(self.intercept + self.model * log_odds + (self.graph if linked else 0.0))
 
 
 @cache

@@ -652,9 +652,8 @@ class GoalPlanner:
             for answer in answers:
                 linked, statement = graph_link(graph, anchor, answer.subject)
                 p = weights.p(answer.score, linked)
-                p_model = answer.p_yes if math.isfinite(answer.p_yes) else math.nan
                 check = CompanionCheck(
-                    target.name, anchor, answer.subject, p_model, answer.score, statement, p, False
+                    target.name, anchor, answer.subject, answer.p_yes, answer.score, statement, p, False
                 )
                 checks.append(check)
                 if math.isfinite(p) and p > 0.5:
