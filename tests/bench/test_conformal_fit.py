@@ -3,12 +3,29 @@ worst, and the thresholds."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pytest
 
-from conceptbot.bench.conformal_fit import TaskScores, fit, nonconformity, split_scores, task_scores
+from conceptbot.bench.conformal_fit import (
+    TaskScores,
+    fit,
+    nonconformity,
+    reading_label,
+    split_scores,
+    task_scores,
+)
 from conceptbot.bench.grading import Task
-from conceptbot.core.plan import Done, Plan
-from conceptbot.core.trace import DecisionTrace, JudgementTrace, PlanTrace, TargetTrace
+from conceptbot.core.plan import Done, PickAndPlace, Plan
+from conceptbot.core.trace import (
+    ClarifyingQuestion,
+    DecisionTrace,
+    GoalTrace,
+    JudgementTrace,
+    PlanTrace,
+    ReadingOption,
+    TargetTrace,
+)
 
 GOLD = {"type": "assign", "assign": {"lemon": ["bowl"], "jam": ["user"]}}
 TASK = Task("dev-x-1", "implicit", "request", "kitchen", GOLD, "")
@@ -101,3 +118,74 @@ def test_split_scores_keep_the_kinds_apart() -> None:
     found = split_scores(TASK, _plan(bowl, user), "softmax")
     assert found.yes_no == pytest.approx((0.2,)) and found.one == pytest.approx((0.65,))
     assert len(found) == 2 and found.covered(0.2, 0.65) and not found.covered(0.2, 0.6)
+
+
+def _read(p_other: float, meant: int | None, p_taken: float = 0.65) -> TaskScores:
+    """A task with a sure yes/no decision and a which-reading decision."""
+    options = (ReadingOption("tea", p_taken), ReadingOption("tea and cake", p_other, "other"))
+    return TaskScores((0.02,), readings=options, meant=meant)
+
+
+def test_the_reading_threshold_asks_the_fewest_readings_that_keep_the_coverage() -> None:
+    taken = _read(0.15, 0)
+    assert taken.reading_covered(0.62) and not taken.reading_asked(0.62) and taken.reading_asked(0.9)
+    assert len(taken) == 2 and len(_read(0.15, None)) == 1  # no reading passes: left out
+    # Twenty tasks whose reading meant is the one taken: no reading need be asked about (the
+    # threshold in the middle of those that ask none: a floor above 0.15 and at most 0.65).
+    found = fit([taken] * 20)
+    assert found.qhat_reading is not None and found.asked == {0.8: 0, 0.9: 0, 0.95: 0}
+    assert 1 - 0.65 <= found.qhat_reading[0.9] < 1 - 0.15
+    # Where the reading dropped was meant in four of them, more likely there (0.3) than in the
+    # others (0.1): each coverage needs one of the four at least (0.8: 17 of 20 tasks), so the
+    # threshold keeps a dropped reading 0.3 likely and not one 0.1 likely, and asks the four alone.
+    wrong, sure = _read(0.3, 1), _read(0.1, 0)
+    assert not wrong.reading_covered(0.62) and wrong.reading_covered(0.85)
+    found = fit([wrong] * 4 + [sure] * 16)
+    assert found.qhat_reading is not None and found.asked == {0.8: 4, 0.9: 4, 0.95: 4}
+    assert all(1 - 0.3 <= q < 1 - 0.1 for q in found.qhat_reading.values())
+    assert found.held_out[0.9] == pytest.approx(1.0)
+    # Without a labelled reading, the reading questions take the one threshold, as before.
+    plain = fit([TaskScores((0.1, 0.05 * i)) for i in range(1, 20)])
+    assert plain.qhat_reading == plain.single
+
+
+class _Readings:
+    """A system whose request reads two ways: the reading taken sends the apple to the user, the
+    other the coke; it answers a reading question as told and asks nothing else."""
+
+    def __init__(self) -> None:
+        self.asked: list[str] = []
+
+    def plan(self, request: str, scene: object, ask: object = None, **_: object) -> Plan:
+        options = (ReadingOption("give the apple", 0.65), ReadingOption("give the coke", 0.15, "other"))
+        question = ClarifyingQuestion(
+            "Did you mean ...?", "", tuple(o.text for o in options), (0.65, 0.15), kind="reading"
+        )
+        answer = ask(question) if callable(ask) else None
+        self.asked += [answer] if answer else []
+        thing = "coke" if answer == "give the coke" else "apple"
+        goal = GoalTrace((), False, "p", "plain", None, "need", options)
+        return Plan(
+            [PickAndPlace(thing, "user"), Done()],
+            trace=PlanTrace(config="conceptbot", goal=goal),
+            questions=[replace(question, answer=answer)],
+        )
+
+
+def test_a_reading_is_labelled_by_the_first_reading_whose_plan_passes() -> None:
+    system = _Readings()
+    coke = Task(
+        "dev-x-3", "implicit", "request", "kitchen", {"type": "assign", "assign": {"coke": ["user"]}}, ""
+    )
+    options, meant = reading_label(coke, system.plan(coke.request, None), system)
+    assert [o.text for o in options] == ["give the apple", "give the coke"] and meant == 1
+    assert system.asked == ["give the apple", "give the coke"]
+    apple = replace(coke, gold={"type": "assign", "assign": {"apple": ["user"]}})
+    assert reading_label(apple, system.plan(apple.request, None), system)[1] == 0
+    nothing = replace(coke, gold={"type": "assign", "assign": {"chips": ["user"]}})
+    assert reading_label(nothing, system.plan(apple.request, None), system)[1] is None  # left out
+    # A plan without a reading question though it read two ways: the system does not ask them all.
+    unasked = replace(system.plan(apple.request, None), questions=[])
+    with pytest.raises(ValueError, match="coverage ASK_ALL"):
+        reading_label(apple, unasked, system)
+    assert reading_label(apple, _plan(), system) == ((), None)  # read one way

@@ -180,3 +180,22 @@ def test_the_schema_rejects_what_breaks_the_contract(data: dict, why: str) -> No
     with pytest.raises(ValidationError):
         validator.validate(data)
     assert any(why in error.message for error in validator.iter_errors(data))
+
+
+def test_the_goal_s_readings_validate_and_a_reading_of_no_kind_does_not() -> None:
+    from conceptbot.core.trace import GoalTrace, ReadingOption
+
+    readings = (
+        ReadingOption("give the user the tea", 0.65),
+        ReadingOption("give the cake", float("nan"), "other"),
+    )
+    goal = GoalTrace((), False, "Give me tea.", "plain", None, "need", readings).to_dict()
+    assert goal["readings"][1] == {"text": "give the cake", "p": None, "kind": "other"}
+    data = copy.deepcopy(VALID)
+    data["trace"]["goal"] = goal
+    validator = _validator()
+    validator.validate(data)
+    data["trace"]["goal"]["readings"][0]["kind"] = "guess"
+    assert any("is not one of" in error.message for error in validator.iter_errors(data))
+    with pytest.raises(ValueError, match="kind must be one of"):
+        ReadingOption("x", 0.5, "guess")

@@ -746,11 +746,18 @@ def gold_reading(task: Task, question: ClarifyingQuestion, plan_as: Callable[[st
     the reading the plan acts on (the first). The task format says what should happen, not how the
     request reads, so what each reading would do stands in for the person's meaning; a wrong reading
     whose plan happens to pass is taken too."""
-    for reading in question.objects:
+    return meant_reading(task, question.objects, plan_as) or question.objects[0]
+
+
+def meant_reading(task: Task, readings: Sequence[str], plan_as: Callable[[str], Plan]) -> str | None:
+    """The first of ``readings`` under which the plan passes (``plan_as(reading)`` plans with that
+    answer), or None where none does: the reading the gold stands for, as :func:`gold_reading`
+    takes it, and what the plan-level calibration labels a reading decision with."""
+    for reading in readings:
         plan = plan_as(reading)
         if grade(task, plan.actions, plan.refused).ok:
             return reading
-    return question.objects[0]
+    return None
 
 
 def gold_needs(task: Task, obj: str, destination: str) -> bool:

@@ -226,6 +226,37 @@ class TargetTrace:
         }
 
 
+#: The kinds of reading a person may be asked to choose between: the one the targets are, the one
+#: the choice between the words and the plain form dropped, and a sampled plain form's.
+READING_KINDS = ("taken", "other", "sampled")
+
+
+@dataclass(frozen=True)
+class ReadingOption:
+    """One reading of a request the person could be asked about, and how likely it is the one meant.
+
+    Attributes:
+        text: The reading in words ('give the user one "fruit" and one "soda"').
+        p: P(it is the one meant): for ``taken`` and ``other`` the odds of the step of the choice
+            that kept or dropped it (``pipeline/goal/reading_odds.json``), for ``sampled`` the
+            share of the sampled plain forms that read it.
+        kind: One of :data:`READING_KINDS`.
+    """
+
+    text: str
+    p: float
+    kind: str = "taken"
+
+    def __post_init__(self) -> None:
+        if self.kind not in READING_KINDS:
+            raise ValueError(f"kind must be one of {READING_KINDS}, got {self.kind!r}")
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form (a probability that is not a number as null)."""
+        p = round(self.p, 4) if math.isfinite(self.p) else None
+        return {"text": self.text, "p": p, "kind": self.kind}
+
+
 @dataclass(frozen=True)
 class GoalTrace:
     """Where the request sends things (the goal planner's first part).
@@ -239,6 +270,11 @@ class GoalTrace:
             ``plain`` (on the plain form), ``both`` (the two agree), "" (only the words were read).
         other: Where the two readings differ, the one not taken (goal-set JSON: stack, dish, need,
             targets), else None.
+        step: Where the request reads two or more ways, the step of the choice that kept the
+            reading taken (``pipeline/goal/aided.py``'s steps), else "".
+        readings: Where it reads two or more ways, every reading the person could be asked about
+            with its probability, the one taken first (before the conformal set keeps some: what
+            the plan-level calibration fits the reading threshold on), else empty.
     """
 
     targets: tuple[TargetTrace, ...]
@@ -246,6 +282,8 @@ class GoalTrace:
     plain: str = ""
     reading: str = ""
     other: dict[str, Any] | None = None
+    step: str = ""
+    readings: tuple[ReadingOption, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (also the web page's ``goal`` event); the readings only where the request was
@@ -253,6 +291,8 @@ class GoalTrace:
         found: dict[str, Any] = {"targets": [t.to_dict() for t in self.targets], "stack": self.stack}
         if self.reading:
             found.update(plain=self.plain, reading=self.reading, other=self.other)
+        if self.readings:
+            found.update(step=self.step, readings=[r.to_dict() for r in self.readings])
         return found
 
 

@@ -334,6 +334,23 @@ def test_a_reading_is_asked_about_unless_its_set_is_the_reading_taken_alone() ->
     assert reading_question(same, 0.9066) is None  # the person could not tell the two apart
 
 
+def test_the_reading_set_keeps_the_reading_taken_and_what_is_likely_enough_never_a_guess() -> None:
+    from conceptbot.core.trace import ReadingOption
+    from conceptbot.pipeline.goal_planner.asking import reading_set
+
+    taken, other = ReadingOption("tea", 0.65), ReadingOption("tea and cake", 0.15, "other")
+    sampled = ReadingOption("cake", 0.4, "sampled")
+    assert reading_set([taken, other, sampled], 0.62) == [taken, sampled]  # floor 0.38
+    assert reading_set([taken, other, sampled], 0.9) == [taken, other, sampled]
+    assert reading_set([taken, other, sampled], 0.5) == [taken]
+    # The reading taken under the floor keeps the one dropped, however unlikely: ask, not guess.
+    assert reading_set([ReadingOption("tea", 0.3), other], 0.62) == [ReadingOption("tea", 0.3), other]
+    nan = float("nan")
+    assert reading_set([taken, ReadingOption("tea and cake", nan, "other")], 0.5)[1].kind == "other"
+    assert reading_set([ReadingOption("tea", nan), other], 0.5)[1] == other
+    assert reading_set([taken, ReadingOption("cake", nan, "sampled")], 0.9) == [taken]  # no number, no offer
+
+
 def test_sampled_readings_likely_enough_are_listed_after_the_two_readings_once_each() -> None:
     from conceptbot.pipeline.goal_planner.targets import Alternative
 

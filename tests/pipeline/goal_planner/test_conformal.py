@@ -75,6 +75,10 @@ def test_the_shipped_calibration_has_every_coverage_in_order() -> None:
     assert yes_no == sorted(yes_no) and all(0.5 <= q <= 1.0 for q in yes_no)
     assert all(0.0 < calibration.threshold_one(c) <= 1.0 for c in COVERAGES)
     assert calibration.threshold_one(0.9) < calibration.threshold(0.9)
+    # The reading decisions' own: on dev the reading meant was the one taken wherever a reading
+    # passed, so the fit asks about no more readings than at 0.8 (docs/asking.md).
+    assert calibration.qhat_reading is not None and fits.qhat_reading is not None
+    assert all(calibration.threshold_reading(c) <= calibration.threshold(c) for c in COVERAGES)
     with pytest.raises(ValueError, match=r"no conformal threshold for coverage 0\.7"):
         calibration.threshold(0.7)
 
@@ -98,6 +102,11 @@ def test_a_models_own_calibration_is_read_before_the_shipped_one(tmp_path) -> No
     found = calibration_for(tmp_path, "openai-compatible", "my/model:7b", "nograph")
     assert (found.threshold_one(0.9), found.threshold_yes_no(0.9), found.threshold(0.9)) == (0.35, 0.7, 0.5)
     assert found.threshold_one(1.0) == found.threshold_yes_no(1.0) == 1.0  # every decision asked
+    assert found.qhat_reading is None and found.threshold_reading(0.9) == 0.5  # none of its own: the one
+    readings = {"nograph": {"0.8": 0.6, "0.9": 0.62, "0.95": 0.64}}
+    path.write_text(json.dumps({"plan_qhat": own, **kinds, "plan_qhat_reading": readings, "fitted_on": "m"}))
+    found = calibration_for(tmp_path, "openai-compatible", "my/model:7b", "nograph")
+    assert (found.threshold_reading(0.9), found.threshold_reading(1.0)) == (0.62, 1.0)
     assert calibration_for(tmp_path, "llamacpp", "other") == shipped()  # another model's file is not it
     assert calibration_for(tmp_path, "openai-compatible", "my/model:7b", level="decision") == shipped(
         level="decision"

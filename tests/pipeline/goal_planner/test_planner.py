@@ -13,6 +13,7 @@ from conceptbot.core.scene import Scene, scene_from_dict
 from conceptbot.core.usage import Usage
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.conceptbot import ConceptBot
+from conceptbot.pipeline.goal_planner.conformal import shipped
 from conceptbot.pipeline.goal_planner.decide import Decider, FactFinder
 from conceptbot.pipeline.goal_planner.planner import GoalPlanner, is_person
 from conceptbot.pipeline.goal_planner.targets import (
@@ -764,7 +765,7 @@ class _TwoReadings:
 
 
 def test_where_the_request_reads_two_ways_the_person_is_asked_which_and_the_answer_is_planned() -> None:
-    reader = _TwoReadings(0.6, 0.3)
+    reader = _TwoReadings(0.6, 0.4)
     llm = FakeLLM(scores=[PRIOR, SAFE, PRIOR, SAFE])  # the risk question of each move
     asked: list = []
 
@@ -789,17 +790,23 @@ def test_where_the_request_reads_two_ways_the_person_is_asked_which_and_the_answ
 
 
 def test_a_reading_question_unanswered_acts_on_the_reading_taken_with_its_odds() -> None:
-    reader = _TwoReadings(0.6, 0.3)
+    reader = _TwoReadings(0.6, 0.4)
     llm = FakeLLM(scores=[PRIOR, SAFE])
     result = GoalPlanner(reader, Decider(llm, FactFinder(None))).plan("chips", SCENE)
     assert format_actions(result.actions) == ["pick_and_place(chips, user)", "done()"]
-    assert [(q.kind, q.answer, q.p_yes) for q in result.questions] == [("reading", None, (0.6, 0.3))]
+    assert [(q.kind, q.answer, q.p_yes) for q in result.questions] == [("reading", None, (0.6, 0.4))]
     assert reader.alternatives == 0  # the other reading is not made unless it is meant
+    # The trace keeps every reading with its odds (what the calibration fits the reading threshold on).
+    goal = result.trace.goal.to_dict()
+    assert goal["step"] == "fewer" and [(r["kind"], r["p"]) for r in goal["readings"]] == [
+        ("taken", 0.6),
+        ("other", 0.4),
+    ]
 
 
 def test_neither_reading_meant_is_a_refusal_and_nothing_is_decided() -> None:
     llm = FakeLLM(scores=[])
-    planner = GoalPlanner(_TwoReadings(0.6, 0.3), Decider(llm, FactFinder(None)))
+    planner = GoalPlanner(_TwoReadings(0.6, 0.4), Decider(llm, FactFinder(None)))
     result = planner.plan("chips", SCENE, ask=lambda q: "none")
     assert result.refused and format_actions(result.actions) == ["done()"]
     assert "neither reading" in (result.reason or "") and result.questions[0].answer == "none"
@@ -807,13 +814,20 @@ def test_neither_reading_meant_is_a_refusal_and_nothing_is_decided() -> None:
 
 
 def test_a_reading_whose_other_is_unlikely_is_not_asked_about() -> None:
-    # At 0.9 a reading stays in the set at P >= 1 - 0.9066: 0.04 does not.
+    # At 0.9 a dropped reading stays in the set at P >= 1 - the reading decisions' own threshold
+    # (0.62 shipped): 0.3 does not, though the one threshold for every decision (0.88) keeps it.
+    calibration = shipped()
+    assert 1 - calibration.threshold_reading(0.9) > 0.3 >= 1 - calibration.threshold(0.9)
     llm = FakeLLM(scores=[PRIOR, SAFE])
     asked: list = []
-    planner = GoalPlanner(_TwoReadings(0.67, 0.04), Decider(llm, FactFinder(None)))
+    planner = GoalPlanner(_TwoReadings(0.67, 0.3), Decider(llm, FactFinder(None)))
     result = planner.plan("chips", SCENE, ask=lambda q: asked.append(q) or "none")
     assert not asked and not result.questions
     assert format_actions(result.actions) == ["pick_and_place(chips, user)", "done()"]
+    # Asking about every decision (coverage 1), it is asked.
+    llm = FakeLLM(scores=[PRIOR, SAFE])
+    planner = GoalPlanner(_TwoReadings(0.67, 0.3), Decider(llm, FactFinder(None)), coverage=1.0)
+    assert [q.kind for q in planner.plan("chips", SCENE).questions] == ["reading"]
 
 
 def test_a_sampled_reading_the_person_chooses_is_planned() -> None:
@@ -827,7 +841,7 @@ def test_a_sampled_reading_the_person_chooses_is_planned() -> None:
 
     class _Sampled:
         def read(self, request: str, scene: Scene) -> TargetsRead:
-            more = (Alternative("give the user the glue", 0.33, glue),)
+            more = (Alternative("give the user the glue", 0.5, glue),)
             doubt = ReadingDoubt("give the user the chips", "", 0.8, 0.0, "agree", unused, more)
             chips = [Target("user", 1, "named", ["chips"])]
             return TargetsRead(False, chips, Usage(calls=0), "p", "both", None, doubt)

@@ -22,9 +22,10 @@ decision get conformal prediction sets (:mod:`.conformal`):
 - which of two readings of the request was meant, where the rules read its words and the model's
   plain form of it differently (:class:`~conceptbot.pipeline.goal_planner.targets.ReadingDoubt`):
   the set holds each reading at least ``1 - qhat`` likely by the odds of the step that chose
-  (:mod:`conceptbot.pipeline.goal.doubt`); unless it is the reading taken alone, the person is
-  asked before anything is decided ("Did you mean: give the user one "fruit" and one "soda", or
-  give the user one "fruit"?"). Neither is a refusal.
+  (:mod:`conceptbot.pipeline.goal.doubt`), with the reading decisions' own threshold where the
+  calibration has one (``qhat_reading``), ``qhat`` otherwise; unless it is the reading taken
+  alone, the person is asked before anything is decided ("Did you mean: give the user one "fruit"
+  and one "soda", or give the user one "fruit"?"). Neither is a refusal.
 
 The target with the most uncertain decision is asked first, at most :data:`MAX_QUESTIONS` per
 plan. Asked (``ask`` given), the answer replaces the decisions; not asked, the plan acts on each
@@ -40,7 +41,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 
 from conceptbot.core.system import Ask
-from conceptbot.core.trace import ClarifyingQuestion, DecisionTrace, JudgementTrace
+from conceptbot.core.trace import ClarifyingQuestion, DecisionTrace, JudgementTrace, ReadingOption
 from conceptbot.pipeline.goal_planner.conformal import OLD_RULE, DecisionSet, decision_set
 from conceptbot.pipeline.goal_planner.decide import Judgement
 from conceptbot.pipeline.goal_planner.targets import ALL, ReadingDoubt, Target
@@ -273,27 +274,50 @@ def clarify(
     )
 
 
-def reading_question(doubt: ReadingDoubt, qhat: float) -> ClarifyingQuestion | None:
-    """The question of which reading was meant, or None where the set is the reading taken alone.
+def reading_options(doubt: ReadingDoubt) -> tuple[ReadingOption, ...]:
+    """Every reading of a request that reads two or more ways, with its probability: the one taken,
+    the one the choice dropped (where the words and the plain form differ), each sampled one."""
+    options = [ReadingOption(doubt.taken, doubt.p_taken, "taken")]
+    if doubt.other:
+        options.append(ReadingOption(doubt.other, doubt.p_other, "other"))
+    return (*options, *(ReadingOption(m.text, m.p, "sampled") for m in doubt.more))
+
+
+def reading_set(options: Iterable[ReadingOption], qhat: float) -> list[ReadingOption]:
+    """The conformal set of readings (:func:`reading_options`), the one taken first.
 
     The set holds the reading dropped unless it is less than ``1 - qhat`` likely and the one taken
-    is not, and each sampled reading at least ``1 - qhat`` likely; a reading that reads the same in
-    words as one before it is left out (the person could not tell them apart)."""
+    is not, and each sampled reading at least ``1 - qhat`` likely (a probability that is not a
+    number keeps the reading dropped: ask, never guess); a reading that reads the same in words as
+    one before it is left out (the person could not tell them apart). The plan-level calibration
+    fits the reading threshold by this rule (:mod:`conceptbot.bench.conformal_fit`)."""
+    found = list(options)
     floor = 1.0 - qhat
-    options = [(doubt.taken, doubt.p_taken)]
-    if doubt.other and not (doubt.p_taken >= floor and doubt.p_other < floor):
-        options.append((doubt.other, doubt.p_other))
-    options += [(m.text, m.p) for m in doubt.more if m.p >= floor]
+    taken = next((o.p for o in found if o.kind == "taken"), 1.0)
+
+    def kept(option: ReadingOption) -> bool:
+        if option.kind == "taken":
+            return True
+        if option.kind == "other":
+            return not (taken >= floor and option.p < floor)
+        return option.p >= floor
+
     seen: set[str] = set()
-    kept = [(text, p) for text, p in options if not (text in seen or seen.add(text))]
+    return [o for o in found if kept(o) and not (o.text in seen or seen.add(o.text))]
+
+
+def reading_question(doubt: ReadingDoubt, qhat: float) -> ClarifyingQuestion | None:
+    """The question of which reading was meant, or None where the set (:func:`reading_set`) is the
+    reading taken alone."""
+    kept = reading_set(reading_options(doubt), qhat)
     if len(kept) < 2:
         return None
-    listed = ", or ".join(text for text, _ in kept)
+    listed = ", or ".join(o.text for o in kept)
     return ClarifyingQuestion(
         f"Did you mean: {listed}? One of them, or none.",
         "",
-        tuple(text for text, _ in kept),
-        tuple(_shown(p) for _, p in kept),
+        tuple(o.text for o in kept),
+        tuple(_shown(o.p) for o in kept),
         kind="reading",
     )
 

@@ -28,6 +28,7 @@ from conceptbot.core.system import ASK_ALL, COVERAGES, LEVELS, WHICH_ONE
 
 __all__ = [
     "COVERAGES",
+    "KINDS",
     "LEVELS",
     "Calibration",
     "DecisionSet",
@@ -45,9 +46,9 @@ CALIBRATION_DOC = (
     "P(yes) over the judgement set (benchmarks/fit_judgements.py --conformal --write). plan_qhat: plan "
     "level, a dev task's worst decision (benchmarks/fit_conformal_plans.py --write), for the which-one "
     "rule plan_which_one names; plan_qhat_RULE: for another rule. plan_qhat is one threshold for "
-    "every decision (the tasks' worst), which the reading questions take; plan_qhat_yes_no and "
-    "plan_qhat_one (plan_qhat_yes_no_RULE, plan_qhat_one_RULE) are the pair per kind of decision "
-    "the calibrated decisions take (plan_qhat where they are missing). Refit for another model."
+    "every decision (the tasks' worst); plan_qhat_yes_no, plan_qhat_one and plan_qhat_reading "
+    "(plan_qhat_yes_no_RULE, ...) are the thresholds per kind of decision the yes/no, which-one "
+    "and which-reading decisions take (plan_qhat where they are missing). Refit for another model."
 )
 #: The which-one rule of a plan-level calibration that names none (written before 2026-12-03), and
 #: of the sets where no rule is given.
@@ -119,6 +120,7 @@ class Calibration:
     rule: str = OLD_RULE
     qhat_one: dict[float, float] | None = None  # which-one decisions' own (None: qhat's)
     qhat_yes_no: dict[float, float] | None = None  # yes/no decisions' own (None: qhat's)
+    qhat_reading: dict[float, float] | None = None  # which-reading decisions' own (None: qhat's)
 
     def threshold_one(self, coverage: float) -> float:
         """The which-one decisions' threshold for ``coverage``: their own where it was fitted, else
@@ -137,6 +139,15 @@ class Calibration:
             ValueError: A coverage without a fitted threshold.
         """
         return self._own(self.qhat_yes_no, coverage)
+
+    def threshold_reading(self, coverage: float) -> float:
+        """The which-reading decisions' threshold for ``coverage`` (whether to ask which reading of
+        the request was meant): their own where it was fitted, else :meth:`threshold`'s.
+
+        Raises:
+            ValueError: A coverage without a fitted threshold.
+        """
+        return self._own(self.qhat_reading, coverage)
 
     def _own(self, found: dict[float, float] | None, coverage: float) -> float:
         if coverage == ASK_ALL or not found or coverage not in found:
@@ -173,7 +184,7 @@ def plan_key(data: dict[str, Any], rule: str | None) -> tuple[str, str]:
 
 
 #: The kinds of calibrated decision with thresholds of their own beside the plan-level one.
-KINDS = ("yes_no", "one")
+KINDS = ("yes_no", "one", "reading")
 
 
 def kind_key(key: str, kind: str) -> str:
@@ -226,8 +237,8 @@ def shipped(combination: str = "graph", level: str = "plan", rule: str | None = 
     qhat = {float(k): float(v) for k, v in fitted.items()}
     if level != "plan":
         return Calibration(qhat, str(data[where]), False, rule)
-    ones, yes_no = (_kind(data, key, combination, kind) for kind in ("one", "yes_no"))
-    return Calibration(qhat, str(data[where]), True, rule, ones, yes_no)
+    ones, yes_no, reading = (_kind(data, key, combination, kind) for kind in ("one", "yes_no", "reading"))
+    return Calibration(qhat, str(data[where]), True, rule, ones, yes_no, reading)
 
 
 def user_file(directory: Path, backend: str, model: str) -> Path:
@@ -262,11 +273,11 @@ def calibration_for(
         fitted = data[key][combination]
         qhat = {float(c): float(fitted[str(c)]) for c in COVERAGES}
         where = str(data["fitted_on"])
-        ones, yes_no = (_kind(data, key, combination, kind) for kind in ("one", "yes_no"))
+        ones, yes_no, reading = (_kind(data, key, combination, kind) for kind in ("one", "yes_no", "reading"))
     except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError, AttributeError) as exc:
         raise ConfigError(
             f"{path} is not a conformal calibration for this rule ({type(exc).__name__}: {exc})", hint=fix
         ) from None
     if not all(0.0 <= q <= 1.0 for q in qhat.values()):  # NaN fails too
         raise ConfigError(f"{path}: a threshold is not a number in [0, 1]", hint=fix)
-    return Calibration(qhat, where, True, rule, ones, yes_no)
+    return Calibration(qhat, where, True, rule, ones, yes_no, reading)

@@ -58,7 +58,13 @@ from conceptbot.core.trace import (
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline import modes
 from conceptbot.pipeline.affordance import Gripper, affordance
-from conceptbot.pipeline.goal_planner.asking import clarify, is_sort, move_words, reading_question
+from conceptbot.pipeline.goal_planner.asking import (
+    clarify,
+    is_sort,
+    move_words,
+    reading_options,
+    reading_question,
+)
 from conceptbot.pipeline.goal_planner.companions import (
     CompanionWeights,
     candidates,
@@ -308,13 +314,23 @@ class GoalPlanner:
         observer.progress("Goal: where the request sends things")
         # A pile has no destination of its own (the objects are the destinations): no targets.
         read = self.targets.read(request, scene)
-        # The reading questions take the one plan-level threshold (they are not in the per-kind
-        # fit: their odds come from the goal set, not from dev plans).
-        qhat = self.calibration.threshold(self.coverage)
+        # The reading questions take their own threshold where the calibration has one (fitted on
+        # the dev plans with the others: their odds come from the goal set's readings, whether the
+        # plan needs the reading dropped from the dev plans), else the one plan-level threshold.
+        qhat = self.calibration.threshold_reading(self.coverage)
+        doubt = read.doubt
         # Where the request reads two ways, which was meant comes first: it changes the targets.
         read, about_reading, meant = self._reading(read, qhat, ask)
         stack, targets, usage["goal"] = read.stack, read.targets, read.usage
-        goal = GoalTrace(tuple(target_trace(t) for t in targets), stack, read.plain, read.reading, read.other)
+        goal = GoalTrace(
+            tuple(target_trace(t) for t in targets),
+            stack,
+            read.plain,
+            read.reading,
+            read.other,
+            doubt.step if doubt else "",
+            reading_options(doubt) if doubt else (),
+        )
         observer.event("goal", goal)
         if meant is None:
             # The person meant neither reading: nothing is decided or moved (fail closed).
