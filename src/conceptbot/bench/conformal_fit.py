@@ -403,9 +403,8 @@ def fit(tasks: Sequence[TaskScores]) -> PlanFit:
     worst = [max((*t.yes_no, *t.one), default=0.0) for t in tasks]
     single = {coverage: conformal_threshold(worst, coverage) for coverage in COVERAGES}
     readings = any(t.meant is not None for t in tasks)
-    chosen = {}
     for coverage in COVERAGES:
-        r, y, o = chosen[coverage] = _choose(cover_sum, ask_sum, empty_sum, questions, n, coverage)
+        r, y, o = _choose(cover_sum, ask_sum, empty_sum, questions, n, coverage)
         qhat[coverage], qhat_one[coverage] = float(GRID_YES_NO[y]), float(GRID_ONE[o])
         qhat_reading[coverage] = float(GRID_READING[r]) if readings else single[coverage]
         if not any(t.one for t in tasks):  # nothing to fit it on: the yes/no threshold stands in
