@@ -108,6 +108,11 @@ READING = ClarifyingQuestion(
 
 def reading_worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: Any = None) -> None:
     """A run whose request reads two ways: which reading was meant, then the plan by that one."""
+    readings = [
+        {"text": READINGS[0], "p": 0.6, "kind": "taken"},
+        {"text": READINGS[1], "p": 0.3, "kind": "other"},
+    ]
+    emit("goal", {"data": {"targets": [], "stack": False, "step": "fewer", "readings": readings}})
     chosen = READING.read(ask(READING)) if ask is not None else ()
     plan = {
         (READINGS[0],): ["pick_and_place(apple, user)"],
@@ -291,6 +296,9 @@ def test_the_page_asks_which_reading_was_meant(server: str, browser) -> None:
 
     _ask(server, browser, "choose-box")
     assert browser.find_element(By.ID, "question-text").text == READING.text
+    # The goal says each reading's odds, and which the plan acts on unless told otherwise.
+    shown = browser.find_element(By.ID, "targets").text
+    assert 'readings (fewer): taken “give the user one "fruit"” P 0.60; dropped' in shown
     boxes = browser.find_elements(By.CSS_SELECTOR, "#choose-options input")
     assert [b.get_attribute("type") for b in boxes] == ["radio"] * 2  # one reading, no "another"
     labels = [li.text.strip() for li in browser.find_elements(By.CSS_SELECTOR, "#choose-options li")]

@@ -187,6 +187,11 @@ function showGoal(goal) {
                     sampled: "read from a sampled plain form, as you chose"};
   if (goal.reading) $("targets").append(el("li", {class: "plain"},
     `said plainly by the model: “${goal.plain}” (${readings[goal.reading]})`));
+  // Where it reads two ways or more: each reading with P(it is the one meant), whether asked or not.
+  const kinds = {taken: "taken", other: "dropped", sampled: "sampled"};
+  if (goal.readings && goal.readings.length > 1) $("targets").append(el("li", {class: "plain"},
+    `readings (${goal.step}): ` + goal.readings.map((r) =>
+      `${kinds[r.kind]} “${r.text}” ${r.p === null ? "P ?" : "P " + r.p.toFixed(2)}`).join("; ")));
 }
 
 function showDecisions(decisions) {
