@@ -13,7 +13,9 @@ BENCHMARKS = sorted((Path(__file__).resolve().parents[1] / "benchmarks").glob("*
 
 
 @pytest.mark.parametrize("script", BENCHMARKS, ids=[p.stem for p in BENCHMARKS])
-def test_a_benchmark_script_imports(script: Path) -> None:
+def test_a_benchmark_script_imports(script: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # Run as a script, a benchmark has its own folder first on the path (some import a sibling).
+    monkeypatch.syspath_prepend(str(script.parent))
     spec = importlib.util.spec_from_file_location(f"benchmark_{script.stem}", script)
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
@@ -175,3 +177,26 @@ def test_the_paraphrase_benchmark_takes_the_rounds_asked_for() -> None:
     every = paraphrases.chosen_rows({"dev-implicit-4"}, None, False)
     assert len(every) > len(held) and all(r["split"] == "paraphrase" for r in every)
     assert any(r["split"] == "original" for r in paraphrases.chosen_rows({"dev-implicit-4"}, None, True))
+
+
+def test_the_held_out_reading_labels_are_summed_at_both_thresholds(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.syspath_prepend(str(BENCHMARKS[0].parent))
+    spec = importlib.util.spec_from_file_location(
+        "benchmark_reading_labels", BENCHMARKS[0].parent / "bench_reading_labels.py"
+    )
+    assert spec is not None and spec.loader is not None
+    labels = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(labels)
+    taken = {"text": "a", "p": 0.65, "kind": "taken"}
+    found = [
+        {"readings": [taken, {"text": "b", "p": 0.125, "kind": "other"}], "meant": 0},
+        {"readings": [taken, {"text": "c", "p": 0.3, "kind": "other"}], "meant": 1},
+        {"readings": [taken, {"text": "d", "p": 0.2, "kind": "other"}], "meant": None},  # none passes
+        {"readings": [], "meant": None},  # read one way
+    ]
+    row = labels.summary(found, 0.9)
+    assert (row["paraphrases"], row["two_ways"], row["labelled"]) == (4, 3, 2)
+    assert row["meant"] == {"taken": 1, "other": 1}
+    # The one threshold (0.884 at 0.9) keeps both dropped readings; the reading one (0.62) neither.
+    assert row["one threshold (before)"]["asked"] == 2 and row["one threshold (before)"]["covered"] == 2
+    assert row["reading threshold"]["asked"] == 0 and row["reading threshold"]["covered"] == 1
