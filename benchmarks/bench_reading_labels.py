@@ -6,10 +6,17 @@ each reading planned as the person's answer, the other questions answered from t
 Printed: how many paraphrases read two ways, which reading the plan passes with (the one taken, the
 one dropped, a sampled one, none), and for the shipped reading threshold and the one threshold the
 reading questions took before (``plan_qhat``), how many would be asked and how many sets hold the
-reading meant. The dev tasks' own requests fitted the threshold; the paraphrases did not.
+reading meant.
+
+``--write`` fits the reading decisions' own threshold on these labels and stores it in
+``src/conceptbot/pipeline/conformal.json`` (``plan_qhat_reading``, for both which-one rules and both
+combinations: the readings do not depend on either): split conformal's quantile of ``1 - P(the
+reading meant)`` over the labelled paraphrases, each round's fit checked on the other round first.
+The dev tasks' own requests are no calibration set for it: the reading rules were built on them, and
+the reading taken was the one meant in all 21 of them that read two ways.
 
     .venv/bin/python benchmarks/bench_reading_labels.py [--rounds 11,12] [--category implicit]
-        [--out results/reading-labels-qwen2.5-coder-1.5b.jsonl] [--resume]
+        [--out results/reading-labels-qwen2.5-coder-1.5b.jsonl] [--resume] [--write]
 """
 
 from __future__ import annotations
@@ -25,13 +32,14 @@ from bench_paraphrase_plans import chosen_rows
 from conceptbot.bench.conformal_fit import reading_label
 from conceptbot.bench.grading import Task, load_tasks, task_scene
 from conceptbot.core.config import load_settings
-from conceptbot.core.system import ASK_ALL, PlannerSystem, SystemOptions
+from conceptbot.core.system import ASK_ALL, COVERAGES, PlannerSystem, SystemOptions
 from conceptbot.core.trace import ReadingOption
 from conceptbot.pipeline.goal_planner.asking import reading_set
-from conceptbot.pipeline.goal_planner.conformal import shipped
+from conceptbot.pipeline.goal_planner.conformal import conformal_threshold, shipped
 from conceptbot.systems import build_system
 
 OUT = Path("results/reading-labels-qwen2.5-coder-1.5b.jsonl")
+CONFORMAL = Path(__file__).resolve().parents[1] / "src" / "conceptbot" / "pipeline" / "conformal.json"
 
 
 def label(system: PlannerSystem, task: Task, request: str) -> dict:
@@ -72,12 +80,59 @@ def summary(found: list[dict], coverage: float) -> dict:
     return out
 
 
+def nonconformity(found: list[dict]) -> list[float]:
+    """``1 - P(the reading meant)`` of each labelled paraphrase (a probability that is not one: 1)."""
+    scores = []
+    for f in found:
+        if f["meant"] is None:
+            continue
+        p = f["readings"][f["meant"]]["p"]
+        scores.append(1.0 - p if isinstance(p, int | float) and 0.0 <= p <= 1.0 else 1.0)
+    return scores
+
+
+def fit_reading(found: list[dict]) -> dict[float, float]:
+    """The reading threshold per coverage: split conformal's quantile of :func:`nonconformity`."""
+    scores = nonconformity(found)
+    return {coverage: conformal_threshold(scores, coverage) for coverage in COVERAGES}
+
+
+def write(found: list[dict], rounds: str) -> None:
+    """Print each round's fit checked on the others, and store the fit on all of them."""
+    by_round: dict[int, list[dict]] = {}
+    for f in found:
+        by_round.setdefault(f["round"], []).append(f)
+    for held, rows in sorted(by_round.items()):
+        rest = [f for f in found if f["round"] != held]
+        if not nonconformity(rest) or not nonconformity(rows):
+            continue
+        fitted = fit_reading(rest)
+        for coverage, qhat in fitted.items():
+            scores = nonconformity(rows)
+            kept = sum(round(1.0 - s, 4) >= round(1.0 - qhat, 4) for s in scores) / len(scores)
+            print(f"fitted without round {held}: {coverage} qhat {qhat:.4f}, round {held} covered {kept:.1%}")
+    fitted = fit_reading(found)
+    data = json.loads(CONFORMAL.read_text(encoding="utf-8"))
+    thresholds = {str(c): round(q, 4) for c, q in fitted.items()}
+    for key in ("plan_qhat_reading", "plan_qhat_reading_fits"):
+        data[key] = {"graph": thresholds, "nograph": thresholds}
+    labelled = len(nonconformity(found))
+    data["reading_fitted_on"] = (
+        f"goal-set paraphrase rounds {rounds}: {labelled} labelled readings, {Path(__file__).name}"
+    )
+    CONFORMAL.write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
+    print(f"wrote {CONFORMAL}: plan_qhat_reading {thresholds}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rounds", default="11,12", help="comma-separated goal-set rounds (held out: 11,12)")
     parser.add_argument("--category", help="a dev category (implicit, risk, ...)")
     parser.add_argument("--out", type=Path, default=OUT, help="results file, a JSON line per paraphrase")
     parser.add_argument("--resume", action="store_true", help="keep the paraphrases already in --out")
+    parser.add_argument(
+        "--write", action="store_true", help=f"store the reading threshold in {CONFORMAL.name}"
+    )
     args = parser.parse_args()
     rows = chosen_rows(None, args.category, False, {int(r) for r in args.rounds.split(",")})
     tasks = {t.id: t for t in load_tasks(split="dev")}
@@ -107,8 +162,10 @@ def main() -> None:
                 f"[{n}/{len(rows)}] {row['task']}: {row['request']} -> {kinds} meant {found['meant']}",
                 flush=True,
             )
-    for coverage in (0.8, 0.9, 0.95):
+    for coverage in COVERAGES:
         print(coverage, json.dumps(summary(results, coverage)))
+    if args.write:
+        write(results, args.rounds)
 
 
 if __name__ == "__main__":

@@ -14,11 +14,9 @@ every dev task once without asking (through the cache; the probabilities do not 
 coverage: ``qhat`` and the leave-one-task-out coverage of whole tasks (how often a task's every
 decision would be covered by a ``qhat`` fitted without it). ``--write`` stores the thresholds in
 ``src/conceptbot/pipeline/conformal.json``, which the planner reads: ``plan_qhat`` for the rule
-``--which-one`` names (the default), ``plan_qhat_RULE`` for the other: one threshold for every decision,
-and beside each the threshold per kind of decision (``plan_qhat_yes_no``, ``plan_qhat_one``,
-``plan_qhat_reading``, and ``_RULE`` for the other rule). The tasks are planned asking about every
-decision and reading (coverage 1, nobody answering), and each task whose request reads two ways is
-planned again with each reading as the answer, to label which was meant.
+``--which-one`` names (the default), ``plan_qhat_RULE`` for the other: one threshold for every decision
+(the reading questions take it), and beside each the pair per kind of decision the calibrated
+decisions take (``plan_qhat_yes_no``, ``plan_qhat_one``, and ``_RULE`` for the other rule).
 
     .venv/bin/python benchmarks/fit_conformal_plans.py [--write] [--which-one fits|softmax]
 """
@@ -33,8 +31,8 @@ from typing import Any
 from conceptbot.bench.conformal_fit import SYSTEMS, PlanFit, collect, fit, thresholds_document
 from conceptbot.bench.grading import load_tasks
 from conceptbot.core.config import load_settings
-from conceptbot.core.system import ASK_ALL, WHICH_ONE, SystemOptions
-from conceptbot.pipeline.goal_planner.conformal import CALIBRATION_DOC, KINDS, shipped
+from conceptbot.core.system import WHICH_ONE, SystemOptions
+from conceptbot.pipeline.goal_planner.conformal import CALIBRATION_DOC, shipped
 from conceptbot.systems import build_system
 
 CONFORMAL = Path("src/conceptbot/pipeline/conformal.json")
@@ -42,25 +40,19 @@ CONFORMAL = Path("src/conceptbot/pipeline/conformal.json")
 
 def fit_system(system_name: str) -> dict[str, PlanFit]:
     """Plan the dev tasks with one system and fit each which-one rule; print the figures."""
-    # Asking about every decision and reading (nobody answers): the probabilities do not depend on
-    # the coverage, and every reading is listed so that each can be planned as the answer.
-    system = build_system(load_settings(), system_name, SystemOptions(coverage=ASK_ALL))
+    system = build_system(load_settings(), system_name, SystemOptions())
     fits = {rule: fit(scores) for rule, scores in collect(system, load_tasks(split="dev")).items()}
     for rule, found in fits.items():
         print(
             f"\n{system_name}, which-one rule {rule}: {found.tasks} dev tasks with calibrated decisions "
             f"({found.decisions} decisions)"
         )
-        print(
-            f"{'coverage':>8} {'yes/no':>6} {'one':>6} {'reading':>7} {'single':>6} {'asked':>5} "
-            f"{'leave-one-out':>13}"
-        )
+        print(f"{'coverage':>8} {'yes/no':>6} {'one':>6} {'single':>6} {'asked':>5} {'leave-one-out':>13}")
         ones, single, asked = found.qhat_one or found.qhat, found.single or found.qhat, found.asked or {}
-        readings = found.qhat_reading or single
         for coverage, q in found.qhat.items():
             print(
-                f"{coverage:>8.2f} {q:>6.3f} {ones[coverage]:>6.3f} {readings[coverage]:>7.3f} "
-                f"{single[coverage]:>6.3f} {asked.get(coverage, 0):>5} {found.held_out[coverage]:>13.1%}"
+                f"{coverage:>8.2f} {q:>6.3f} {ones[coverage]:>6.3f} {single[coverage]:>6.3f} "
+                f"{asked.get(coverage, 0):>5} {found.held_out[coverage]:>13.1%}"
             )
     return fits
 
@@ -71,7 +63,7 @@ def merged(data: dict[str, Any], fits: dict[str, dict[str, PlanFit]], rule: str)
     the default which-one rule."""
     data = {**data, "_doc": CALIBRATION_DOC}
     # The default rule's thresholds are plan_qhat and its kinds' keys, not plan_qhat_RULE.
-    for stale in (f"plan_qhat_{rule}", *(f"plan_qhat_{kind}_{rule}" for kind in KINDS)):
+    for stale in (f"plan_qhat_{rule}", f"plan_qhat_one_{rule}", f"plan_qhat_yes_no_{rule}"):
         data.pop(stale, None)
     for key, value in thresholds_document(fits, rule).items():
         kept = data.get(key) if isinstance(data.get(key), dict) else {}

@@ -194,9 +194,13 @@ def test_the_held_out_reading_labels_are_summed_at_both_thresholds(monkeypatch: 
         {"readings": [taken, {"text": "d", "p": 0.2, "kind": "other"}], "meant": None},  # none passes
         {"readings": [], "meant": None},  # read one way
     ]
-    row = labels.summary(found, 0.9)
+    row = labels.summary(found, 0.8)
     assert (row["paraphrases"], row["two_ways"], row["labelled"]) == (4, 3, 2)
     assert row["meant"] == {"taken": 1, "other": 1}
-    # The one threshold (0.884 at 0.9) keeps both dropped readings; the reading one (0.62) neither.
-    assert row["one threshold (before)"]["asked"] == 2 and row["one threshold (before)"]["covered"] == 2
+    # At 0.8 the one threshold (0.78) keeps the dropped reading 0.3 likely; the reading one (0.35)
+    # keeps neither.
+    assert row["one threshold (before)"]["asked"] == 1 and row["one threshold (before)"]["covered"] == 2
     assert row["reading threshold"]["asked"] == 0 and row["reading threshold"]["covered"] == 1
+    # The threshold is split conformal's quantile of 1 - P(the reading meant), labelled rows only.
+    assert labels.nonconformity(found) == pytest.approx([0.35, 0.7])
+    assert labels.fit_reading(found)[0.8] == 1.0  # two rows: too few for 0.8, keep every reading

@@ -120,35 +120,6 @@ def test_split_scores_keep_the_kinds_apart() -> None:
     assert len(found) == 2 and found.covered(0.2, 0.65) and not found.covered(0.2, 0.6)
 
 
-def _read(p_other: float, meant: int | None, p_taken: float = 0.65) -> TaskScores:
-    """A task with a sure yes/no decision and a which-reading decision."""
-    options = (ReadingOption("tea", p_taken), ReadingOption("tea and cake", p_other, "other"))
-    return TaskScores((0.02,), readings=options, meant=meant)
-
-
-def test_the_reading_threshold_asks_the_fewest_readings_that_keep_the_coverage() -> None:
-    taken = _read(0.15, 0)
-    assert taken.reading_covered(0.62) and not taken.reading_asked(0.62) and taken.reading_asked(0.9)
-    assert len(taken) == 2 and len(_read(0.15, None)) == 1  # no reading passes: left out
-    # Twenty tasks whose reading meant is the one taken: no reading need be asked about (the
-    # threshold in the middle of those that ask none: a floor above 0.15 and at most 0.65).
-    found = fit([taken] * 20)
-    assert found.qhat_reading is not None and found.asked == {0.8: 0, 0.9: 0, 0.95: 0}
-    assert 1 - 0.65 <= found.qhat_reading[0.9] < 1 - 0.15
-    # Where the reading dropped was meant in four of them, more likely there (0.3) than in the
-    # others (0.1): each coverage needs one of the four at least (0.8: 17 of 20 tasks), so the
-    # threshold keeps a dropped reading 0.3 likely and not one 0.1 likely, and asks the four alone.
-    wrong, sure = _read(0.3, 1), _read(0.1, 0)
-    assert not wrong.reading_covered(0.62) and wrong.reading_covered(0.85)
-    found = fit([wrong] * 4 + [sure] * 16)
-    assert found.qhat_reading is not None and found.asked == {0.8: 4, 0.9: 4, 0.95: 4}
-    assert all(1 - 0.3 <= q < 1 - 0.1 for q in found.qhat_reading.values())
-    assert found.held_out[0.9] == pytest.approx(1.0)
-    # Without a labelled reading, the reading questions take the one threshold, as before.
-    plain = fit([TaskScores((0.1, 0.05 * i)) for i in range(1, 20)])
-    assert plain.qhat_reading == plain.single
-
-
 class _Readings:
     """A system whose request reads two ways: the reading taken sends the apple to the user, the
     other the coke; it answers a reading question as told and asks nothing else."""

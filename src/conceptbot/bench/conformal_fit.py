@@ -11,26 +11,16 @@ request was read wrong, and no set of that target's objects can cover it). Both 
 from the same plans, so one pass over the tasks fits both; the tasks without a calibrated decision
 take no part.
 
-Four thresholds per coverage. ``single``: the split-conformal quantile of the tasks' worst yes/no
-and which-one decisions, one threshold for every decision (what a calibration file without the
-others gives every kind). And one per kind of decision: ``qhat`` for yes/no decisions,
-``qhat_one`` for which-one decisions and ``qhat_reading`` for which reading of the request was
-meant, the grid thresholds with which the fewest dev tasks get a question while the chosen share of
-tasks (split conformal's ``ceil((n + 1) * coverage)``) still has every decision in its prediction
-set; on a tie, the least yes/no threshold, then the fewest which-one sets that keep no candidate,
-then the fewest reading questions, and the reading and which-one thresholds in the middle of those
-tied. A task asks where a yes/no decision keeps both answers, a which-one decision keeps two or more
-candidates or none (then the likeliest are offered), or the reading set keeps two readings or more.
-
-A which-reading decision (where the rules read the request's words and the model's plain form
-differently, or sampled plain forms read it otherwise) scores its readings by the odds of the step
-of the choice (``pipeline/goal/reading_odds.json``, counted on the goal set) and the share of the
-sampled forms; it is labelled on dev by planning each reading as the person's answer, the other
-questions answered from the gold: the reading meant is the first under which the plan passes (the
-one taken first), and one where no reading passes is left out. Before then the reading
-questions took ``single``, which kept every dropped reading at 0.9: 20 of the 108 dev tasks and 15
-of the 47 were asked which reading was meant, and the gold's answer was the reading taken in every
-one (docs/asking.md, eighteenth session, 2026-12-05).
+Three thresholds per coverage. ``single``: the split-conformal quantile of the tasks' worst
+decisions, one threshold for every decision (the reading questions take it where the calibration
+has no reading threshold of its own). And a pair, one per
+kind of decision: ``qhat`` for yes/no decisions and ``qhat_one`` for which-one decisions, the grid
+pair with which the fewest dev tasks get a question while the chosen share of tasks (split
+conformal's ``ceil((n + 1) * coverage)``) still has every decision in its prediction set; on a tie,
+the least yes/no threshold, then the fewest which-one sets that keep no candidate, and the
+which-one threshold in the middle of those tied. A task asks where a yes/no decision keeps both
+answers, or a which-one decision keeps two or more candidates or none (then the likeliest are
+offered).
 
 The single threshold for both kinds (as before 2026-12-05) let the yes/no decisions
 of sorts set the which-one threshold too: at 0.9 a candidate 13% likely was kept, so "which one"
@@ -40,13 +30,18 @@ tried first) falls on the few confidently wrong ones: it kept nearly every candi
 four dev tasks were added. Choosing the pair on dev fits two numbers to the calibration tasks; the
 leave-one-task-out coverage printed beside each (the pair chosen without the task, then the task
 checked) says how well the promise holds on a task the fit has not seen.
+
+The which-reading decision is labelled by :func:`reading_label`, but not fitted here: on the dev
+tasks' own requests, which the reading rules were built on, the reading taken was the one meant in
+all 21 that read two ways, while on held-out paraphrases of them the reading dropped was meant in
+15 of 90. Its threshold is fitted on the paraphrases (``benchmarks/bench_reading_labels.py``).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -141,59 +136,33 @@ def task_scores(task: Task, plan: Plan, rule: str = OLD_RULE) -> list[float]:
 class TaskScores:
     """A task's decision nonconformities by kind: yes/no decisions and which-one decisions, and
     each which-one decision's two largest probabilities (``tops``; absent: its right answer the
-    likeliest, nothing else likely); and where the request reads two or more ways, the which-reading
-    decision: the readings with their probabilities (``readings``, the one taken first) and which
-    of them the plan passes with (``meant``; None: no such decision, or no reading passes, and then
-    it is left out as a which-one decision the gold accepts nothing for is)."""
+    likeliest, nothing else likely)."""
 
     yes_no: tuple[float, ...] = ()
     one: tuple[float, ...] = ()
     tops: tuple[tuple[float, float], ...] = ()
-    readings: tuple[ReadingOption, ...] = ()
-    meant: int | None = None
 
     def __len__(self) -> int:
-        return len(self.yes_no) + len(self.one) + (self.meant is not None)
-
-    def reading_covered(self, qhat_reading: float) -> bool:
-        """Whether the reading set (:func:`~conceptbot.pipeline.goal_planner.asking.reading_set`)
-        holds the reading meant (true where there is no labelled which-reading decision)."""
-        if self.meant is None:
-            return True
-        return self.readings[self.meant].text in {o.text for o in reading_set(self.readings, qhat_reading)}
-
-    def reading_asked(self, qhat_reading: float) -> bool:
-        """Whether the labelled which-reading decision keeps two readings or more (a question)."""
-        return self.meant is not None and len(reading_set(self.readings, qhat_reading)) > 1
+        return len(self.yes_no) + len(self.one)
 
     def _tops(self) -> tuple[tuple[float, float], ...]:
         return self.tops if len(self.tops) == len(self.one) else tuple((1.0 - s, 0.0) for s in self.one)
 
-    def covered(self, qhat: float, qhat_one: float, qhat_reading: float | None = None) -> bool:
+    def covered(self, qhat: float, qhat_one: float) -> bool:
         """Whether every decision's prediction set holds the right answer with these thresholds (a
-        which-one set that keeps nothing offers the likeliest, so it does; the which-reading
-        decision only where ``qhat_reading`` is given). Compared as the planner does: a probability
-        at least ``1 - qhat`` is kept."""
+        which-one set that keeps nothing offers the likeliest, so it does). Compared as the planner
+        does: a probability at least ``1 - qhat`` is kept."""
         floor, floor_one = round(1.0 - qhat, 4), round(1.0 - qhat_one, 4)
-        reading = qhat_reading is None or self.reading_covered(qhat_reading)
-        return (
-            reading
-            and all(round(1.0 - s, 4) >= floor for s in self.yes_no)
-            and all(
-                round(1.0 - s, 4) >= floor_one or round(top, 4) < floor_one
-                for s, (top, _) in zip(self.one, self._tops(), strict=True)
-            )
+        return all(round(1.0 - s, 4) >= floor for s in self.yes_no) and all(
+            round(1.0 - s, 4) >= floor_one or round(top, 4) < floor_one
+            for s, (top, _) in zip(self.one, self._tops(), strict=True)
         )
 
-    def asked(self, qhat: float, qhat_one: float, qhat_reading: float | None = None) -> bool:
-        """Whether a decision's set keeps both answers (yes/no), other than one candidate, or (with
-        ``qhat_reading``) two readings or more."""
+    def asked(self, qhat: float, qhat_one: float) -> bool:
+        """Whether a decision's set keeps both answers (yes/no) or other than one candidate."""
         floor, floor_one = round(1.0 - qhat, 4), round(1.0 - qhat_one, 4)
-        reading = qhat_reading is not None and self.reading_asked(qhat_reading)
-        return (
-            reading
-            or any(round(min(s, 1.0 - s), 4) >= floor for s in self.yes_no)
-            or any(round(top, 4) < floor_one or round(second, 4) >= floor_one for top, second in self._tops())
+        return any(round(min(s, 1.0 - s), 4) >= floor for s in self.yes_no) or any(
+            round(top, 4) < floor_one or round(second, 4) >= floor_one for top, second in self._tops()
         )
 
 
@@ -220,9 +189,7 @@ class PlanFit:
         qhat_one: The threshold per coverage of which-one decisions (None: ``qhat``'s).
         asked: Per coverage, the fitted tasks that get a question with the thresholds.
         single: Per coverage, one threshold for every decision: the split-conformal quantile of
-            the tasks' worst yes/no and which-one decisions (None: ``qhat``'s).
-        qhat_reading: The threshold per coverage of which-reading decisions (``single``'s where no
-            task has a labelled one; None: ``qhat``'s).
+            the tasks' worst decisions (the reading questions take it; None: ``qhat``'s).
     """
 
     qhat: dict[float, float]
@@ -232,7 +199,6 @@ class PlanFit:
     qhat_one: dict[float, float] | None = None
     asked: dict[float, int] | None = None
     single: dict[float, float] | None = None
-    qhat_reading: dict[float, float] | None = None
 
 
 def reading_label(
@@ -269,15 +235,13 @@ def collect(
     system: PlannerSystem, tasks: Iterable[Task], progress: Callable[[Task], None] | None = None
 ) -> dict[str, list[TaskScores]]:
     """Plan every task once without asking; per which-one rule (:data:`WHICH_ONE`), each task's
-    decision nonconformities, and its which-reading decision labelled (:func:`reading_label`, which
-    plans each reading again; ``system`` plans at :data:`~conceptbot.core.system.ASK_ALL`). Tasks
-    without a calibrated decision are left out. ``progress`` is called after each task."""
+    decision nonconformities (tasks without a calibrated decision left out). ``progress`` is called
+    after each task."""
     found: dict[str, list[TaskScores]] = {rule: [] for rule in WHICH_ONE}
     for task in tasks:
         plan = system.plan(task.request, task_scene(task))
-        readings, meant = reading_label(task, plan, system)
         for rule in WHICH_ONE:
-            scores = replace(split_scores(task, plan, rule), readings=readings, meant=meant)
+            scores = split_scores(task, plan, rule)
             if len(scores):
                 found[rule].append(scores)
         if progress is not None:
@@ -285,11 +249,10 @@ def collect(
     return found
 
 
-#: The grids the thresholds are chosen on (a yes/no threshold under one half keeps no answer of some
-#: decisions, so it starts there).
+#: The grids the pair of thresholds is chosen on (a yes/no threshold under one half keeps no answer
+#: of some decisions, so it starts there).
 GRID_YES_NO = np.round(np.arange(0.5, 1.0 + 1e-9, 0.0025), 4)
 GRID_ONE = np.round(np.arange(0.0, 1.0 + 1e-9, 0.01), 4)
-GRID_READING = np.round(np.arange(0.0, 1.0 + 1e-9, 0.01), 4)
 
 
 def _grids(tasks: Sequence[TaskScores]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -319,70 +282,31 @@ def _grids(tasks: Sequence[TaskScores]) -> tuple[np.ndarray, np.ndarray, np.ndar
     return covered, asked, empties
 
 
-def _reading_grids(tasks: Sequence[TaskScores]) -> tuple[np.ndarray, np.ndarray]:
-    """Per task and reading threshold: whether its which-reading decision's set holds the reading
-    meant (true without a labelled one), and whether it asks; by the planner's own rule
-    (:func:`~conceptbot.pipeline.goal_planner.asking.reading_set`)."""
-    covered = np.ones((len(tasks), len(GRID_READING)), dtype=bool)
-    asked = np.zeros_like(covered)
-    for i, task in enumerate(tasks):
-        if task.meant is None:
-            continue
-        for r, qhat in enumerate(GRID_READING):
-            covered[i, r] = task.reading_covered(float(qhat))
-            asked[i, r] = task.reading_asked(float(qhat))
-    return covered, asked
-
-
-def _with_readings(
-    covered: np.ndarray, asked: np.ndarray, reading_covered: np.ndarray, reading_asked: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Per reading threshold and pair of thresholds, the tasks covered and the tasks asked (summed
-    over the tasks given: ``covered`` and ``asked`` per task and pair, the reading ones per task
-    and reading threshold)."""
-    shape = (len(GRID_READING), *covered.shape[1:])
-    cover_sum, ask_sum = np.zeros(shape, dtype=np.int64), np.zeros(shape, dtype=np.int64)
-    for r in range(len(GRID_READING)):
-        cover_sum[r] = (covered & reading_covered[:, r, None, None]).sum(axis=0)
-        ask_sum[r] = (asked | reading_asked[:, r, None, None]).sum(axis=0)
-    return cover_sum, ask_sum
-
-
 def _choose(
-    covered: np.ndarray,
-    asked: np.ndarray,
-    empty: np.ndarray,
-    questions: np.ndarray,
-    n: int,
-    coverage: float,
-) -> tuple[int, int, int]:
-    """The grid thresholds (reading, yes/no, which-one) for ``coverage`` from the summed counts of
-    ``n`` tasks (``covered``, ``asked`` per the three; ``empty``: per which-one threshold, the
-    which-one decisions whose set keeps no candidate; ``questions``: per reading threshold, the
-    reading questions); see the module docstring. The last of each (keep everything) where too
-    few tasks reach the coverage."""
+    covered: np.ndarray, asked: np.ndarray, empty: np.ndarray, n: int, coverage: float
+) -> tuple[int, int]:
+    """The grid pair for ``coverage`` from the summed counts of ``n`` tasks (``empty``: per
+    which-one threshold, the which-one decisions whose set keeps no candidate); see the module
+    docstring. The last pair (keep everything) where too few tasks reach the coverage."""
     need = math.ceil((n + 1) * coverage)
     if need > n:
-        return len(GRID_READING) - 1, len(GRID_YES_NO) - 1, len(GRID_ONE) - 1
-    # Fewest asked, then the least yes/no threshold (the shortest questions: of the thresholds that
-    # ask as little, covering more than the chosen share buys nothing the person asked for, and on
-    # dev it doubled the reading questions when they took the yes/no threshold), then the fewest
-    # which-one sets that keep no candidate (those offer the likeliest dozen, a poor question), then
-    # the fewest reading questions: one key, smallest wins.
+        return len(GRID_YES_NO) - 1, len(GRID_ONE) - 1
+    # Fewest asked, then the least yes/no threshold (the shortest questions: of the pairs that ask
+    # as little, covering more than the chosen share buys nothing the person asked for, and on dev
+    # it doubled the reading questions, which take the yes/no threshold), then the fewest which-one
+    # sets that keep no candidate (those offer the likeliest dozen, a poor question): one key,
+    # smallest wins.
     big = np.iinfo(np.int64).max
-    rows = np.arange(covered.shape[1])[None, :, None]
-    width, depth = int(empty.max()) + 1, int(questions.max()) + 1
-    key = ((asked * covered.shape[1] + rows) * width + empty[None, None, :]) * depth
-    key = np.where(covered >= need, key + questions[:, None, None], big)
+    rows = np.arange(covered.shape[0])[:, None]
+    width = int(empty.max()) + 1
+    key = (asked * covered.shape[0] + rows) * width + empty[None, :]
+    key = np.where(covered >= need, key, big)
     best = np.argwhere(key == key.min())
-    # Of those tied on it, the reading threshold and then the which-one threshold in the middle (the
-    # farthest from a set that changes).
-    y = int(best[:, 1].min())
-    best = best[best[:, 1] == y]
-    readings = sorted({int(r) for r in best[:, 0]})
-    r = readings[len(readings) // 2]
-    tied = sorted(int(o) for o in best[best[:, 0] == r][:, 2])
-    return r, y, tied[len(tied) // 2]
+    # Of the pairs tied on it, the which-one threshold in the middle (the farthest from a set that
+    # changes).
+    y = int(best[:, 0].min())
+    tied = sorted(int(o) for yy, o in best if yy == y)
+    return y, tied[len(tied) // 2]
 
 
 def fit(tasks: Sequence[TaskScores]) -> PlanFit:
@@ -395,44 +319,28 @@ def fit(tasks: Sequence[TaskScores]) -> PlanFit:
     if not tasks:
         raise ValueError("no task has a calibrated decision: nothing to calibrate on")
     covered, asked, empties = _grids(tasks)
-    reading_covered, reading_asked = _reading_grids(tasks)
-    cover_sum, ask_sum = _with_readings(covered, asked, reading_covered, reading_asked)
-    empty_sum, questions = empties.sum(axis=0), reading_asked.sum(axis=0)
+    cover_sum, ask_sum, empty_sum = covered.sum(axis=0), asked.sum(axis=0), empties.sum(axis=0)
     n = len(tasks)
-    qhat, qhat_one, qhat_reading, count = {}, {}, {}, {}
-    worst = [max((*t.yes_no, *t.one), default=0.0) for t in tasks]
+    qhat, qhat_one, held, count = {}, {}, {}, {}
+    worst = [max((*t.yes_no, *t.one)) for t in tasks]
     single = {coverage: conformal_threshold(worst, coverage) for coverage in COVERAGES}
-    readings = any(t.meant is not None for t in tasks)
     for coverage in COVERAGES:
-        r, y, o = _choose(cover_sum, ask_sum, empty_sum, questions, n, coverage)
+        y, o = _choose(cover_sum, ask_sum, empty_sum, n, coverage)
         qhat[coverage], qhat_one[coverage] = float(GRID_YES_NO[y]), float(GRID_ONE[o])
-        qhat_reading[coverage] = float(GRID_READING[r]) if readings else single[coverage]
         if not any(t.one for t in tasks):  # nothing to fit it on: the yes/no threshold stands in
             qhat_one[coverage] = qhat[coverage]
-        count[coverage] = int(ask_sum[r, y, o])
-    kept: dict[float, list[bool]] = {coverage: [] for coverage in COVERAGES}
-    for i in range(n):
-        if n == 1:
-            for coverage in COVERAGES:
-                kept[coverage].append(True)
-            continue
-        # The task's own part of the sums, taken away: the thresholds fitted without it.
-        mine = slice(i, i + 1)
-        own_cover, own_ask = _with_readings(
-            covered[mine], asked[mine], reading_covered[mine], reading_asked[mine]
-        )
-        for coverage in COVERAGES:
-            ri, yi, oi = _choose(
-                cover_sum - own_cover,
-                ask_sum - own_ask,
-                empty_sum - empties[i],
-                questions - reading_asked[i],
-                n - 1,
-                coverage,
+        count[coverage] = int(asked[:, y, o].sum())
+        kept = []
+        for i in range(n):
+            if n == 1:
+                kept.append(True)
+                continue
+            yi, oi = _choose(
+                cover_sum - covered[i], ask_sum - asked[i], empty_sum - empties[i], n - 1, coverage
             )
-            kept[coverage].append(bool(covered[i, yi, oi] and reading_covered[i, ri]))
-    held = {coverage: sum(found) / len(found) for coverage, found in kept.items()}
-    return PlanFit(qhat, held, n, sum(map(len, tasks)), qhat_one, count, single, qhat_reading)
+            kept.append(bool(covered[i, yi, oi]))
+        held[coverage] = sum(kept) / len(kept)
+    return PlanFit(qhat, held, n, sum(map(len, tasks)), qhat_one, count, single)
 
 
 def thresholds_document(fits: dict[str, dict[str, PlanFit]], rule: str) -> dict[str, Any]:
@@ -453,8 +361,5 @@ def thresholds_document(fits: dict[str, dict[str, PlanFit]], rule: str) -> dict[
         document[kind_key(key, "yes_no")] = {c: rounded(f[each].qhat) for c, f in fits.items()}
         document[kind_key(key, "one")] = {
             c: rounded(f[each].qhat_one or f[each].qhat) for c, f in fits.items()
-        }
-        document[kind_key(key, "reading")] = {
-            c: rounded(f[each].qhat_reading or f[each].single or f[each].qhat) for c, f in fits.items()
         }
     return document

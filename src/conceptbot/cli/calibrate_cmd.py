@@ -18,7 +18,7 @@ from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.cli.params import FiniteFloatRange
 from conceptbot.cli.progress import count_progress
 from conceptbot.core.errors import ConceptBotError
-from conceptbot.core.system import ASK_ALL, SystemOptions
+from conceptbot.core.system import SystemOptions
 from conceptbot.core.text import terminal_safe
 from conceptbot.knowledge.base import TARGET_PROPERTIES
 from conceptbot.knowledge.registry import open_graph
@@ -167,8 +167,7 @@ def _conformal(app: AppContext, as_json: bool) -> None:
     backend = model = ""
     rule = shipped().rule  # the which-one rule the planner uses unless told otherwise
     for combination, config in SYSTEMS:
-        # Every decision and reading listed (nobody answers), so that each reading can be labelled.
-        system = build_system(app.settings, config, SystemOptions(coverage=ASK_ALL))
+        system = build_system(app.settings, config, SystemOptions())
         if getattr(system, "planner_kind", None) != "goal":
             raise ConceptBotError(
                 "the conformal calibration needs the goal planner, which needs a backend that scores options",

@@ -814,13 +814,14 @@ def test_neither_reading_meant_is_a_refusal_and_nothing_is_decided() -> None:
 
 
 def test_a_reading_whose_other_is_unlikely_is_not_asked_about() -> None:
-    # At 0.9 a dropped reading stays in the set at P >= 1 - the reading decisions' own threshold
-    # (0.62 shipped): 0.3 does not, though the one threshold for every decision (0.88) keeps it.
+    # At 0.8 a dropped reading stays in the set at P >= 1 - the reading decisions' own threshold
+    # (0.35 shipped, fitted on held-out paraphrases): 0.3 does not, though the one threshold for
+    # every decision (0.78) keeps it.
     calibration = shipped()
-    assert 1 - calibration.threshold_reading(0.9) > 0.3 >= 1 - calibration.threshold(0.9)
+    assert 1 - calibration.threshold_reading(0.8) > 0.3 >= 1 - calibration.threshold(0.8)
     llm = FakeLLM(scores=[PRIOR, SAFE])
     asked: list = []
-    planner = GoalPlanner(_TwoReadings(0.67, 0.3), Decider(llm, FactFinder(None)))
+    planner = GoalPlanner(_TwoReadings(0.67, 0.3), Decider(llm, FactFinder(None)), coverage=0.8)
     result = planner.plan("chips", SCENE, ask=lambda q: asked.append(q) or "none")
     assert not asked and not result.questions
     assert format_actions(result.actions) == ["pick_and_place(chips, user)", "done()"]

@@ -46,9 +46,11 @@ CALIBRATION_DOC = (
     "P(yes) over the judgement set (benchmarks/fit_judgements.py --conformal --write). plan_qhat: plan "
     "level, a dev task's worst decision (benchmarks/fit_conformal_plans.py --write), for the which-one "
     "rule plan_which_one names; plan_qhat_RULE: for another rule. plan_qhat is one threshold for "
-    "every decision (the tasks' worst); plan_qhat_yes_no, plan_qhat_one and plan_qhat_reading "
-    "(plan_qhat_yes_no_RULE, ...) are the thresholds per kind of decision the yes/no, which-one "
-    "and which-reading decisions take (plan_qhat where they are missing). Refit for another model."
+    "every decision (the tasks' worst); plan_qhat_yes_no and plan_qhat_one (plan_qhat_yes_no_RULE, "
+    "plan_qhat_one_RULE) are the thresholds the yes/no and which-one decisions take, and "
+    "plan_qhat_reading (plan_qhat_reading_RULE) the question of which reading was meant, fitted on "
+    "held-out paraphrases (benchmarks/bench_reading_labels.py --write; reading_fitted_on); plan_qhat "
+    "where they are missing. Refit for another model."
 )
 #: The which-one rule of a plan-level calibration that names none (written before 2026-12-03), and
 #: of the sets where no rule is given.

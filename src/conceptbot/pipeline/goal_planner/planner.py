@@ -315,8 +315,9 @@ class GoalPlanner:
         # A pile has no destination of its own (the objects are the destinations): no targets.
         read = self.targets.read(request, scene)
         # The reading questions take their own threshold where the calibration has one (fitted on
-        # the dev plans with the others: their odds come from the goal set's readings, whether the
-        # plan needs the reading dropped from the dev plans), else the one plan-level threshold.
+        # held-out paraphrases labelled by their plans: on the dev tasks' own requests, which the
+        # reading rules were built on, the dropped reading is never the one meant), else the one
+        # plan-level threshold.
         qhat = self.calibration.threshold_reading(self.coverage)
         doubt = read.doubt
         # Where the request reads two ways, which was meant comes first: it changes the targets.
