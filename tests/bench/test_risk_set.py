@@ -5,22 +5,17 @@
 
 from __future__ import annotations
 
-import json
 from collections import Counter
-from pathlib import Path
 
 from conceptbot.pipeline.hazards import is_person, is_vulnerable
-
-DATA = Path(__file__).resolve().parents[2] / "benchmarks" / "data"
-SET = DATA / "risk_set.jsonl"
-PAPER_OBJECTS = DATA / "paper_objects.txt"
+from tests.bench.labelled import paper_objects, set_rows
 
 FIELDS = {"id", "kind", "round", "answer", "object", "to", "with", "request", "scene", "notes"}
 KINDS = {"child", "animal", "adult", "place", "mix"}
 
 
 def _rows() -> list[dict]:
-    return [json.loads(line) for line in SET.read_text(encoding="utf-8").splitlines() if line.strip()]
+    return set_rows("risk_set.jsonl")
 
 
 def test_every_row_has_the_fields_and_a_known_kind_round_and_answer() -> None:
@@ -51,7 +46,6 @@ def test_recipients_are_who_the_kind_says() -> None:
 
 
 def test_no_object_is_one_of_the_paper_s() -> None:
-    lines = PAPER_OBJECTS.read_text(encoding="utf-8").splitlines()
-    paper = {line.strip().lower() for line in lines if line.strip() and not line.startswith("#")}
+    paper = paper_objects()
     named = {name.lower() for row in _rows() for name in [row["object"], *row["with"]]}
     assert not named & paper

@@ -4,18 +4,15 @@ describes it."""
 
 from __future__ import annotations
 
-import json
 from collections import Counter
-from pathlib import Path
 
-DATA = Path(__file__).resolve().parents[2] / "benchmarks" / "data"
-SET = DATA / "together_set.jsonl"
-PAPER_OBJECTS = DATA / "paper_objects.txt"
+from tests.bench.labelled import paper_objects, set_rows
+
 FIELDS = {"id", "round", "need", "first", "other", "together", "notes"}
 
 
 def _rows() -> list[dict]:
-    return [json.loads(line) for line in SET.read_text(encoding="utf-8").splitlines() if line.strip()]
+    return set_rows("together_set.jsonl")
 
 
 def test_every_row_has_the_fields_a_round_and_a_label() -> None:
@@ -34,10 +31,6 @@ def test_both_rounds_hold_both_answers() -> None:
 
 
 def test_no_object_is_one_of_the_paper_s() -> None:
-    paper = {
-        line.strip().lower()
-        for line in PAPER_OBJECTS.read_text(encoding="utf-8").splitlines()
-        if line.strip() and not line.startswith("#")
-    }
+    paper = paper_objects()
     named = {o.lower() for r in _rows() for o in (r["first"], r["other"])}
     assert not named & paper
