@@ -239,7 +239,7 @@ def shipped(combination: str = "graph", level: str = "plan", rule: str | None = 
     qhat = {float(k): float(v) for k, v in fitted.items()}
     if level != "plan":
         return Calibration(qhat, str(data[where]), False, rule)
-    ones, yes_no, reading = (_kind(data, key, combination, kind) for kind in ("one", "yes_no", "reading"))
+    yes_no, ones, reading = (_kind(data, key, combination, kind) for kind in KINDS)
     return Calibration(qhat, str(data[where]), True, rule, ones, yes_no, reading)
 
 
@@ -275,7 +275,7 @@ def calibration_for(
         fitted = data[key][combination]
         qhat = {float(c): float(fitted[str(c)]) for c in COVERAGES}
         where = str(data["fitted_on"])
-        ones, yes_no, reading = (_kind(data, key, combination, kind) for kind in ("one", "yes_no", "reading"))
+        yes_no, ones, reading = (_kind(data, key, combination, kind) for kind in KINDS)
     except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError, AttributeError) as exc:
         raise ConfigError(
             f"{path} is not a conformal calibration for this rule ({type(exc).__name__}: {exc})", hint=fix
