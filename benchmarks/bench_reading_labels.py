@@ -16,7 +16,11 @@ The dev tasks' own requests are no calibration set for it: the reading rules wer
 the reading taken was the one meant in all 21 of them that read two ways.
 
     .venv/bin/python benchmarks/bench_reading_labels.py [--rounds 11,12] [--category implicit]
-        [--out results/reading-labels-qwen2.5-coder-1.5b.jsonl] [--resume] [--write]
+        [--out results/reading-labels-qwen2.5-coder-1.5b.jsonl] [--resume [--rescore]] [--write]
+
+``--rescore`` gives the kept paraphrases' two readings the odds the planner gives them today (the
+step's odds and the model's preference, :mod:`conceptbot.pipeline.goal.judge`) without planning them
+again, so the threshold can be refit after the odds change.
 """
 
 from __future__ import annotations
@@ -34,6 +38,10 @@ from conceptbot.bench.grading import Task, load_tasks, task_scene
 from conceptbot.core.config import load_settings
 from conceptbot.core.system import ASK_ALL, COVERAGES, PlannerSystem, SystemOptions
 from conceptbot.core.trace import ReadingOption
+from conceptbot.models.registry import open_llm
+from conceptbot.pipeline.goal.doubt import judge_weights, judged
+from conceptbot.pipeline.goal.doubt import odds as step_odds
+from conceptbot.pipeline.goal.judge import ReadingJudge
 from conceptbot.pipeline.goal_planner.asking import reading_set
 from conceptbot.pipeline.goal_planner.conformal import conformal_threshold, shipped
 from conceptbot.systems import build_system
@@ -124,6 +132,21 @@ def write(found: list[dict], rounds: str) -> None:
     print(f"wrote {CONFORMAL}: plan_qhat_reading {thresholds}")
 
 
+def rescored(found: dict, judge: ReadingJudge) -> dict:
+    """A labelled paraphrase with its two readings' odds as the planner now gives them (the step's
+    odds moved by the model's preference, :func:`conceptbot.pipeline.goal.doubt.judged`), without
+    planning it again: the labels depend on the readings' plans, not on their odds."""
+    kinds = [r["kind"] for r in found["readings"]]
+    weights = judge_weights()
+    if kinds != ["taken", "other"] or weights is None:
+        return found
+    taken, other = (r["text"] for r in found["readings"])
+    odds = judged(step_odds(found["step"]), judge.prefer(found["request"], taken, other).log_odds, weights)
+    probabilities = (round(odds.taken, 4), round(odds.other, 4))
+    readings = [{**r, "p": p} for r, p in zip(found["readings"], probabilities, strict=True)]
+    return {**found, "readings": readings}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rounds", default="11,12", help="comma-separated goal-set rounds (held out: 11,12)")
@@ -133,7 +156,14 @@ def main() -> None:
     parser.add_argument(
         "--write", action="store_true", help=f"store the reading threshold in {CONFORMAL.name}"
     )
+    parser.add_argument(
+        "--rescore",
+        action="store_true",
+        help="with --resume: give the kept paraphrases' readings today's odds (no planning), rewrite --out",
+    )
     args = parser.parse_args()
+    if args.rescore and not args.resume:
+        parser.error("--rescore works on the paraphrases kept by --resume")
     rows = chosen_rows(None, args.category, False, {int(r) for r in args.rounds.split(",")})
     tasks = {t.id: t for t in load_tasks(split="dev")}
     done: dict[str, dict] = {}
@@ -142,6 +172,10 @@ def main() -> None:
             if line.strip():
                 found = json.loads(line)
                 done[found["key"]] = found
+    if args.rescore:
+        judge = ReadingJudge(open_llm(load_settings(), module="reading"))
+        done = {key: rescored(found, judge) for key, found in done.items()}
+        args.out.write_text("".join(json.dumps(f) + "\n" for f in done.values()), encoding="utf-8")
     system = build_system(load_settings(), "conceptbot", SystemOptions(coverage=ASK_ALL))
     results = []
     with args.out.open("a" if args.resume else "w", encoding="utf-8") as out:

@@ -25,6 +25,15 @@ how often the reading kept and the reading dropped are the gold, on the records 
 reads to decide whether to ask which reading was meant. No model is run.
 
     .venv/bin/python benchmarks/bench_restated_reading.py --fit-odds --out results/restate/goal-set.jsonl
+
+``--fit-judge`` asks the model which of the two readings was meant (:mod:`conceptbot.pipeline.goal.judge`,
+through the answer cache) on every record that reads two ways with the gold one of them, fits how
+much its preference moves each step's odds on the tuning rounds (:func:`fit_judge`), and prints the
+ranking of the meant reading (AUC) with the steps' odds alone and with the preference, on the tuning
+rounds and on the held-out rounds 11 and 12; with ``--write`` the weights go into the odds file's
+``judge``.
+
+    .venv/bin/python benchmarks/bench_restated_reading.py --fit-judge --out results/restate/goal-set.jsonl
 """
 
 from __future__ import annotations
@@ -33,9 +42,10 @@ import argparse
 import hashlib
 import importlib.util
 import json
+import math
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from functools import cache
 from pathlib import Path
 from typing import Any
@@ -46,6 +56,8 @@ from conceptbot.models.registry import open_llm
 from conceptbot.pipeline import prompts
 from conceptbot.pipeline.goal import Goal, GoalReader, same_goal
 from conceptbot.pipeline.goal.aided import POLICIES, AidedReader, choose
+from conceptbot.pipeline.goal.doubt import JudgeWeights, Odds, describe, judged
+from conceptbot.pipeline.goal.judge import ReadingJudge
 from conceptbot.pipeline.goal.restate import Restater
 
 
@@ -159,6 +171,8 @@ ODDS = Path("src/conceptbot/pipeline/goal/reading_odds.json")
 #: The goal-set rounds the odds are counted on; the last round is held out to check them.
 TUNING_ROUNDS = (0, 8, 9, 10)
 HELD_OUT = 11
+#: The goal-set rounds the judge's weights are checked on (never fitted on).
+HELD_OUT_ROUNDS = (11, 12)
 
 
 def step_counts(records: Sequence[dict[str, Any]]) -> dict[str, list[int]]:
@@ -215,6 +229,101 @@ def show_odds(records: Sequence[dict[str, Any]], fitted: dict[str, Any]) -> None
               f"{n:>14} {kept:>4} {dropped:>5}")  # fmt: skip
 
 
+def judged_rows(records: Sequence[dict[str, Any]], judge: ReadingJudge) -> list[dict[str, Any]]:
+    """The records that read two ways (in words too) and whose gold is one of the two, each with the
+    step, which reading the gold is (``taken`` or ``other``) and the model's preference for the
+    reading taken (:class:`ReadingJudge`, through the answer cache)."""
+    rows = []
+    for i, record in enumerate(records, 1):
+        words = Goal.from_dict(record["words_goal"])
+        plain = Goal.from_dict(record["plain_goal"]) if record["plain_goal"] else None
+        gold = Goal.from_dict(record["gold"])
+        chosen = choose(words, plain, "grounded", record["request"], record["plain"], _names(record["task"]))
+        if chosen.other is None:
+            continue
+        taken, other = describe(chosen.goal), describe(chosen.other)
+        label = (
+            "taken"
+            if same_goal(chosen.goal, gold).ok
+            else "other"
+            if same_goal(chosen.other, gold).ok
+            else None
+        )
+        if label is None or taken == other:
+            continue
+        preference = judge.prefer(record["request"], taken, other).log_odds
+        rows.append({"round": record["round"], "step": chosen.step, "label": label, "preference": preference})
+        print(f"\r{i}/{len(records)} judged", end="", file=sys.stderr, flush=True)
+    print(file=sys.stderr)
+    return rows
+
+
+def _offset(step: str, steps: dict[str, Any]) -> float:
+    found = steps.get(step) or {}
+    taken, other = found.get("taken", 0.5), found.get("other", 0.5)
+    return math.log(other / taken)
+
+
+def fit_judge(rows: Sequence[dict[str, Any]], steps: dict[str, Any], ridge: float = 0.01) -> dict[str, float]:
+    """The weights of :func:`conceptbot.pipeline.goal.doubt.judged`: a logistic regression of "the
+    reading dropped was meant" on the model's preference against it, offset by the step's log-odds
+    (``steps``, the shipped odds), with a light ridge; Newton's method."""
+    w = b = 0.0
+    for _ in range(100):
+        grad = [ridge * w, ridge * b]
+        hess = [[ridge, 0.0], [0.0, ridge]]
+        for row in rows:
+            x = -row["preference"]
+            p = 1.0 / (1.0 + math.exp(-(_offset(row["step"], steps) + b + w * x)))
+            err = p - (row["label"] == "other")
+            v = p * (1.0 - p)
+            grad[0] += err * x
+            grad[1] += err
+            hess[0][0] += v * x * x
+            hess[0][1] += v * x
+            hess[1][1] += v
+        det = hess[0][0] * hess[1][1] - hess[0][1] ** 2
+        dw = (hess[1][1] * grad[0] - hess[0][1] * grad[1]) / det
+        db = (hess[0][0] * grad[1] - hess[0][1] * grad[0]) / det
+        w, b = w - dw, b - db
+        if abs(dw) + abs(db) < 1e-9:
+            break
+    return {"weight": round(w, 4), "bias": round(b, 4)}
+
+
+def auc(rows: Sequence[dict[str, Any]], score: Callable[[dict[str, Any]], float]) -> float:
+    """How often a row whose dropped reading was meant scores above one whose taken reading was
+    (ties half): the area under the ROC curve of ``score`` as P(the dropped reading was meant)."""
+    pos = [score(r) for r in rows if r["label"] == "other"]
+    neg = [score(r) for r in rows if r["label"] == "taken"]
+    if not pos or not neg:
+        return float("nan")
+    return sum((p > n) + 0.5 * (p == n) for p in pos for n in neg) / (len(pos) * len(neg))
+
+
+def show_judge(rows: Sequence[dict[str, Any]], steps: dict[str, Any], weights: dict[str, float]) -> None:
+    """The fit's ranking beside the steps' alone, on the tuning rounds and on the held-out ones."""
+    fitted = JudgeWeights(weights["weight"], weights["bias"])
+
+    def combined(row: dict[str, Any]) -> float:
+        found = odds_of(row["step"], steps)
+        return judged(found, row["preference"], fitted).other
+
+    print(f"weight {weights['weight']}, bias {weights['bias']}")
+    print(f"{'rounds':14} {'rows':>5} {'dropped meant':>14} {'AUC steps':>10} {'AUC judged':>11}")
+    for name, wanted in (("tuning", TUNING_ROUNDS), ("held out", HELD_OUT_ROUNDS)):
+        these = [r for r in rows if r["round"] in wanted]
+        dropped = sum(r["label"] == "other" for r in these)
+        steps_auc = auc(these, lambda r: _offset(r["step"], steps))
+        print(f"{name:14} {len(these):>5} {dropped:>14} {steps_auc:>10.3f} {auc(these, combined):>11.3f}")
+
+
+def odds_of(step: str, steps: dict[str, Any]) -> Odds:
+    """A step's odds from an odds file's ``steps``."""
+    found = steps.get(step) or {}
+    return Odds(found.get("taken", 0.5), found.get("other", 0.5), found.get("rows", 0))
+
+
 def changed(split: str, restater: Restater) -> None:
     """Print, per reader (graph, no graph), the tasks of ``split`` whose goal reads differently."""
     readers = {
@@ -239,15 +348,35 @@ def main() -> None:
     parser.add_argument("--failures", choices=["words", "plain", "both", "none"], default="none")
     parser.add_argument("--limit", type=int, default=0, help="read only the first N rows of each round")
     parser.add_argument("--fit-odds", action="store_true", help="count each choice step's odds from --out")
-    parser.add_argument("--write", action="store_true", help=f"with --fit-odds: write {ODDS}")
+    parser.add_argument(
+        "--fit-judge", action="store_true", help="fit the model's reading preference's weights from --out"
+    )
+    parser.add_argument("--write", action="store_true", help=f"with --fit-odds or --fit-judge: write {ODDS}")
     args = parser.parse_args()
-    if args.fit_odds:
+    if args.fit_odds or args.fit_judge:
         if args.out is None or not args.out.exists():
-            parser.error("--fit-odds reads the records of --out (a file this script wrote)")
+            parser.error("--fit-odds and --fit-judge read the records of --out (a file this script wrote)")
         records = [json.loads(x) for x in args.out.read_text(encoding="utf-8").splitlines() if x]
         records = [r for r in records if r["key"].endswith(f"|{PROMPT}")]
-        fitted = fit_odds(records)
-        show_odds(records, fitted)
+        shipped = json.loads(ODDS.read_text(encoding="utf-8"))
+        if args.fit_odds:
+            fitted = fit_odds(records)
+            show_odds(records, fitted)
+            fitted.update({k: v for k, v in shipped.items() if k == "judge"})  # the judge's fit stays
+        else:
+            judge = ReadingJudge(open_llm(load_settings(), module="reading"))
+            rows = judged_rows(records, judge)
+            tuning = [r for r in rows if r["round"] in TUNING_ROUNDS]
+            weights = fit_judge(tuning, shipped["steps"])
+            show_judge(rows, shipped["steps"], weights)
+            fitted = {
+                **shipped,
+                "judge": {
+                    **weights,
+                    "fitted_on": f"goal set rounds {', '.join(map(str, TUNING_ROUNDS))}: {len(tuning)} rows "
+                    f"read two ways with the gold one of them, restate prompt {PROMPT}",
+                },
+            }
         if args.write:
             ODDS.write_text(json.dumps(fitted, indent=2) + "\n", encoding="utf-8")
             print(f"wrote {ODDS}")

@@ -204,3 +204,53 @@ def test_the_held_out_reading_labels_are_summed_at_both_thresholds(monkeypatch: 
     # The threshold is split conformal's quantile of 1 - P(the reading meant), labelled rows only.
     assert labels.nonconformity(found) == pytest.approx([0.35, 0.7])
     assert labels.fit_reading(found)[0.8] == 1.0  # two rows: too few for 0.8, keep every reading
+
+
+def _script(name: str, monkeypatch: pytest.MonkeyPatch) -> Any:
+    """A benchmark script as a module, its folder on the path as when it runs."""
+    monkeypatch.syspath_prepend(str(BENCHMARKS[0].parent))
+    spec = importlib.util.spec_from_file_location(f"benchmark_{name}", BENCHMARKS[0].parent / f"{name}.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_reading_judge_fit_learns_how_much_the_preference_says(monkeypatch: pytest.MonkeyPatch) -> None:
+    restated = _script("bench_restated_reading", monkeypatch)
+    steps = {"fewer": {"taken": 0.6, "other": 0.2}}
+    # The dropped reading was meant exactly where the model preferred it (a negative preference).
+    rows = [{"round": 0, "step": "fewer", "label": "other", "preference": -0.2 - 0.1 * i} for i in range(5)]
+    rows += [{"round": 0, "step": "fewer", "label": "taken", "preference": 0.1 * i - 0.05} for i in range(10)]
+    fitted = restated.fit_judge(rows, steps)
+    assert fitted["weight"] > 5  # the preference separates them: a large weight
+    assert restated.auc(rows, lambda r: -r["preference"]) == 1.0
+    assert restated.auc(rows, lambda r: 0.0) == 0.5  # the step alone ranks nothing
+    none = [{"round": 0, "step": "fewer", "label": "taken", "preference": p} for p in (0.1, -0.1)]
+    assert restated.fit_judge(none, steps)["weight"] == pytest.approx(0.0, abs=1.0)  # ridge: no signal
+
+
+def test_held_out_readings_are_rescored_without_planning_them_again(monkeypatch: pytest.MonkeyPatch) -> None:
+    labels = _script("bench_reading_labels", monkeypatch)
+    from conceptbot.models.fake import FakeLLM
+    from conceptbot.pipeline.goal.doubt import judge_weights, judged, odds
+    from conceptbot.pipeline.goal.judge import ReadingJudge
+
+    found = {
+        "request": "A treat for the dog, go on.",
+        "step": "fewer",
+        "readings": [
+            {"text": 'put the ingredients of "treat" where it fits', "p": 0.67, "kind": "taken"},
+            {"text": 'give the dog one "treat"', "p": 0.12, "kind": "other"},
+        ],
+        "meant": 1,
+    }
+    judge = ReadingJudge(FakeLLM(scores=[[-2.0, -0.3], [-0.1, -2.5]]))  # prefers the dropped one
+    again = labels.rescored(found, judge)
+    weights = judge_weights()
+    assert weights is not None
+    expected = judged(odds("fewer"), 0.5 * (-1.7 - 2.4), weights)
+    assert [r["p"] for r in again["readings"]] == [round(expected.taken, 4), round(expected.other, 4)]
+    assert again["readings"][1]["p"] > 0.5 and again["meant"] == 1 and found["readings"][1]["p"] == 0.12
+    one_way = {**found, "readings": found["readings"][:1]}
+    assert labels.rescored(one_way, ReadingJudge(FakeLLM())) == one_way  # nothing to weigh

@@ -189,12 +189,18 @@ def test_the_goal_s_readings_validate_and_a_reading_of_no_kind_does_not() -> Non
         ReadingOption("give the user the tea", 0.65),
         ReadingOption("give the cake", float("nan"), "other"),
     )
-    goal = GoalTrace((), False, "Give me tea.", "plain", None, "need", readings).to_dict()
+    goal = GoalTrace((), False, "Give me tea.", "plain", None, "need", readings, -0.31234).to_dict()
     assert goal["readings"][1] == {"text": "give the cake", "p": None, "kind": "other"}
+    assert goal["preference"] == -0.3123  # the model's view of the two, which moved their odds
+    unasked = GoalTrace((), False, "Give me tea.", "plain", None, "need", readings, float("nan")).to_dict()
+    assert "preference" not in unasked  # a model error is no view (JSON has no NaN)
     data = copy.deepcopy(VALID)
     data["trace"]["goal"] = goal
     validator = _validator()
     validator.validate(data)
+    data["trace"]["goal"]["preference"] = "taken"
+    assert any("is not of type 'number'" in error.message for error in validator.iter_errors(data))
+    data["trace"]["goal"]["preference"] = -0.3123
     data["trace"]["goal"]["readings"][0]["kind"] = "guess"
     assert any("is not one of" in error.message for error in validator.iter_errors(data))
     with pytest.raises(ValueError, match="kind must be one of"):

@@ -112,7 +112,8 @@ def reading_worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: Any
         {"text": READINGS[0], "p": 0.6, "kind": "taken"},
         {"text": READINGS[1], "p": 0.3, "kind": "other"},
     ]
-    emit("goal", {"data": {"targets": [], "stack": False, "step": "fewer", "readings": readings}})
+    goal = {"targets": [], "stack": False, "step": "fewer", "readings": readings, "preference": -0.1234}
+    emit("goal", {"data": goal})
     chosen = READING.read(ask(READING)) if ask is not None else ()
     plan = {
         (READINGS[0],): ["pick_and_place(apple, user)"],
@@ -299,6 +300,7 @@ def test_the_page_asks_which_reading_was_meant(server: str, browser) -> None:
     # The goal says each reading's odds, and which the plan acts on unless told otherwise.
     shown = browser.find_element(By.ID, "targets").text
     assert 'readings (fewer): taken “give the user one "fruit"” P 0.60; dropped' in shown
+    assert shown.endswith("P 0.30; the model prefers the dropped one by 0.12 nats")
     boxes = browser.find_elements(By.CSS_SELECTOR, "#choose-options input")
     assert [b.get_attribute("type") for b in boxes] == ["radio"] * 2  # one reading, no "another"
     labels = [li.text.strip() for li in browser.find_elements(By.CSS_SELECTOR, "#choose-options li")]

@@ -275,6 +275,8 @@ class GoalTrace:
         readings: Where it reads two or more ways, every reading the person could be asked about
             with its probability, the one taken first (before the conformal set keeps some: what
             the plan-level calibration fits the reading threshold on), else empty.
+        preference: Where the two readings differ, the model's log-odds for the one taken over the
+            one dropped, which moved the step's odds (``pipeline/goal/judge.py``), else None.
     """
 
     targets: tuple[TargetTrace, ...]
@@ -284,15 +286,18 @@ class GoalTrace:
     other: dict[str, Any] | None = None
     step: str = ""
     readings: tuple[ReadingOption, ...] = ()
+    preference: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (also the web page's ``goal`` event); the readings only where the request was
-        said plainly."""
+        said plainly, the model's preference only where it was asked."""
         found: dict[str, Any] = {"targets": [t.to_dict() for t in self.targets], "stack": self.stack}
         if self.reading:
             found.update(plain=self.plain, reading=self.reading, other=self.other)
         if self.readings:
             found.update(step=self.step, readings=[r.to_dict() for r in self.readings])
+            if self.preference is not None and math.isfinite(self.preference):
+                found["preference"] = round(self.preference, 4)
         return found
 
 

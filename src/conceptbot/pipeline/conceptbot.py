@@ -38,6 +38,7 @@ from conceptbot.models.llm import LLM
 from conceptbot.pipeline import modes, prompts
 from conceptbot.pipeline.goal import GoalFinder, GoalReader
 from conceptbot.pipeline.goal.adapter import SAMPLES
+from conceptbot.pipeline.goal.judge import ReadingJudge
 from conceptbot.pipeline.goal.restate import Restater
 from conceptbot.pipeline.goal_planner import conformal
 from conceptbot.pipeline.goal_planner.combine import combination
@@ -171,6 +172,9 @@ class ConceptBot:
                 Restater(self._llm_for("restate")) if reading in ("restated", "sampled") else None,
                 # Sampled plain forms: more readings to offer where they disagree (goal/adapter.py).
                 samples=SAMPLES if reading == "sampled" else 0,
+                # Where the two readings differ, the model is asked which was meant: on held-out
+                # paraphrases it ranks them far better than the step that chose (goal/judge.py).
+                judge=ReadingJudge(self._llm_for("reading")) if reading in ("restated", "sampled") else None,
             ),
             decider,
             self.ope if self.switches.ope else None,

@@ -511,7 +511,10 @@ def test_a_stack_puts_fragile_things_on_top_and_wide_things_low() -> None:
 
 
 def test_conceptbot_reads_the_model_s_plain_form_and_traces_both_readings() -> None:
-    llm = FakeLLM(["Put the glue on the table."], scores=[PRIOR, UNSAFE])
+    # Which reading was meant, asked both ways round (the plain one first, then second), then the
+    # glue's risk question.
+    judged = [[-0.2, -2.0], [-2.0, -0.2]]
+    llm = FakeLLM(["Put the glue on the table."], scores=[*judged, PRIOR, UNSAFE])
     bot = ConceptBot(llm, RelationRetriever(DictGraph(), FakeEmbedder(), theta=0.1), "urp", planner="goal")
     plan = bot.plan("Oh, before I forget, would you be a dear and pop the glue on the table?", SCENE)
     goal = plan.to_dict()["trace"]["goal"]
@@ -520,6 +523,11 @@ def test_conceptbot_reads_the_model_s_plain_form_and_traces_both_readings() -> N
     # The words' own reading, not taken: "dear" as a thing wanted, besides the glue.
     assert len(goal["other"]["targets"]) == 2
     assert "Plain:" in llm.requests[0].messages[-1].content
+    # The model preferred the reading taken by 1.8 nats: the reading dropped is unlikely.
+    assert goal["preference"] == pytest.approx(1.8)
+    taken, other = goal["readings"]
+    assert (taken["kind"], other["kind"]) == ("taken", "other") and other["p"] < 0.01 < taken["p"]
+    assert "A: put the glue in or on the table" in llm.score_requests[0].messages[-1].content
 
 
 def test_conceptbot_uses_the_goal_planner_when_asked() -> None:

@@ -40,7 +40,8 @@ from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline.goal.aided import Policy, Reading, read_twice
 from conceptbot.pipeline.goal.compare import same_goal, structure
-from conceptbot.pipeline.goal.doubt import describe, odds
+from conceptbot.pipeline.goal.doubt import describe, judge_weights, judged, odds
+from conceptbot.pipeline.goal.judge import ReadingJudge
 from conceptbot.pipeline.goal.reader import GoalReader
 from conceptbot.pipeline.goal.restate import Restater
 from conceptbot.pipeline.goal.types import ALL as GOAL_ALL
@@ -225,6 +226,8 @@ class GoalFinder:
         samples: Plain forms sampled besides the greedy one (``--reading sampled``); the readings
             :data:`MIN_VOTES` of them (with the words' and the greedy one's) read alike are offered
             in the question of which reading was meant. 0: none.
+        judge: Where the two readings differ, the model's view of which was meant weighs with the
+            step's odds (:mod:`.judge`, :func:`.doubt.judged`); None: the step's odds alone.
     """
 
     def __init__(
@@ -235,6 +238,7 @@ class GoalFinder:
         restater: Restater | None = None,
         policy: Policy = "grounded",
         samples: int = 0,
+        judge: ReadingJudge | None = None,
     ) -> None:
         self.reader = reader
         self.finder = finder
@@ -242,6 +246,7 @@ class GoalFinder:
         self.restater = restater
         self.policy = policy
         self.samples = samples
+        self.judge = judge
 
     def read(self, request: str, scene: Scene) -> TargetsRead:
         """Whether the request asks for a pile, its targets, and the model calls made."""
@@ -268,6 +273,15 @@ class GoalFinder:
             return replace(read, plain=reading.plain, reading=source)
         flipped = "words" if reading.source == "plain" else "plain"
         found = odds(reading.step)
+        taken_text = describe(reading.goal)
+        other_text = describe(other) if other is not None else ""
+        weights = judge_weights() if self.judge is not None and other is not None else None
+        preference = None
+        if weights is not None and self.judge is not None and other_text != taken_text:
+            judged_by = self.judge.prefer(request, taken_text, other_text)
+            preference = judged_by.log_odds
+            found = judged(found, preference, weights)
+            read = replace(read, usage=read.usage + judged_by.usage)
 
         def alternative() -> TargetsRead:
             # The other reading: its targets, and the reading it was chosen over as its other.
@@ -276,13 +290,14 @@ class GoalFinder:
             return replace(again, plain=reading.plain, reading=flipped, other=reading.goal.to_dict())
 
         doubt = ReadingDoubt(
-            describe(reading.goal),
-            describe(other) if other is not None else "",
+            taken_text,
+            other_text,
             found.taken,
             found.other if other is not None else 0.0,
             reading.step,
             alternative,
             more,
+            preference,
         )
         kept = other.to_dict() if other is not None else None
         return replace(read, plain=reading.plain, reading=source, other=kept, doubt=doubt)

@@ -14,6 +14,7 @@ one "fruit" and one "soda"').
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass
 from functools import cache
 from importlib.resources import files
@@ -68,6 +69,49 @@ def odds(step: str) -> Odds:
     if not all(isinstance(p, (int, float)) and 0.0 <= p <= 1.0 for p in (taken, other)):  # NaN fails
         return Odds(*UNKNOWN)
     return Odds(float(taken), float(other), int(found.get("rows", 0)))
+
+
+@dataclass(frozen=True)
+class JudgeWeights:
+    """How the model's preference between the two readings (:class:`.judge.Preference`) moves a
+    step's odds, fitted on the goal set's tuning rounds (``bench_restated_reading.py --fit-judge``).
+
+    Attributes:
+        weight: Log-odds of the reading dropped per nat the model prefers it.
+        bias: Added to the step's log-odds of the reading dropped.
+    """
+
+    weight: float
+    bias: float
+
+
+def judge_weights() -> JudgeWeights | None:
+    """The shipped weights, or None where the odds file has none (the steps' odds stand alone).
+
+    Raises:
+        ConfigError: The file's weights are not two finite numbers.
+    """
+    found = _odds_data().get("judge")
+    if found is None:
+        return None
+    values = (found.get("weight"), found.get("bias")) if isinstance(found, dict) else (None, None)
+    if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in values):
+        raise ConfigError(f"reading odds file {ODDS_FILE}: 'judge' needs finite 'weight' and 'bias'")
+    return JudgeWeights(float(values[0]), float(values[1]))  # type: ignore[arg-type]
+
+
+def judged(found: Odds, preference: float, weights: JudgeWeights) -> Odds:
+    """A step's odds moved by the model's ``preference`` for the reading taken over the one dropped
+    (log-odds): of the mass the two readings share, the dropped one gets
+    ``sigmoid(log(other / taken) + bias - weight * preference)``; what neither reading holds stays.
+    A preference that is not a number gives :data:`UNKNOWN`: the person is asked, never a guess made.
+    """
+    if not math.isfinite(preference) or found.taken <= 0.0 or found.other <= 0.0:
+        return Odds(*UNKNOWN, found.rows) if not math.isfinite(preference) else found
+    shared = found.taken + found.other
+    z = math.log(found.other / found.taken) + weights.bias - weights.weight * preference
+    other = shared / (1.0 + math.exp(-z)) if z > -700 else 0.0
+    return Odds(shared - other, other, found.rows)
 
 
 def _things(target: GoalTarget, dish: str | None) -> str:

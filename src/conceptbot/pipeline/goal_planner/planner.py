@@ -331,6 +331,7 @@ class GoalPlanner:
             read.other,
             doubt.step if doubt else "",
             reading_options(doubt) if doubt else (),
+            doubt.preference if doubt else None,
         )
         observer.event("goal", goal)
         if meant is None:

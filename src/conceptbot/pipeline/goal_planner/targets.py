@@ -229,11 +229,14 @@ class ReadingDoubt:
         taken: The reading the targets are, in words.
         other: The reading not taken, in words ("" where the words and the plain form agree and
             only sampled readings differ).
-        p_taken: P(the reading taken is the one meant), from the step of the choice that kept it.
+        p_taken: P(the reading taken is the one meant), from the step of the choice that kept it
+            (and the model's preference, where it was asked).
         p_other: P(the reading not taken is).
         step: The step of the choice (:data:`conceptbot.pipeline.goal.aided.STEPS`).
         alternative: Reads the request as the other reading.
         more: Readings of sampled plain forms, likeliest first (empty unless sampled).
+        preference: The model's log-odds for the reading taken over the other, which moved the
+            step's odds (:mod:`conceptbot.pipeline.goal.judge`); None where it was not asked.
     """
 
     taken: str
@@ -243,6 +246,7 @@ class ReadingDoubt:
     step: str
     alternative: Callable[[], TargetsRead]
     more: tuple[Alternative, ...] = ()
+    preference: float | None = None
 
 
 @dataclass(frozen=True)

@@ -191,7 +191,10 @@ function showGoal(goal) {
   const kinds = {taken: "taken", other: "dropped", sampled: "sampled"};
   if (goal.readings && goal.readings.length > 1) $("targets").append(el("li", {class: "plain"},
     `readings (${goal.step}): ` + goal.readings.map((r) =>
-      `${kinds[r.kind]} “${r.text}” ${r.p === null ? "P ?" : "P " + r.p.toFixed(2)}`).join("; ")));
+      `${kinds[r.kind]} “${r.text}” ${r.p === null ? "P ?" : "P " + r.p.toFixed(2)}`).join("; ") +
+    (typeof goal.preference === "number"
+      ? `; the model prefers the ${goal.preference >= 0 ? "taken" : "dropped"} one by ${Math.abs(goal.preference).toFixed(2)} nats`
+      : "")));
 }
 
 function showDecisions(decisions) {

@@ -1,0 +1,71 @@
+"""The model's own view of which of two readings of a request was meant.
+
+Where the rules read a request's words and its plain form two ways (:mod:`.aided`), the step of the
+choice that kept one says little on new wording: on the goal set's held-out paraphrases (rounds 11
+and 12) the steps' odds ranked the meant reading below chance (AUC 0.43). Shown the request and
+both readings in words (:func:`.doubt.describe`), the small model picks the meant one far better
+(AUC 0.83 on the same rows; ``benchmarks/bench_restated_reading.py --fit-judge``;
+``docs/notes/2026-12-06-reading-judge.md``). :class:`ReadingJudge` asks it, and :func:`.doubt.judged`
+weighs its answer with the step's odds.
+
+The model leans to the first option it is shown, so it is asked twice, the readings in each order,
+and the two answers' log-odds are averaged: what is left is its preference for the reading itself.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+from conceptbot.core.errors import ConceptBotError
+from conceptbot.core.usage import Usage
+from conceptbot.models.llm import LLM, Message, ScoreRequest
+from conceptbot.pipeline import prompts
+
+logger = logging.getLogger(__name__)
+OPTIONS = ("A", "B")
+
+
+@dataclass(frozen=True)
+class Preference:
+    """How much more the model takes one reading than the other to be meant.
+
+    Attributes:
+        log_odds: log P(the first reading) - log P(the second), averaged over both orders; NaN where
+            it could not be had (a model error): the odds are then unknown and the person is asked.
+        usage: The model's calls.
+    """
+
+    log_odds: float
+    usage: Usage = field(default_factory=lambda: Usage(calls=0))
+
+
+class ReadingJudge:
+    """Asks the model which of two readings of a request the person meant (see the module).
+
+    Args:
+        llm: An LLM that can score options.
+    """
+
+    def __init__(self, llm: LLM) -> None:
+        self.llm = llm
+
+    def prefer(self, request: str, first: str, second: str) -> Preference:
+        """The model's preference for ``first`` over ``second`` as what ``request`` asks for; never
+        raises for a model's failure (a NaN preference: ask, do not guess)."""
+        try:
+            ahead, usage = self._ask(request, first, second)
+            behind, used = self._ask(request, second, first)
+        except ConceptBotError as exc:
+            logger.warning("judging the readings of %r failed: %s", request[:80], exc)
+            return Preference(float("nan"))
+        return Preference(0.5 * (ahead - behind), usage + used)
+
+    def _ask(self, request: str, first: str, second: str) -> tuple[float, Usage]:
+        user = prompts.fill(
+            "reading_judge_user", request=" ".join(request.split()), first=first, second=second
+        )
+        # Both files filled exactly as written: the fitted weights were measured on these very prompts.
+        messages = (Message("system", prompts.fill("reading_judge_system")), Message("user", user))
+        scored = self.llm.score(ScoreRequest(options=OPTIONS, messages=messages))
+        return scored.logprobs[0] - scored.logprobs[1], scored.usage
