@@ -34,7 +34,10 @@ from conceptbot.systems import build_system
 
 OUT = Path("results/one-pairwise-qwen2.5-coder-1.5b.jsonl")
 SYSTEM = "You help a household robot understand people. Answer with A or B only."
-USER = 'A person said to the robot: "{request}"\nWhich one should the robot {move}?\nA: the {a}\nB: the {b}\nAnswer A or B.'
+USER = (
+    'A person said to the robot: "{request}"\n'
+    "Which one should the robot {move}?\nA: the {a}\nB: the {b}\nAnswer A or B."
+)
 #: The dev categories whose targets may take one of several objects.
 CATEGORIES = ("ambiguous", "implicit", "risk", "materials")
 
@@ -96,8 +99,8 @@ def report(rows: Sequence[dict[str, Any]]) -> None:
         good = [r for r in these if r["first_ok"]]
         bad = [r for r in these if not r["first_ok"]]
         print(
-            f"{where}: {len(these)} decisions, first choice acceptable in {len(good)}; exactly one of the two "
-            f"in {len(one)}: p_one picks it {sum(r['first_ok'] for r in one)}, the model "
+            f"{where}: {len(these)} decisions, first choice acceptable in {len(good)}; "
+            f"exactly one of the two in {len(one)}: p_one picks it {sum(r['first_ok'] for r in one)}, the model "
             f"{sum((r['preference'] > 0) == r['first_ok'] for r in one)}; AUC for the first choice "
             f"acceptable: p_one {auc([r['p_first'] for r in good], [r['p_first'] for r in bad]):.3f}, "
             f"preference {auc([r['preference'] for r in good], [r['preference'] for r in bad]):.3f}"
