@@ -100,7 +100,8 @@ def report(rows: Sequence[dict[str, Any]]) -> None:
         bad = [r for r in these if not r["first_ok"]]
         print(
             f"{where}: {len(these)} decisions, first choice acceptable in {len(good)}; "
-            f"exactly one of the two in {len(one)}: p_one picks it {sum(r['first_ok'] for r in one)}, the model "
+            f"exactly one of the two in {len(one)}: "
+            f"p_one picks it {sum(r['first_ok'] for r in one)}, the model "
             f"{sum((r['preference'] > 0) == r['first_ok'] for r in one)}; AUC for the first choice "
             f"acceptable: p_one {auc([r['p_first'] for r in good], [r['p_first'] for r in bad]):.3f}, "
             f"preference {auc([r['preference'] for r in good], [r['preference'] for r in bad]):.3f}"
