@@ -254,3 +254,24 @@ def test_held_out_readings_are_rescored_without_planning_them_again(monkeypatch:
     assert again["readings"][1]["p"] > 0.5 and again["meant"] == 1 and found["readings"][1]["p"] == 0.12
     one_way = {**found, "readings": found["readings"][:1]}
     assert labels.rescored(one_way, ReadingJudge(FakeLLM())) == one_way  # nothing to weigh
+
+
+def test_the_pairwise_which_one_benchmark_averages_both_orders_and_ranks(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    pairwise = _script("bench_one_pairwise", monkeypatch)
+    from conceptbot.models.fake import FakeLLM
+
+    llm = FakeLLM(scores=[[-0.1, -1.1], [-0.5, -0.7]])  # A by 1.0, then A by 0.2 (the lean to A)
+    found = pairwise.preference(llm, "I need to write", "give to the user", "pencil", "pen")
+    assert found == pytest.approx(0.4)
+    assert "A: the pen\nB: the pencil" in llm.score_requests[1].messages[-1].content
+    rows = [
+        {"set": "dev", "first_ok": True, "second_ok": False, "p_first": 0.6, "preference": 0.3},
+        {"set": "dev", "first_ok": False, "second_ok": True, "p_first": 0.9, "preference": -0.2},
+        {"set": "dev", "first_ok": True, "second_ok": True, "p_first": 0.5, "preference": 0.1},
+    ]
+    pairwise.report(rows)
+    shown = capsys.readouterr().out
+    assert "3 decisions, first choice acceptable in 2; exactly one of the two in 2" in shown
+    assert "p_one picks it 1, the model 2" in shown and "p_one 0.000, preference 1.000" in shown
