@@ -206,18 +206,14 @@ def test_the_held_out_reading_labels_are_summed_at_both_thresholds(monkeypatch: 
     assert labels.fit_reading(found)[0.8] == 1.0  # two rows: too few for 0.8, keep every reading
 
 
-def _script(name: str, monkeypatch: pytest.MonkeyPatch) -> Any:
-    """A benchmark script as a module, its folder on the path as when it runs."""
+def _on_path(name: str, monkeypatch: pytest.MonkeyPatch) -> Any:
+    """A benchmark script as a module, its folder on the path as when it runs (it imports a sibling)."""
     monkeypatch.syspath_prepend(str(BENCHMARKS[0].parent))
-    spec = importlib.util.spec_from_file_location(f"benchmark_{name}", BENCHMARKS[0].parent / f"{name}.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return _script(name)
 
 
 def test_the_reading_judge_fit_learns_how_much_the_preference_says(monkeypatch: pytest.MonkeyPatch) -> None:
-    restated = _script("bench_restated_reading", monkeypatch)
+    restated = _on_path("bench_restated_reading", monkeypatch)
     steps = {"fewer": {"taken": 0.6, "other": 0.2}}
     # The dropped reading was meant exactly where the model preferred it (a negative preference).
     rows = [{"round": 0, "step": "fewer", "label": "other", "preference": -0.2 - 0.1 * i} for i in range(5)]
@@ -231,7 +227,7 @@ def test_the_reading_judge_fit_learns_how_much_the_preference_says(monkeypatch: 
 
 
 def test_held_out_readings_are_rescored_without_planning_them_again(monkeypatch: pytest.MonkeyPatch) -> None:
-    labels = _script("bench_reading_labels", monkeypatch)
+    labels = _on_path("bench_reading_labels", monkeypatch)
     from conceptbot.models.fake import FakeLLM
     from conceptbot.pipeline.goal.doubt import judge_weights, judged, odds
     from conceptbot.pipeline.goal.judge import ReadingJudge
@@ -259,7 +255,7 @@ def test_held_out_readings_are_rescored_without_planning_them_again(monkeypatch:
 def test_the_pairwise_which_one_benchmark_averages_both_orders_and_ranks(
     monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    pairwise = _script("bench_one_pairwise", monkeypatch)
+    pairwise = _on_path("bench_one_pairwise", monkeypatch)
     from conceptbot.models.fake import FakeLLM
 
     llm = FakeLLM(scores=[[-0.1, -1.1], [-0.5, -0.7]])  # A by 1.0, then A by 0.2 (the lean to A)
