@@ -215,3 +215,28 @@ def test_readable_output_says_which_mat_went_under_what_was_too_hot() -> None:
         "too hot for the dining table? the casserole dish: P(yes) 0.95 -> the cork mat goes under it" in text
     )
     assert "pick_and_place(cork mat, dining table)" in text
+
+
+def test_readable_output_gives_each_reading_its_odds_and_the_model_s_preference() -> None:
+    from rich.console import Console
+
+    import conceptbot.cli.main  # noqa: F401  (the command modules are imported through it)
+    from conceptbot.cli.plan_cmd import show
+    from conceptbot.core.scene import scene_from_dict
+    from conceptbot.models.fake import FakeEmbedder, FakeLLM
+    from conceptbot.pipeline.conceptbot import ConceptBot
+    from conceptbot.pipeline.retrieval import RelationRetriever
+    from tests.pipeline.fakes import DictGraph
+
+    scene = scene_from_dict({"pickable_objects": ["glue", "chips"], "destinations": ["table", "user"]})
+    # Which reading was meant (the model prefers the second shown both times: the dropped one),
+    # then the glue's risk question.
+    judged, prior, safe = [[-2.0, -0.5], [-0.3, -2.3]], [-1.0, -1.0], [-0.05, -3.0]
+    llm = FakeLLM(["Put the glue on the table."], scores=[*judged, prior, safe])
+    bot = ConceptBot(llm, RelationRetriever(DictGraph(), FakeEmbedder(), theta=0.1), "urp", planner="goal")
+    plan = bot.plan("Oh, before I forget, would you be a dear and pop the glue on the table?", scene)
+    console = Console(record=True, width=240)
+    show(plan, console)
+    text = console.export_text()
+    assert "taken 'put the glue in or on the table' P 0." in text and "; dropped '" in text
+    assert "the model prefers the dropped one by 1.75 nats" in text

@@ -241,6 +241,8 @@ READINGS = {
     "words": "read from the request's own words (the plain form read otherwise)",
     "sampled": "read from a sampled plain form, as the person chose",
 }
+#: Each reading's part, for the print-out (as the web page says it).
+KINDS = {"taken": "taken", "other": "dropped", "sampled": "sampled"}
 
 
 def _goal(console: Console, trace: PlanTrace) -> None:
@@ -251,6 +253,16 @@ def _goal(console: Console, trace: PlanTrace) -> None:
     console.print(line("\n", ("Goal", "bold"), " (stack)" if goal.stack else ""))
     if goal.reading:
         console.print(line(f"  said plainly by the model: {goal.plain!r}; {READINGS[goal.reading]}"))
+    if len(goal.readings) > 1:
+        # Each reading with P(it is the one meant): why the person was, or was not, asked which.
+        odds = "; ".join(
+            f"{KINDS[r.kind]} {r.text!r} P {'?' if r.p != r.p else f'{r.p:.2f}'}" for r in goal.readings
+        )
+        preference = goal.preference
+        if preference is not None and math.isfinite(preference):
+            side = "taken" if preference >= 0 else "dropped"
+            odds += f"; the model prefers the {side} one by {abs(preference):.2f} nats"
+        console.print(line(f"  readings ({goal.step}): {odds}"))
     for target in goal.targets:
         how = {"named": "named in the request", "speaker": "the speaker", "scored": "scored"}[target.how]
         named = f"; objects named: {', '.join(target.named)}" if target.named else ""
