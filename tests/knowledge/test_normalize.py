@@ -1,7 +1,7 @@
 import pytest
 
 from conceptbot.knowledge.base import Edge
-from conceptbot.knowledge.normalize import candidates, lookup, modifiers, normalize, singular
+from conceptbot.knowledge.normalize import candidates, lemmatised, lookup, modifiers, normalize, singular
 
 
 @pytest.mark.parametrize(
@@ -93,3 +93,48 @@ def test_compound_modifiers_are_tried_whole_first() -> None:
     result = lookup("Black Widow Spider", fetch, None, 10)
     assert result.matched == "spider + black widow"
     assert {e.head for e in result.edges} == {"spider", "black widow"}
+
+
+def test_a_word_kept_plural_is_lemmatised_only_as_the_lemmatised_sources_name_it() -> None:
+    assert (singular("scissors"), lemmatised("scissors")) == ("scissors", "scissor")
+    assert (singular("boxes"), lemmatised("boxes")) == ("box", "box")
+    assert candidates("tweezers") == [("tweezers", "exact"), ("tweezer", "lemma")]
+    assert candidates("kitchen scissors")[-1] == ("scissors", "head")  # the head stays the word
+
+
+def test_a_kept_plural_only_wordnet_names_gets_omcs_statements_about_its_singular() -> None:
+    # WordNet names "scissors" as written; OMCS lemmatised it to "scissor".
+    known = {
+        "scissors": [Edge("scissors", "IsA", "edge tool", 2.0, "wordnet")],
+        "scissor": [
+            Edge("scissor", "UsedFor", "cut", 7.0, "omcs"),
+            Edge("scissor", "HasProperty", "sharp", 3.0, "omcs"),
+            Edge("drawer", "AtLocation", "scissor", 1.0, "omcs"),
+            Edge("scissor", "IsA", "verb sense", 1.0, "wordnet"),  # WordNet's own singular: not added
+        ],
+        "glasses": [Edge("glasses", "UsedFor", "see", 3.0, "omcs")],
+        "glass": [Edge("glass", "HasProperty", "sharp", 4.0, "omcs")],
+    }
+    fetch = _fetcher(known)
+    found = lookup("scissors", fetch, None, 10)
+    assert (found.matched, found.match) == ("scissors", "exact")
+    assert [e.sentence for e in found.edges] == [
+        "scissors UsedFor cut",
+        "scissors HasProperty sharp",
+        "scissors IsA edge tool",
+        "drawer AtLocation scissors",
+    ]
+    assert [e.sentence for e in lookup("scissors", fetch, None, 2).edges] == [
+        "scissors UsedFor cut",
+        "scissors HasProperty sharp",
+    ]
+    # As the head of a compound too.
+    assert "scissors UsedFor cut" in [e.sentence for e in lookup("kitchen scissors", fetch, None, 10).edges]
+    # A kept plural OMCS knows as written keeps its own statements: "glass" is another thing.
+    assert [e.sentence for e in lookup("glasses", fetch, None, 10).edges] == ["glasses UsedFor see"]
+
+
+def test_a_kept_plural_with_no_statements_is_looked_up_by_its_singular() -> None:
+    fetch = _fetcher({"tweezer": [Edge("tweezer", "UsedFor", "pluck eyebrows", 2.0, "omcs")]})
+    found = lookup("tweezers", fetch, None, 10)
+    assert (found.matched, found.match, found.edges[0].tail) == ("tweezer", "lemma", "pluck eyebrows")

@@ -123,3 +123,30 @@ def test_the_graph_cannot_veto_through_a_word_of_the_name_or_against_its_own_str
 def test_hazard_words_are_matched_as_words() -> None:
     assert hazard_in(_edge("x", "HasProperty", "sharpener"), "child") is None
     assert hazard_in(_edge("x", "IsA", "choking hazard"), "child") == "choking hazard"
+
+
+def test_a_word_kept_plural_is_vetoed_by_what_the_lemmatised_source_says_of_its_singular() -> None:
+    # The offline graph as built: WordNet names "scissors" as written (three senses), ConceptNet 4's
+    # OMCS statements name it "scissor". The lookup reads both (knowledge/normalize.py).
+    from tests.pipeline.fakes import DictGraph
+
+    class TwoSources(DictGraph):
+        def _fetch(self, concept, relations, limit):
+            rows = {
+                "scissors": [
+                    _edge("scissors", "IsA", "edge tool", 2.0, "wordnet"),
+                    _edge("scissors", "IsA", "wrestling hold", 1.0, "wordnet"),
+                ],
+                "scissor": [
+                    _edge("scissor", "UsedFor", "cut", 7.0),
+                    _edge("scissor", "HasProperty", "sharp", 3.0),
+                ],
+            }.get(concept, [])
+            return [e for e in rows if relations is None or e.relation in relations][:limit]
+
+    check = HazardCheck(TwoSources({}))
+    veto = check.veto("scissors", "child", {})
+    assert veto is not None and veto.source == "graph" and "scissors HasProperty sharp" in veto.statement
+    assert check.veto("scissors", "user", {}) is None  # an adult who asks gets them
+    # "safety scissors" is read through its head noun: no evidence about the object itself.
+    assert check.veto("safety scissors", "child", {}) is None

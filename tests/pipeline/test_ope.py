@@ -45,6 +45,12 @@ def test_results_are_cached_per_object_and_mode(tmp_path: Path) -> None:
     # Another graph version is another key: the (empty) fake must be asked, and it raises.
     other = ObjectPropertiesExtractor(FakeLLM([properties_reply()]), retriever, store, "v2")
     assert not other.run(["sponge"], modes.PROPERTIES).properties["sponge"].cached
+    # So are other facts from the same graph (the graph read another way): never a stale answer.
+    read_otherwise = RelationRetriever(
+        DictGraph({"knife": [("knife", "UsedFor", "spread butter")]}), FakeEmbedder(), theta=0.1
+    )
+    fresh = ObjectPropertiesExtractor(FakeLLM([properties_reply()]), read_otherwise, store, "v1")
+    assert not fresh.run(["knife"], modes.PROPERTIES).properties["knife"].cached
 
 
 def test_risk_mode_keeps_only_scene_partners_with_scene_spelling() -> None:

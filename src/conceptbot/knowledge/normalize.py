@@ -15,16 +15,28 @@ Hellebore" -> "green hellebore").
 4. ``modifier`` only the modifiers, when the head noun is unknown.
 
 English compounds put the head noun last, which is why the last word is the head.
+
+Words kept plural (``_KEEP``: "scissors", "tweezers", "tongs") are the concept themselves, so their
+singular is not tried as another name. But the two offline sources name them differently: WordNet
+by the word ("scissors"), ConceptNet 4's OMCS statements by a lemmatiser's singular ("scissor
+UsedFor cut", "scissor HasProperty sharp"). So where the concept matched for such a word has only
+WordNet's statements, OMCS's statements about its singular are added, named as the word; and where
+the word has none at all, its singular is tried as a ``lemma``. A word that OMCS knows as written
+("glasses", "jeans") keeps its own statements only: OMCS's "glass" mixes drinking glasses with
+spectacles.
 """
 
 from __future__ import annotations
 
 import re
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 
 from conceptbot.knowledge.base import ConceptEdges, Edge
 
 Fetch = Callable[[str, Sequence[str] | None, int], list[Edge]]
+#: The source that names concepts by the word as written; the others' English is lemmatised.
+WORD_SOURCE = "wordnet"
 
 _ARTICLES = ("a ", "an ", "the ", "some ")
 _IRREGULAR = {
@@ -115,7 +127,17 @@ def normalize(text: str) -> str:
 
 def singular(word: str) -> str:
     """A conservative English singular of one word (unknown shapes are left alone)."""
-    if word in _KEEP or len(word) <= 3:
+    return _singular(word, keep=True)
+
+
+def lemmatised(word: str) -> str:
+    """A lemmatiser's singular of one word, kept plurals included ("scissors" -> "scissor"): how
+    ConceptNet 4's OMCS statements name it. Other words: :func:`singular`."""
+    return _singular(word, keep=False)
+
+
+def _singular(word: str, keep: bool) -> str:
+    if (keep and word in _KEEP) or len(word) <= 3:
         return word
     if word in _IRREGULAR:
         return _IRREGULAR[word]
@@ -135,6 +157,8 @@ def candidates(text: str) -> list[tuple[str, str]]:
         return []
     words = phrase.split(" ")
     lemma = " ".join([*words[:-1], singular(words[-1])])
+    if lemma == phrase:  # a word kept plural: its lemmatised singular, only where it has no statements
+        lemma = " ".join([*words[:-1], lemmatised(words[-1])])
     out = [(phrase, "exact")]
     if lemma != phrase:
         out.append((lemma, "lemma"))
@@ -161,7 +185,7 @@ def lookup(text: str, fetch: Fetch, relations: Sequence[str] | None, limit: int)
         limit: Maximum number of edges returned.
     """
     for concept, kind in candidates(text):
-        edges = fetch(concept, relations, limit)
+        edges = _unlemmatised(concept, fetch(concept, relations, limit), fetch, relations, limit)
         if not edges:
             continue
         if kind != "head":
@@ -176,6 +200,27 @@ def lookup(text: str, fetch: Fetch, relations: Sequence[str] | None, limit: int)
     if collected:
         return ConceptEdges(text, " + ".join(used), "modifier", tuple(collected))
     return ConceptEdges(text, None, "none", ())
+
+
+def _unlemmatised(
+    concept: str, edges: list[Edge], fetch: Fetch, relations: Sequence[str] | None, limit: int
+) -> list[Edge]:
+    """``edges`` of a concept whose last word is kept plural and which only WordNet names, with the
+    lemmatised sources' statements about its singular, named as the concept ("scissor UsedFor cut"
+    as "scissors UsedFor cut"), strongest first (see the module docstring). Others: ``edges``."""
+    words = concept.split(" ")
+    single = lemmatised(words[-1])
+    if not edges or single == words[-1] or singular(words[-1]) != words[-1]:
+        return edges
+    if any(e.source != WORD_SOURCE for e in edges):
+        return edges
+    other = " ".join([*words[:-1], single])
+    more = [
+        replace(e, head=concept if e.head == other else e.head, tail=concept if e.tail == other else e.tail)
+        for e in fetch(other, relations, limit)
+        if e.source != WORD_SOURCE
+    ]
+    return sorted([*edges, *more], key=lambda e: -e.weight)[:limit]
 
 
 def _modifier_edges(

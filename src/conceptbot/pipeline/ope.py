@@ -102,9 +102,11 @@ class ObjectPropertiesExtractor:
         self.graph_version = graph_version
         self.max_relations = max_relations
 
-    def _key(self, name: str, mode: OPEMode, context: str) -> str:
-        # Everything the answer depends on: the prompt text and the retrieval settings included, so
-        # editing a prompt or the relation list never serves a stale answer.
+    def _key(self, name: str, mode: OPEMode, context: str, kept: list[str]) -> str:
+        # Everything the answer depends on: the prompt text, the retrieval settings and the facts
+        # put in the prompt included, so editing a prompt, the relation list or how the graph is
+        # read (knowledge/normalize.py) never serves a stale answer. (A key missed for unchanged
+        # facts costs little: the model's reply to the same prompt is in the answer cache.)
         retrieval = [self.retriever.theta, list(self.retriever.relations)] if self.retriever else None
         payload = [
             name,
@@ -116,6 +118,7 @@ class ObjectPropertiesExtractor:
             retrieval,
             mode.system_prompt(),
             self.max_relations,
+            kept,
         ]
         return hashlib.sha256(json.dumps(payload).encode()).hexdigest()
 
@@ -146,7 +149,7 @@ class ObjectPropertiesExtractor:
             kept = (
                 [edge_text(s.edge) for s in retrievals[name].kept[: self.max_relations]] if retrievals else []
             )
-            key = self._key(name, kind, context)
+            key = self._key(name, kind, context, kept)
             cached = (
                 self.store.attempt("read the cache", self.store.get_value, "ope", key) if self.store else None
             )
