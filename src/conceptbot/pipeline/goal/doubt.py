@@ -94,10 +94,14 @@ def judge_weights() -> JudgeWeights | None:
     found = _odds_data().get("judge")
     if found is None:
         return None
-    values = (found.get("weight"), found.get("bias")) if isinstance(found, dict) else (None, None)
-    if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in values):
+    weight, bias = (found.get("weight"), found.get("bias")) if isinstance(found, dict) else (None, None)
+    if not (_finite(weight) and _finite(bias)):
         raise ConfigError(f"reading odds file {ODDS_FILE}: 'judge' needs finite 'weight' and 'bias'")
-    return JudgeWeights(float(values[0]), float(values[1]))  # type: ignore[arg-type]
+    return JudgeWeights(float(weight), float(bias))
+
+
+def _finite(value: object) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
 def judged(found: Odds, preference: float, weights: JudgeWeights) -> Odds:
@@ -106,8 +110,10 @@ def judged(found: Odds, preference: float, weights: JudgeWeights) -> Odds:
     ``sigmoid(log(other / taken) + bias - weight * preference)``; what neither reading holds stays.
     A preference that is not a number gives :data:`UNKNOWN`: the person is asked, never a guess made.
     """
-    if not math.isfinite(preference) or found.taken <= 0.0 or found.other <= 0.0:
-        return Odds(*UNKNOWN, found.rows) if not math.isfinite(preference) else found
+    if not math.isfinite(preference):
+        return Odds(*UNKNOWN, found.rows)
+    if found.taken <= 0.0 or found.other <= 0.0:
+        return found  # odds of 0 (never smoothed so) have no log-odds to move
     shared = found.taken + found.other
     z = math.log(found.other / found.taken) + weights.bias - weights.weight * preference
     other = shared / (1.0 + math.exp(-z)) if z > -700 else 0.0
