@@ -271,3 +271,18 @@ def test_the_pairwise_which_one_benchmark_averages_both_orders_and_ranks(
     shown = capsys.readouterr().out
     assert "3 decisions, first choice acceptable in 2; exactly one of the two in 2" in shown
     assert "p_one picks it 1, the model 2" in shown and "p_one 0.000, preference 1.000" in shown
+
+
+def test_the_paraphrase_asking_benchmark_counts_reading_questions(monkeypatch: pytest.MonkeyPatch) -> None:
+    paraphrases = _on_path("bench_asking_paraphrases", monkeypatch)
+    read = {"kind": "reading", "text": "Did you mean ...?", "answer": "a", "objects": 2}
+    choose = {"kind": "choose", "text": "Which of these ...?", "answer": "x", "objects": 3}
+    found = [
+        {"task": "t1", "alone": True, "asked": True, "found": [True], "questions": [read, choose]},
+        {"task": "t2", "alone": False, "asked": True, "found": [True], "questions": [choose]},
+        {"task": "t3", "alone": False, "asked": False, "found": [], "questions": []},
+    ]
+    row = paraphrases.figures(found)
+    assert row["reading_questions"] == 1 and row["tasks"] == 3
+    assert (row["success_without_questions"], row["success"]) == (33.3, 66.7)
+    assert paraphrases.STEPS_READING[0.9] == 0.8788  # the eighteenth session's fit, for the comparison
