@@ -5,8 +5,8 @@ choice that kept one says little on new wording: on the goal set's held-out para
 and 12) the steps' odds ranked the meant reading below chance (AUC 0.43). Shown the request and
 both readings in words (:func:`.doubt.describe`), the small model picks the meant one far better:
 its preference alone ranks them at AUC 0.83 on the same rows, weighed with the steps' odds 0.80
-(``benchmarks/bench_restated_reading.py --fit-judge``; ``docs/notes/2026-12-05-reading-judge.md``). :class:`ReadingJudge` asks it, and :func:`.doubt.judged`
-weighs its answer with the step's odds.
+(``benchmarks/bench_restated_reading.py --fit-judge``; ``docs/notes/2026-12-05-reading-judge.md``).
+:class:`ReadingJudge` asks it, and :func:`.doubt.judged` weighs its answer with the step's odds.
 
 The model leans to the first option it is shown, so it is asked twice, the readings in each order,
 and the two answers' log-odds are averaged: what is left is its preference for the reading itself.
