@@ -102,3 +102,18 @@ def test_a_risk_decision_the_backend_cannot_make_refuses_the_move(bad: float) ->
 def test_a_score_response_refuses_non_finite_numbers() -> None:
     with pytest.raises(ModelOutputError, match="non-finite"):
         FakeLLM(scores=[[math.nan, -1.0]]).score(ScoreRequest(options=("Yes", "No"), prompt="?"))
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf])
+def test_a_reading_preference_the_backend_cannot_give_leaves_the_person_to_say_which(bad: float) -> None:
+    # The model says the request plainly; the rules read the words another way ("dear" as a thing
+    # wanted). Its view of which was meant is not a number: the two readings are as likely, and
+    # which one was meant is asked rather than guessed.
+    scene = scene_from_dict({"pickable_objects": ["glue", "chips"], "destinations": ["table", "user"]})
+    llm = FakeLLM(["Put the glue on the table."], scores=[[bad, -1.0], PRIOR, SAFE])
+    bot = ConceptBot(llm, RelationRetriever(DictGraph({}), FakeEmbedder(), theta=0.1), "urp", planner="goal")
+    plan = bot.plan("Oh, before I forget, would you be a dear and pop the glue on the table?", scene)
+    goal = plan.to_dict()["trace"]["goal"]
+    assert [r["p"] for r in goal["readings"]] == [0.5, 0.5] and "preference" not in goal
+    assert [q.kind for q in plan.questions] == ["reading"]
+    json.dumps(plan.to_dict(), allow_nan=False)
