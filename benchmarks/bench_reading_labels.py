@@ -39,9 +39,7 @@ from conceptbot.core.config import load_settings
 from conceptbot.core.system import ASK_ALL, COVERAGES, PlannerSystem, SystemOptions
 from conceptbot.core.trace import ReadingOption
 from conceptbot.models.registry import open_llm
-from conceptbot.pipeline.goal.doubt import judge_weights, judged
-from conceptbot.pipeline.goal.doubt import odds as step_odds
-from conceptbot.pipeline.goal.judge import ReadingJudge
+from conceptbot.pipeline.goal.judge import ReadingJudge, reading_odds
 from conceptbot.pipeline.goal_planner.asking import reading_set
 from conceptbot.pipeline.goal_planner.conformal import conformal_threshold, shipped
 from conceptbot.systems import build_system
@@ -134,14 +132,15 @@ def write(found: list[dict], rounds: str) -> None:
 
 def rescored(found: dict, judge: ReadingJudge) -> dict:
     """A labelled paraphrase with its two readings' odds as the planner now gives them (the step's
-    odds moved by the model's preference, :func:`conceptbot.pipeline.goal.doubt.judged`), without
+    odds moved by the model's preference, :func:`conceptbot.pipeline.goal.judge.reading_odds`), without
     planning it again: the labels depend on the readings' plans, not on their odds."""
     kinds = [r["kind"] for r in found["readings"]]
-    weights = judge_weights()
-    if kinds != ["taken", "other"] or weights is None:
+    if kinds != ["taken", "other"]:
         return found
     taken, other = (r["text"] for r in found["readings"])
-    odds = judged(step_odds(found["step"]), judge.prefer(found["request"], taken, other).log_odds, weights)
+    odds, judged_by = reading_odds(found["step"], found["request"], taken, other, judge)
+    if judged_by is None:
+        return found
     probabilities = (round(odds.taken, 4), round(odds.other, 4))
     readings = [{**r, "p": p} for r, p in zip(found["readings"], probabilities, strict=True)]
     return {**found, "readings": readings}

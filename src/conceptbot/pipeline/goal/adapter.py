@@ -40,8 +40,8 @@ from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline.goal.aided import Policy, Reading, read_twice
 from conceptbot.pipeline.goal.compare import same_goal, structure
-from conceptbot.pipeline.goal.doubt import describe, judge_weights, judged, odds
-from conceptbot.pipeline.goal.judge import ReadingJudge
+from conceptbot.pipeline.goal.doubt import describe
+from conceptbot.pipeline.goal.judge import ReadingJudge, reading_odds
 from conceptbot.pipeline.goal.reader import GoalReader
 from conceptbot.pipeline.goal.restate import Restater
 from conceptbot.pipeline.goal.types import ALL as GOAL_ALL
@@ -272,15 +272,10 @@ class GoalFinder:
         if other is None and not more:
             return replace(read, plain=reading.plain, reading=source)
         flipped = "words" if reading.source == "plain" else "plain"
-        found = odds(reading.step)
         taken_text = describe(reading.goal)
         other_text = describe(other) if other is not None else ""
-        weights = judge_weights() if self.judge is not None and other is not None else None
-        preference = None
-        if weights is not None and self.judge is not None and other_text != taken_text:
-            judged_by = self.judge.prefer(request, taken_text, other_text)
-            preference = judged_by.log_odds
-            found = judged(found, preference, weights)
+        found, judged_by = reading_odds(reading.step, request, taken_text, other_text, self.judge)
+        if judged_by is not None:
             read = replace(read, usage=read.usage + judged_by.usage)
 
         def alternative() -> TargetsRead:
@@ -297,7 +292,7 @@ class GoalFinder:
             reading.step,
             alternative,
             more,
-            preference,
+            judged_by.log_odds if judged_by is not None else None,
         )
         kept = other.to_dict() if other is not None else None
         return replace(read, plain=reading.plain, reading=source, other=kept, doubt=doubt)

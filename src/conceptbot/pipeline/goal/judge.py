@@ -21,6 +21,7 @@ from conceptbot.core.errors import ConceptBotError
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, Message, ScoreRequest
 from conceptbot.pipeline import prompts
+from conceptbot.pipeline.goal.doubt import Odds, judge_weights, judged, odds
 
 logger = logging.getLogger(__name__)
 OPTIONS = ("A", "B")
@@ -69,3 +70,18 @@ class ReadingJudge:
         messages = (Message("system", prompts.fill("reading_judge_system")), Message("user", user))
         scored = self.llm.score(ScoreRequest(options=OPTIONS, messages=messages))
         return scored.logprobs[0] - scored.logprobs[1], scored.usage
+
+
+def reading_odds(
+    step: str, request: str, taken: str, other: str, judge: ReadingJudge | None = None
+) -> tuple[Odds, Preference | None]:
+    """How likely the reading ``taken`` and the reading ``other`` (both in words) are the one meant:
+    the odds of the choice's ``step``, moved by ``judge``'s preference where a judge is given, the
+    odds file has fitted weights and the two read differently in words; and that preference (None
+    where the model was not asked)."""
+    found = odds(step)
+    weights = judge_weights() if judge is not None and other and other != taken else None
+    if judge is None or weights is None:
+        return found, None
+    preference = judge.prefer(request, taken, other)
+    return judged(found, preference.log_odds, weights), preference
