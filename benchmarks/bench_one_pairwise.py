@@ -27,8 +27,9 @@ from bench_paraphrase_plans import chosen_rows
 from conceptbot.bench.grading import Task, gold_answer, load_tasks, task_scene
 from conceptbot.core.config import load_settings
 from conceptbot.core.system import PlannerSystem, SystemOptions
-from conceptbot.models.llm import LLM, Message, ScoreRequest
+from conceptbot.models.llm import LLM
 from conceptbot.models.registry import open_llm
+from conceptbot.pipeline.goal.judge import both_orders
 from conceptbot.pipeline.goal_planner.asking import move_words
 from conceptbot.systems import build_system
 
@@ -45,14 +46,10 @@ CATEGORIES = ("ambiguous", "implicit", "risk", "materials")
 def preference(llm: LLM, request: str, move: str, first: str, second: str) -> float:
     """The model's log-odds for ``first`` over ``second``, averaged over both orders."""
 
-    def ask(a: str, b: str) -> float:
-        user = USER.format(request=request, move=move, a=a, b=b)
-        scored = llm.score(
-            ScoreRequest(options=("A", "B"), messages=(Message("system", SYSTEM), Message("user", user)))
-        )
-        return scored.logprobs[0] - scored.logprobs[1]
+    def user(a: str, b: str) -> str:
+        return USER.format(request=request, move=move, a=a, b=b)
 
-    return 0.5 * (ask(first, second) - ask(second, first))
+    return both_orders(llm, SYSTEM, user, first, second)[0]
 
 
 def decisions(system: PlannerSystem, llm: LLM, task: Task, where: str) -> list[dict[str, Any]]:

@@ -15,6 +15,7 @@ and the two answers' log-odds are averaged: what is left is its preference for t
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from conceptbot.core.errors import ConceptBotError
@@ -54,22 +55,39 @@ class ReadingJudge:
     def prefer(self, request: str, first: str, second: str) -> Preference:
         """The model's preference for ``first`` over ``second`` as what ``request`` asks for; never
         raises for a model's failure (a NaN preference: ask, do not guess)."""
+        said = " ".join(request.split())
+
+        def user(a: str, b: str) -> str:
+            return prompts.fill("reading_judge_user", request=said, first=a, second=b)
+
+        # Both files filled exactly as written: the fitted weights were measured on these very prompts.
         try:
-            ahead, usage = self._ask(request, first, second)
-            behind, used = self._ask(request, second, first)
+            log_odds, usage = both_orders(self.llm, prompts.fill("reading_judge_system"), user, first, second)
         except ConceptBotError as exc:
             logger.warning("judging the readings of %r failed: %s", request[:80], exc)
             return Preference(float("nan"))
-        return Preference(0.5 * (ahead - behind), usage + used)
+        return Preference(log_odds, usage)
 
-    def _ask(self, request: str, first: str, second: str) -> tuple[float, Usage]:
-        user = prompts.fill(
-            "reading_judge_user", request=" ".join(request.split()), first=first, second=second
-        )
-        # Both files filled exactly as written: the fitted weights were measured on these very prompts.
-        messages = (Message("system", prompts.fill("reading_judge_system")), Message("user", user))
-        scored = self.llm.score(ScoreRequest(options=OPTIONS, messages=messages))
+
+def both_orders(
+    llm: LLM, system: str, user: Callable[[str, str], str], first: str, second: str
+) -> tuple[float, Usage]:
+    """The model's log-odds for ``first`` over ``second``: "A" against "B" with ``first`` shown as A
+    (``user(first, second)``), then shown as B, averaged, so that its lean to the option shown
+    first cancels; and the two calls' usage.
+
+    Raises:
+        ConceptBotError: The backend could not score (a non-finite score included).
+    """
+
+    def ask(a: str, b: str) -> tuple[float, Usage]:
+        messages = (Message("system", system), Message("user", user(a, b)))
+        scored = llm.score(ScoreRequest(options=OPTIONS, messages=messages))
         return scored.logprobs[0] - scored.logprobs[1], scored.usage
+
+    ahead, usage = ask(first, second)
+    behind, used = ask(second, first)
+    return 0.5 * (ahead - behind), usage + used
 
 
 def reading_odds(
