@@ -210,7 +210,7 @@ def _unlemmatised(
     as "scissors UsedFor cut"), strongest first (see the module docstring). Others: ``edges``."""
     words = concept.split(" ")
     single = lemmatised(words[-1])
-    if not edges or single == words[-1] or singular(words[-1]) != words[-1]:
+    if not edges or words[-1] not in _KEEP or single == words[-1]:
         return edges
     if any(e.source != WORD_SOURCE for e in edges):
         return edges
