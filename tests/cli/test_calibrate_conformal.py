@@ -58,6 +58,8 @@ def test_calibrate_conformal_writes_the_models_thresholds_for_the_planner(
     assert Path(data["path"]).is_file() and found.qhat == {
         float(k): v for k, v in data["plan_qhat"]["graph"].items()
     }
+    # The planner reads them as this model's own: the coverage they promise holds for its plans.
+    assert found.fits("openai-compatible", "my-model") and found.source == data["path"]
     # Every task's worst decision is 1 - 0.7 (yes) or 0.7 (no): the threshold is one of them.
     assert all(round(q, 4) in (0.3, 0.7) for q in found.qhat.values())
     # Both which-one rules are fitted from the same plans; the default is the shipped one's.

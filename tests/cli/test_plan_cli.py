@@ -160,6 +160,47 @@ def test_readable_output_of_the_goal_planner_shows_targets_decisions_and_risk() 
     assert "risk: give the apple to the user" in text and "pick_and_place(apple, user)" in text
 
 
+@pytest.mark.parametrize(
+    ("model", "noted"), [("fake-model", True), ("qwen2.5-coder-1.5b", False)], ids=["another", "embedded"]
+)
+def test_a_plan_says_whose_conformal_thresholds_it_asked_by(model: str, noted: bool) -> None:
+    from rich.console import Console
+
+    import conceptbot.cli.main  # noqa: F401  (the command modules are imported through it)
+    from conceptbot.cli.plan_cmd import show
+    from conceptbot.core.plan import plan_schema
+    from conceptbot.core.scene import scene_from_dict
+    from conceptbot.models.fake import FakeLLM
+    from conceptbot.pipeline.conceptbot import ConceptBot
+
+    jsonschema = pytest.importorskip("jsonschema")
+    prior, yes, no = [-1.0, -1.0], [-0.1, -3.0], [-3.0, -0.1]
+    names, neutral = [-1.0, -3.0], [-2.0, -2.0]
+    llm = FakeLLM(scores=[prior, yes, no, names, neutral, prior, yes], model=model)
+    bot = ConceptBot(llm, None, "urp", planner="goal")
+    plan = bot.plan("Bring me something to eat", scene_from_dict(SCENE))
+    assert plan.trace.calibration is not None
+    assert plan.trace.calibration.to_dict() == {
+        "coverage": 0.9,
+        "model": f"fake:{model}",
+        "fitted_for": "qwen2.5-coder-1.5b",
+        "source": "shipped",
+        "own": not noted,
+    }
+    data = plan.to_dict()
+    jsonschema.validate(data, plan_schema())
+    assert data["trace"]["calibration"]["own"] is not noted
+    console = Console(record=True, width=300)
+    show(plan, console)
+    text = console.export_text()
+    note = (
+        "Note: the confidence and the questions use thresholds fitted for qwen2.5-coder-1.5b, not for "
+        f"fake:{model}: the 0.9 coverage is not promised; `conceptbot calibrate --conformal` fits this "
+        "model's own"
+    )
+    assert (note in text) is noted and ("Note: the confidence" in text) is noted
+
+
 def test_readable_output_says_what_each_of_several_things_is_for() -> None:
     from rich.console import Console
 

@@ -114,6 +114,7 @@ def test_the_goal_planner_with_ope_and_saycan_validate() -> None:
         "decisions",
         "risk",
         "planner",
+        "calibration",
         "ope",
     ]
     llm = FakeLLM(scores=[[0.0, -9.0, -9.0, -9.0, -9.0], [-9.0] * 4 + [0.0]])

@@ -91,6 +91,32 @@ def confident_worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: A
     )
 
 
+FOREIGN = {
+    "coverage": 0.9,
+    "model": "openai:gpt-4o-mini",
+    "fitted_for": "qwen2.5-coder-1.5b",
+    "source": "shipped",
+    "own": False,
+}
+
+
+def foreign_worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: Any = None) -> None:
+    """A run planned by a model the shipped conformal thresholds were not fitted for."""
+    plan = ["pick_and_place(apple, user)", "done()"]
+    emit(
+        "plan",
+        {
+            "plan": plan,
+            "refused": False,
+            "reason": None,
+            "usage": {},
+            "confidence": 0.42,
+            "confidence_by_target": [],
+            "calibration": FOREIGN,
+        },
+    )
+
+
 def picking_worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: Any = None) -> None:
     """A run whose planner has three candidates for a target taking one: which one."""
     choosing_worker(spec, emit, out_dir, ask, ONE)
@@ -332,6 +358,19 @@ def test_the_page_shows_the_plans_confidence_and_where_it_is_lost(server: str, b
     assert _planned(browser) == ["pick_and_place(apple, user)", "done()"]
     assert browser.find_element(By.ID, "confidence").text == (
         "Confidence 0.42 that its calibrated decisions are all right (the user 0.60, the bowl 0.70)"
+    )
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("server", [foreign_worker], indirect=True)
+def test_the_page_says_when_the_thresholds_are_another_models(server: str, browser) -> None:
+    from selenium.webdriver.common.by import By
+
+    _ask(server, browser, "plan-box")
+    assert browser.find_element(By.ID, "confidence").text == (
+        "Confidence 0.42 that its calibrated decisions are all right — the thresholds were fitted for "
+        "qwen2.5-coder-1.5b, not for openai:gpt-4o-mini: the 0.9 coverage is not promised (conceptbot "
+        "calibrate --conformal fits this model's own)"
     )
 
 

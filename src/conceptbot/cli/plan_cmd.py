@@ -194,6 +194,17 @@ def show(result: Plan, console: Console) -> None:
                 f" {result.confidence:.2f} (that its calibrated decisions are all right)",
             )
         )
+    calibration = trace.calibration
+    if calibration is not None and not calibration.own:
+        # A threshold keeps its coverage only for the scores it was fitted on.
+        console.print(
+            line(
+                ("Note:", "yellow"),
+                f" the confidence and the questions use thresholds fitted for {calibration.fitted_for},"
+                f" not for {calibration.model}: the {calibration.coverage:g} coverage is not promised;"
+                " `conceptbot calibrate --conformal` fits this model's own",
+            )
+        )
     for question in result.questions:
         answer = (
             f"answered {question.answer}" if question.answer else "not asked: acted on the likelier answers"

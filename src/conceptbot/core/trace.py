@@ -672,6 +672,39 @@ class RiskCheck:
 
 
 @dataclass(frozen=True)
+class CalibrationNote:
+    """Which conformal thresholds the goal planner asked by, and whether they are this model's.
+
+    A threshold keeps its coverage only for the scores it was fitted on: the shipped ones are the
+    embedded model's; another model's plans get the coverage asked for once ``conceptbot calibrate
+    --conformal`` has fitted its own.
+
+    Attributes:
+        coverage: The coverage asked for (1.0: every calibrated decision is asked).
+        model: The model that planned, as ``backend:model``.
+        fitted_for: The model the thresholds were fitted for.
+        source: ``shipped`` (the package's) or the path of the user's calibration file.
+        own: Whether they were fitted on this model's scores.
+    """
+
+    coverage: float
+    model: str
+    fitted_for: str
+    source: str
+    own: bool
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
+        return {
+            "coverage": self.coverage,
+            "model": self.model,
+            "fitted_for": self.fitted_for,
+            "source": self.source,
+            "own": self.own,
+        }
+
+
+@dataclass(frozen=True)
 class PlannerSummary:
     """How the plan's steps were chosen.
 
@@ -911,7 +944,8 @@ _STEP_PARTS = ("ope", "urp", "goal", "decisions", "stack", "risk", "vetoes", "pl
 # The goal planner's OPE runs on the moves it checks, after the rest; its trace has always listed
 # OPE last, and the JSON keeps that order.
 _GOAL_PARTS = (
-    "urp", "goal", "decisions", "stack", "companions", "risk", "underlay", "vetoes", "planner", "ope"
+    "urp", "goal", "decisions", "stack", "companions", "risk", "underlay", "vetoes", "planner",
+    "calibration", "ope",
 )  # fmt: skip
 
 
@@ -938,6 +972,8 @@ class PlanTrace:
         vetoes: Moves dropped because their evidence names a hazard for the recipient, or because
             their risk decision could not be made (both planners; None: no move was vetoed).
         planner: How the steps were chosen.
+        calibration: The goal planner's conformal thresholds: whose they are, and whether they were
+            fitted for the model that planned.
         household: A household planner's part; its keys are written at the top level of the JSON
             after the others (``objects``, ``risk``, ..., as :class:`HouseholdTrace` lists them).
 
@@ -959,6 +995,7 @@ class PlanTrace:
     companions: tuple[CompanionCheck, ...] | None = None
     vetoes: tuple[Veto, ...] | None = None
     planner: PlannerSummary | None = None
+    calibration: CalibrationNote | None = None
     household: HouseholdTrace | None = None
 
     def __post_init__(self) -> None:

@@ -31,7 +31,7 @@ from conceptbot.core.observe import SILENT, Observer
 from conceptbot.core.plan import Done, Feedback, Plan
 from conceptbot.core.scene import Scene
 from conceptbot.core.system import PLANNERS, Ask
-from conceptbot.core.trace import OPETrace, PlannerSummary, PlanTrace, URPTrace
+from conceptbot.core.trace import CalibrationNote, OPETrace, PlannerSummary, PlanTrace, URPTrace
 from conceptbot.core.usage import Usage
 from conceptbot.models.cache_db import CacheStore
 from conceptbot.models.llm import LLM
@@ -162,6 +162,14 @@ class ConceptBot:
             # the graph tells a "basket" the person speaks of from the scene's "bins"
             same_kind=facts.same_kind if graphed else None,
         )
+        calibration = conformal.calibration_for(
+            calibration_dir,
+            llm.backend,
+            llm.model,
+            "graph" if graph is not None else "nograph",
+            level,
+            which_one,
+        )
         self.goal_planner = GoalPlanner(
             GoalFinder(
                 reader,
@@ -182,15 +190,16 @@ class ConceptBot:
             hazards=self.hazards,
             # Its decisions' conformal thresholds, fitted on the same combination's probabilities.
             # The model's own where `conceptbot calibrate --conformal` wrote one in calibration_dir.
-            calibration=conformal.calibration_for(
-                calibration_dir,
-                llm.backend,
-                llm.model,
-                "graph" if graph is not None else "nograph",
-                level,
-                which_one,
-            ),
+            calibration=calibration,
             coverage=coverage,
+        )
+        # Every plan says whose thresholds it asked by: another model's break the coverage promised.
+        self.calibration_note = CalibrationNote(
+            coverage,
+            f"{llm.backend}:{llm.model}",
+            calibration.fitted_for,
+            calibration.source,
+            calibration.fits(llm.backend, llm.model),
         )
 
     def plan(
@@ -275,6 +284,7 @@ class ConceptBot:
             request=trace.request,
             scene=trace.scene,
             planner=PlannerSummary("decide", len(result.steps)),
+            calibration=self.calibration_note,
             ope=ope,
         )
         actions = result.actions

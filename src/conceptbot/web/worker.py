@@ -161,6 +161,10 @@ def make_worker(systems: SystemFactory, can_simulate: bool) -> Worker:
                         for d in plan.trace.decisions or ()
                         if d.confidence is not None
                     ],
+                    # Whose conformal thresholds it asked by (None: no calibrated decisions).
+                    "calibration": (
+                        plan.trace.calibration.to_dict() if plan.trace.calibration is not None else None
+                    ),
                     # The mat checks: whether a mat went under something too hot for its place.
                     "underlay": [c.to_dict() for c in plan.trace.underlay or ()],
                     # Things used together: whether what a need's target took went with another.

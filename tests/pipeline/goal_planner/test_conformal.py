@@ -172,3 +172,21 @@ def test_at_coverage_one_every_answer_is_kept_without_a_fit() -> None:
 
     assert shipped().threshold(ASK_ALL) == 1.0 and shipped("nograph", "decision").threshold(ASK_ALL) == 1.0
     assert SystemOptions(coverage=ASK_ALL).coverage == 1.0
+
+
+def test_a_calibration_says_which_model_it_was_fitted_for(tmp_path) -> None:
+    from conceptbot.pipeline.goal_planner.conformal import SHIPPED_MODEL, calibration_for, user_file
+
+    found = shipped()
+    assert (found.fitted_for, found.source) == (SHIPPED_MODEL, "shipped") == ("qwen2.5-coder-1.5b", "shipped")
+    assert shipped(level="decision").fitted_for == SHIPPED_MODEL
+    # The embedded model's thresholds hold for it on any backend that serves it, not for another model.
+    assert found.fits("llamacpp", SHIPPED_MODEL) and found.fits("openai-compatible", SHIPPED_MODEL)
+    assert not found.fits("llamacpp", "qwen2.5-coder-0.5b") and not found.fits("openai", "gpt-4o-mini")
+    assert not calibration_for(tmp_path, "openai", "gpt-4o-mini").fits("openai", "gpt-4o-mini")
+    path = user_file(tmp_path, "openai", "gpt-4o-mini")
+    own = {"graph": {"0.8": 0.5, "0.9": 0.6, "0.95": 0.7}}
+    path.write_text(json.dumps({"plan_qhat": own, "fitted_on": "mine"}))
+    mine = calibration_for(tmp_path, "openai", "gpt-4o-mini")
+    assert (mine.fitted_for, mine.source) == ("openai:gpt-4o-mini", str(path))
+    assert mine.fits("openai", "gpt-4o-mini") and not mine.fits("openai-compatible", "gpt-4o-mini")

@@ -50,8 +50,13 @@ CALIBRATION_DOC = (
     "plan_qhat_one_RULE) are the thresholds the yes/no and which-one decisions take, and "
     "plan_qhat_reading (plan_qhat_reading_RULE) the question of which reading was meant, fitted on "
     "held-out paraphrases (benchmarks/bench_reading_labels.py --write; reading_fitted_on); plan_qhat "
-    "where they are missing. Refit for another model."
+    "where they are missing. model: the model every threshold here was fitted for (the embedded "
+    "catalogue's name); the planner tells another model that they are not its own (`conceptbot "
+    "calibrate --conformal` fits its own). Refit for another model."
 )
+#: The model the shipped thresholds were fitted for where the file names none (a file written
+#: before it named one: every shipped fit until then was the embedded model's).
+SHIPPED_MODEL = "qwen2.5-coder-1.5b"
 #: The which-one rule of a plan-level calibration that names none (written before 2026-12-03), and
 #: of the sets where no rule is given.
 OLD_RULE = "softmax"
@@ -114,7 +119,9 @@ class Calibration:
     """The shipped thresholds: ``qhat`` per coverage, where they were fitted, whether they hold
     for which-one decisions (``which_one``; the decision level's, from yes/no judgements, do not),
     and the rule that judges a which-one decision (``rule``, one of :data:`WHICH_ONE`: a threshold
-    holds only for the scores it was fitted on)."""
+    holds only for the scores it was fitted on), the model they were fitted for (``fitted_for``: a
+    model name for the shipped ones, ``backend:model`` for a user's) and where they were read
+    (``source``: ``shipped``, or the user's file)."""
 
     qhat: dict[float, float]
     fitted_on: str
@@ -123,6 +130,16 @@ class Calibration:
     qhat_one: dict[float, float] | None = None  # which-one decisions' own (None: qhat's)
     qhat_yes_no: dict[float, float] | None = None  # yes/no decisions' own (None: qhat's)
     qhat_reading: dict[float, float] | None = None  # which-reading decisions' own (None: qhat's)
+    fitted_for: str = SHIPPED_MODEL
+    source: str = "shipped"
+
+    def fits(self, backend: str, model: str) -> bool:
+        """Whether the thresholds were fitted on this model's scores, so that the coverage they
+        promise holds for its plans: a user's file for this backend and model, or the shipped ones
+        for the model they name (on any backend that serves it, e.g. a llama.cpp server)."""
+        if self.source == "shipped":
+            return model == self.fitted_for
+        return self.fitted_for == f"{backend}:{model}"
 
     def threshold_one(self, coverage: float) -> float:
         """The which-one decisions' threshold for ``coverage``: their own where it was fitted, else
@@ -237,10 +254,11 @@ def shipped(combination: str = "graph", level: str = "plan", rule: str | None = 
         )
     fitted = data[key][combination]
     qhat = {float(k): float(v) for k, v in fitted.items()}
+    model = str(data.get("model", SHIPPED_MODEL))
     if level != "plan":
-        return Calibration(qhat, str(data[where]), False, rule)
+        return Calibration(qhat, str(data[where]), False, rule, fitted_for=model)
     yes_no, ones, reading = (_kind(data, key, combination, kind) for kind in KINDS)
-    return Calibration(qhat, str(data[where]), True, rule, ones, yes_no, reading)
+    return Calibration(qhat, str(data[where]), True, rule, ones, yes_no, reading, model)
 
 
 def user_file(directory: Path, backend: str, model: str) -> Path:
@@ -282,4 +300,4 @@ def calibration_for(
         ) from None
     if not all(0.0 <= q <= 1.0 for q in qhat.values()):  # NaN fails too
         raise ConfigError(f"{path}: a threshold is not a number in [0, 1]", hint=fix)
-    return Calibration(qhat, where, True, rule, ones, yes_no, reading)
+    return Calibration(qhat, where, True, rule, ones, yes_no, reading, f"{backend}:{model}", str(path))

@@ -279,6 +279,9 @@ function showPlan(e) {
   const shares = (e.confidence_by_target || []).map((t) => `the ${t.to} ${t.confidence.toFixed(2)}`).join(", ");
   $("confidence").textContent = typeof e.confidence === "number"
     ? `Confidence ${e.confidence.toFixed(2)} that its calibrated decisions are all right${shares ? " (" + shares + ")" : ""}` : "";
+  // Thresholds fitted for another model do not keep the coverage they promise: say so.
+  const c = e.calibration;
+  if (c && !c.own) $("confidence").textContent += ` — the thresholds were fitted for ${c.fitted_for}, not for ${c.model}: the ${c.coverage} coverage is not promised (conceptbot calibrate --conformal fits this model's own)`;
   // The mat checks: "is the X too hot to put straight on the Y?" and whether a mat went under it.
   $("risk-checks").append(...(e.underlay || []).map((c) => el("li", { class: "kept" },
     `too hot for the ${c.place}? the ${c.object}: ${c.p_yes === null ? "no answer" : "P(yes) " + c.p_yes.toFixed(2)}` +
