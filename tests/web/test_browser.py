@@ -74,21 +74,16 @@ def choosing_worker(
     emit("plan", {"plan": plan, "refused": False, "reason": None, "usage": {}})
 
 
+def _confident_plan(emit: Callable[..., None], **extra: Any) -> None:
+    """Emit a plan with a confidence of 0.42 and the other fields of the event given."""
+    plan = ["pick_and_place(apple, user)", "done()"]
+    emit("plan", {"plan": plan, "refused": False, "reason": None, "usage": {}, "confidence": 0.42, **extra})
+
+
 def confident_worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: Any = None) -> None:
     """A run whose plan carries a confidence and each target's share of it."""
     shares = [{"to": "user", "confidence": 0.6}, {"to": "bowl", "confidence": 0.7}]
-    plan = ["pick_and_place(apple, user)", "done()"]
-    emit(
-        "plan",
-        {
-            "plan": plan,
-            "refused": False,
-            "reason": None,
-            "usage": {},
-            "confidence": 0.42,
-            "confidence_by_target": shares,
-        },
-    )
+    _confident_plan(emit, confidence_by_target=shares)
 
 
 FOREIGN = {
@@ -102,19 +97,7 @@ FOREIGN = {
 
 def foreign_worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: Any = None) -> None:
     """A run planned by a model the shipped conformal thresholds were not fitted for."""
-    plan = ["pick_and_place(apple, user)", "done()"]
-    emit(
-        "plan",
-        {
-            "plan": plan,
-            "refused": False,
-            "reason": None,
-            "usage": {},
-            "confidence": 0.42,
-            "confidence_by_target": [],
-            "calibration": FOREIGN,
-        },
-    )
+    _confident_plan(emit, confidence_by_target=[], calibration=FOREIGN)
 
 
 def picking_worker(spec: Any, emit: Callable[..., None], out_dir: Path, ask: Any = None) -> None:
