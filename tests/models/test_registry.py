@@ -57,6 +57,18 @@ def test_missing_local_model_names_the_install_command(settings: Settings) -> No
         create_llm("llamacpp:qwen2.5-coder-0.5b", settings)
 
 
+def test_a_path_to_an_installed_catalogue_file_is_that_model(settings: Settings, tmp_path: Path) -> None:
+    from conceptbot.models import weights
+
+    installed = weights.model_path(settings.models_dir, weights.get_entry("qwen2.5-coder-0.5b"))
+    installed.parent.mkdir(parents=True, exist_ok=True)
+    installed.write_bytes(b"GGUF")  # not loaded: the backend opens the file on its first call
+    assert create_llm(f"llamacpp:{installed}", settings).model == "qwen2.5-coder-0.5b"
+    own = tmp_path / "mine.gguf"
+    own.write_bytes(b"GGUF")
+    assert create_llm(f"llamacpp:{own}", settings).model == "mine.gguf"
+
+
 def test_fake_backends(settings: Settings, tmp_path: Path) -> None:
     replies = tmp_path / "r.json"
     replies.write_text(json.dumps(["hello"]))

@@ -191,9 +191,15 @@ def _llamacpp(argument: str, settings: Settings) -> LLM:
 
     name = argument or "qwen2.5-coder-1.5b"
     path = weights.resolve(settings.models_dir, name)
+    # A path to an installed catalogue file is that model: its name keys the caches and tells the
+    # planner that the shipped calibration is its own.
+    installed = {
+        weights.model_path(settings.models_dir, entry).resolve(): known
+        for known, entry in weights.catalogue().items()
+    }
     return LlamaCppLLM(
         path,
-        model=name if name in weights.catalogue() else path.name,
+        model=name if name in weights.catalogue() else installed.get(path.resolve(), path.name),
         n_ctx=settings.n_ctx,
         n_threads=settings.n_threads,
     )
