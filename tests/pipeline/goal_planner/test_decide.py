@@ -127,3 +127,21 @@ def test_a_need_asks_whether_each_object_would_help_and_carries_what_the_graph_s
 def test_without_a_graph_nothing_is_stated_of_what_an_object_is_for() -> None:
     found = FactFinder(None).uses(["glue"], "I need to stick paper together")
     assert math.isnan(found["glue"][0]) and found["glue"][1] == ""
+
+
+@pytest.mark.parametrize(
+    ("criterion", "with_facts"),
+    [("poisonous", True), ("safe for the toddler", False), ("child-safe", False), ("harmless", False)],
+)
+def test_a_criterion_of_safety_is_asked_without_the_objects_facts(criterion: str, with_facts: bool) -> None:
+    # The graph knows the button battery; a safety question is asked without what it says (on the
+    # judgement set the facts lowered the model's answer there), a poison question with it.
+    graph = DictGraph({"button battery": [("button battery", "HasProperty", "poisonous if swallowed")]})
+    llm = FakeLLM(scores=[[-1.0, -1.0], [-0.5, -1.5]])
+    facts = FactFinder(RelationRetriever(graph, FakeEmbedder(), theta=-1.0))
+    decider = Decider(llm, facts, combination=Combination(("model",), (1.0,), 0.0))
+    judgements, _, _ = decider.fits("tidy the toys away", criterion, ["button battery"], SCENE)
+    asked = llm.score_requests[-1].messages[-1].content
+    assert ("Facts about it:" in asked) is with_facts and ("poisonous if swallowed" in asked) is with_facts
+    assert bool(judgements[0].facts) is with_facts
+    assert judgements[0].score == pytest.approx(1.0)

@@ -28,7 +28,7 @@ from conceptbot.knowledge.normalize import singular
 from conceptbot.models.llm import LLM, ChatRequest, Message, ScoreRequest
 from conceptbot.pipeline import prompts
 from conceptbot.pipeline.goal_planner.combine import Combination, sigmoid
-from conceptbot.pipeline.goal_planner.evidence import Evidence, GraphEvidence
+from conceptbot.pipeline.goal_planner.evidence import Evidence, GraphEvidence, criterion_terms
 from conceptbot.pipeline.goal_planner.targets import tokens, words
 from conceptbot.pipeline.retrieval import RelationRetriever, edge_text
 
@@ -37,6 +37,8 @@ NEUTRAL_REQUEST = "Please help me."  # the request the name ranking is calibrate
 DEFINING = ("DefinedAs", "MadeOf")  # a word's own definition and ingredients
 USES = ("UsedFor", "CapableOf", "DefinedAs")  # what an object is for, as the graph states it
 CONTENT_FREE = "object"
+#: The criteria (by their ``evidence_terms.json`` group) asked without the object's graph facts.
+BARE_GROUPS = ("safe",)
 #: Graph classes of places heat can mark (:meth:`FactFinder.is_surface`), and of places it cannot
 #: or that hold things inside (appliances, fixtures, containers; also seats, which are furniture).
 SURFACES = frozenset({"furniture", "table", "flat surface", "horizontal surface", "surface", "countertop"})
@@ -511,8 +513,12 @@ class Decider:
         """
         started = time.perf_counter()
         # An ingredient question carries the dish's definition, not the object's facts: with them,
-        # dev ingredients ranked worse (olive oil above the eggs for an omelette).
-        about = {o: () for o in objects} if dish else self.facts.about(objects, [what])
+        # dev ingredients ranked worse (olive oil above the eggs for an omelette). A criterion of
+        # safety ("safe for a toddler") is asked without them too: on the judgement set they lowered
+        # the model's answer there (child-safe 63% right with them, 76% without); the graph's
+        # statements still count, as evidence beside the answer.
+        bare = bool(dish) or bool(set(criterion_terms(what).groups) & set(BARE_GROUPS))
+        about = {o: () for o in objects} if bare else self.facts.about(objects, [what])
         context = self.facts.context(dish, request, dish) if dish else ()
         context_text = ("Facts: " + "; ".join(context) + ".\n") if context else ""
 
