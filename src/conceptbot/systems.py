@@ -165,7 +165,7 @@ def _conceptbot(config: str, settings: Settings, options: SystemOptions, parts: 
         reading=options.reading,
         which_one=options.which_one,
         # A model calibrated with `conceptbot calibrate --conformal` asks by its own thresholds.
-        calibration_dir=settings.calibration_dir,
+        calibration_dir=settings.calibration_dir if options.own_calibration else None,
     )
 
 

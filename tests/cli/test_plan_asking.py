@@ -18,7 +18,8 @@ from conceptbot.core.trace import ClarifyingQuestion, PlanTrace
 
 QUESTION = ClarifyingQuestion("Should I put the lemon in or on the bowl (sour)?", "bowl", ("lemon",), (0.5,))
 CHOOSE = ClarifyingQuestion(
-    "Which of these should I put in or on the bowl (sour): the lemon, the lime or the cup? Any, all or none.",
+    "Which of these should I put in or on the bowl (sour): the lemon, the lime or the cup?"
+    " Name them, or say all or none.",
     "bowl",
     ("lemon", "lime", "cup"),
     (0.5, 0.6, 0.4),
@@ -70,7 +71,7 @@ def test_with_ask_the_question_is_put_and_the_answer_finishes_the_plan(
 ) -> None:
     out = _plan(tmp_path, "--ask", answer="no\n")
     assert out.exit_code == 0, out.output
-    assert "Question: Should I put the lemon in or on the bowl (sour)? (yes, no):" in out.output
+    assert "Question: Should I put the lemon in or on the bowl (sour)? [yes/no]:" in out.output
     assert "1. done()" in out.output and "answered no" in out.output
     assert callable(unsure.asked[0])
 

@@ -144,7 +144,7 @@ def test_markup_and_escapes_in_the_models_words_are_shown_not_obeyed(
 def test_escapes_in_a_request_are_one_clear_error(fresh_home: Home, tmp_path: Path) -> None:
     outcome = _plan(fresh_home(), tmp_path, "bring me an apple \x1b]0;pwned\x07 \x1b[31mRED", TINY_SCENE, [])
     assert_terminal_safe(outcome)
-    assert outcome.code == 2 and "control characters '\\x07' '\\x1b'" in outcome.errors()[0]
+    assert outcome.code == 2 and "control characters or undecodable bytes '\\x07' '\\x1b'" in outcome.errors()[0]
 
 
 def test_a_nan_theta_is_one_clear_error(fresh_home: Home, tmp_path: Path) -> None:

@@ -23,7 +23,8 @@ QUESTION = ClarifyingQuestion(
     "Should I give the sponge to the user (to wipe a spill)?", "user", ("sponge",), (0.5,)
 )
 CHOOSE = ClarifyingQuestion(
-    "Which of these should I give to the user (to wipe a spill): the sponge or the towel? Any, all or none.",
+    "Which of these should I give to the user (to wipe a spill): the sponge or the towel?"
+    " Name them, or say all or none.",
     "user",
     ("sponge", "towel"),
     (0.5, 0.4),

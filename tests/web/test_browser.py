@@ -36,7 +36,7 @@ QUESTION = ClarifyingQuestion(
 )
 CHOOSE = ClarifyingQuestion(
     "Which of these should I give to the user (something sour): the apple, the lemon or the lime? "
-    "Any, all or none.",
+    "Name them, or say all or none.",
     "user",
     ("apple", "lemon", "lime"),
     (0.5, 0.6, 0.45),

@@ -167,7 +167,8 @@ def _conformal(app: AppContext, as_json: bool) -> None:
     backend = model = ""
     rule = shipped().rule  # the which-one rule the planner uses unless told otherwise
     for combination, config in SYSTEMS:
-        system = build_system(app.settings, config, SystemOptions())
+        # Planned by the shipped thresholds: the model's own file is what this replaces.
+        system = build_system(app.settings, config, SystemOptions(own_calibration=False))
         if getattr(system, "planner_kind", None) != "goal":
             raise ConceptBotError(
                 "the conformal calibration needs the goal planner, which needs a backend that scores options",

@@ -13,6 +13,7 @@ from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.cli.progress import byte_progress
 from conceptbot.cli.richtext import plain
 from conceptbot.cli.signals import Terminated, sigterm_raises
+from conceptbot.core.limits import check_text
 from conceptbot.core.text import safe_json_dumps, terminal_safe
 from conceptbot.knowledge.importers.conceptnet5 import OFFICIAL_URL
 from conceptbot.knowledge.install import INSTALL_SETS, install_conceptnet5, install_offline
@@ -138,6 +139,7 @@ def query(
     as_json: bool,
 ) -> None:
     """Edges of CONCEPT (as head or tail), strongest first."""
+    check_text(concept, "concept")  # bad input is an input error, never "the graph is damaged"
     graph = open_graph(app.settings, fallback=fallback, choose=_choose_page if choose_page else None)
     result = graph.edges(concept, list(relations) or None, limit)
     if as_json:

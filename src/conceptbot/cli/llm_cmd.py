@@ -10,6 +10,7 @@ import click
 from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.cli.params import FiniteFloatRange
 from conceptbot.core.errors import ConfigError
+from conceptbot.core.limits import check_text
 from conceptbot.core.text import terminal_safe
 from conceptbot.models.llm import ChatRequest
 from conceptbot.models.registry import open_llm
@@ -46,6 +47,9 @@ def llm(
     """Send PROMPT to the configured LLM once; print the reply, tokens and time."""
     # The schema is checked before the model is loaded: a bad file costs no model time.
     schema_value = _read_schema(schema) if schema is not None else None
+    check_text(prompt, "prompt")
+    if system is not None:
+        check_text(system, "system message")
     model = open_llm(app.settings, module="cli")
     request = ChatRequest.of(
         prompt, system=system, max_tokens=max_tokens, temperature=temperature, n=n, seed=seed

@@ -18,7 +18,7 @@ from conceptbot.core.limits import check_request
 from conceptbot.core.plan import Plan
 from conceptbot.core.system import METHODS, SystemOptions
 from conceptbot.core.text import safe_json_dumps, terminal_safe
-from conceptbot.core.trace import ClarifyingQuestion, PlanTrace, RetrievalTrace
+from conceptbot.core.trace import YES_NO, ClarifyingQuestion, PlanTrace, RetrievalTrace
 from conceptbot.scenes import resolve_scene
 from conceptbot.systems import SYSTEMS, build_system
 
@@ -100,7 +100,8 @@ def plan(
         theta=theta, planner_method=method, n=n, fallback=fallback, coverage=float(coverage), reading=reading
     )  # SayCan has none
     bot = build_system(app.settings, config, options)
-    interactive = sys.stdin.isatty() and sys.stderr.isatty() and not as_json
+    # stdin or stderr may be closed (`<&-`): then nobody can be asked.
+    interactive = _is_tty(sys.stdin) and _is_tty(sys.stderr) and not as_json
     asking = ask if ask is not None else interactive
     result = bot.plan(request, scene, risk=risk, observer=ON_STDERR, ask=_ask_on_terminal if asking else None)
     if as_json:
@@ -110,19 +111,30 @@ def plan(
     show(result, Console())
 
 
+def _is_tty(stream: object) -> bool:
+    """Whether ``stream`` is an open terminal (a standard stream closed at start is None)."""
+    try:
+        return bool(stream.isatty()) if stream is not None else False  # type: ignore[attr-defined]
+    except (ValueError, OSError):  # closed while running
+        return False
+
+
 def _ask_on_terminal(question: ClarifyingQuestion) -> str:
     """The question on stderr (stdout stays the plan's): yes or no; or the objects listed by number,
     answered with numbers or names (``choose``: comma-separated, ``one``: one, or another's name)
     or ``none``; asked again until it is an answer."""
     text = terminal_safe(question.text)  # scene names and criteria come from files and requests
-    if question.kind == "confirm":
-        return click.prompt(f"Question: {text}", type=click.Choice(["yes", "no"]), err=True)
+    if question.kind in YES_NO:
+        while True:  # read as the page and ROS 2 read it: Yes, YES, y
+            chosen = question.read(click.prompt(f"Question: {text} [yes/no]", err=True))
+            if chosen is not None:
+                return question.normalised(chosen)
     click.echo(f"Question: {text}", err=True)
     for number, obj in enumerate(question.objects, 1):
         click.echo(f"  {number}. {terminal_safe(obj)}", err=True)
     if question.others:  # a which-one question: the person may name what the list missed
         click.echo(f"  or another: {terminal_safe(', '.join(question.others))}", err=True)
-    how = "numbers or names, comma-separated" if question.kind == "choose" else "a number or a name"
+    how = "numbers or names, comma-separated; or all" if question.kind == "choose" else "a number or a name"
     while True:
         reply = click.prompt(f"Which ({how}; or none)", err=True)
         chosen = question.read(_by_number(reply, question.objects))

@@ -46,6 +46,27 @@ FORBIDDEN_NAME_CHARS = ",()'\"`"
 _REQUEST_LAYOUT = re.compile(r"[\t\n\r\v\f\x85\u2028\u2029]+")
 # Formatting controls that reorder how text is displayed (the "Trojan Source" characters).
 _BIDI_CONTROLS = frozenset("\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
+# Control characters, and lone surrogates: Python decodes bytes that are not UTF-8 (an argument
+# holding \xff) to U+DC80..U+DCFF, which no file, cache key or HTTP body can encode.
+_UNPRINTABLE = ("Cc", "Cs")
+
+
+def check_text(text: str, what: str) -> str:
+    """``text`` as it is, if it holds no lone surrogate (bytes that were not UTF-8).
+
+    For free text that is not a request (a prompt, a concept to look up): its layout is kept.
+
+    Raises:
+        ConfigError: A lone surrogate, named by its escape.
+    """
+    bad = sorted({c for c in text if unicodedata.category(c) == "Cs"})
+    if bad:
+        shown = " ".join(repr(c) for c in bad)
+        raise ConfigError(
+            f"the {what} contains undecodable bytes {shown} (text that is not UTF-8?)",
+            hint=f"give the {what} as UTF-8 text",
+        )
+    return text
 
 
 def check_name(name: str, where: str) -> str:
@@ -86,7 +107,8 @@ def check_request(request: object) -> CheckedRequest:
     meaning to the robot and would be obeyed by the terminal that shows the request.
 
     Raises:
-        ConfigError: Not a string, empty (or only spaces), too long, or a control character.
+        ConfigError: Not a string, empty (or only spaces), too long, a control character or a
+            lone surrogate (bytes that were not UTF-8).
     """
     if isinstance(request, CheckedRequest):
         return request
@@ -99,13 +121,14 @@ def check_request(request: object) -> CheckedRequest:
         )
     if len(text) > MAX_REQUEST_CHARS:
         raise ConfigError(f"the request is {len(text)} characters long; the limit is {MAX_REQUEST_CHARS}")
-    bad = sorted({c for c in text if unicodedata.category(c) == "Cc" or c in _BIDI_CONTROLS})
+    bad = sorted({c for c in text if unicodedata.category(c) in _UNPRINTABLE or c in _BIDI_CONTROLS})
     if bad:
-        # repr() shows each one as an escape ('\x1b'), so the message itself is safe to print.
+        # repr() shows each one as an escape ('\x1b', '\udcff'), so the message itself is safe to print.
         shown = " ".join(repr(c) for c in bad)
         raise ConfigError(
-            f"the request contains the control characters {shown} (a terminal escape sequence?)",
-            hint="type the request as plain text, without colour codes or other escape sequences",
+            f"the request contains the control characters or undecodable bytes {shown}"
+            " (a terminal escape sequence, or text that is not UTF-8?)",
+            hint="type the request as plain UTF-8 text, without colour codes or other escape sequences",
         )
     return CheckedRequest(text)
 

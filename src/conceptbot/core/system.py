@@ -107,6 +107,9 @@ class SystemOptions:
         which_one: How a target taking one object is judged sure (:data:`WHICH_ONE`); None: the
             rule the calibration names (``softmax`` for the shipped one: on dev, ``fits`` asked a
             little less and succeeded a little less, docs/asking.md).
+        own_calibration: Read the model's own conformal thresholds where ``conceptbot calibrate
+            --conformal`` wrote them; False: the shipped ones (what ``calibrate --conformal`` plans
+            by, so that it never reads the file it is about to replace, damaged or not).
 
     Raises:
         ConfigError: A value of the wrong type, out of range or not one of the choices.
@@ -121,6 +124,7 @@ class SystemOptions:
     level: str = "plan"
     reading: str = "restated"
     which_one: str | None = None
+    own_calibration: bool = True
 
     def __post_init__(self) -> None:
         if self.theta is not None:
@@ -144,6 +148,8 @@ class SystemOptions:
             raise ConfigError(f"n must be a whole number of completions >= 1, got {self.n!r}")
         if self.fallback is not None and not isinstance(self.fallback, bool):
             raise ConfigError(f"fallback must be True, False or None, got {self.fallback!r}")
+        if not isinstance(self.own_calibration, bool):
+            raise ConfigError(f"own_calibration must be True or False, got {self.own_calibration!r}")
 
 
 def _choice(label: str, value: object, choices: tuple[object, ...]) -> None:

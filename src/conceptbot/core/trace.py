@@ -361,6 +361,7 @@ class JudgementTrace:
 
 
 NONE = "none"  # the answer that sends none of a ``choose`` or ``one`` question's objects
+ALL = "all"  # the answer that sends every object of a ``choose`` question
 KINDS = ("confirm", "choose", "one", "reading", "harm")
 YES_NO = ("confirm", "harm")  # the kinds answered yes or no
 
@@ -369,7 +370,7 @@ YES_NO = ("confirm", "harm")  # the kinds answered yes or no
 class ClarifyingQuestion:
     """A question the planner asks where calibrated decisions' conformal prediction sets are unsure:
     about one object (``confirm``: yes or no); where a target taking all that fit is unsure of
-    several, about all of them at once (``choose``: which of these go; any, all or none); where a
+    several, about all of them at once (``choose``: which of these go; some, all or none); where a
     target taking one object has several candidates (``one``: which one, another the person names,
     or none); where the household harm judge is unsure, whether the instruction is dangerous
     (``harm``: yes refuses it).
@@ -416,16 +417,19 @@ class ClarifyingQuestion:
 
     def read(self, reply: object) -> tuple[str, ...] | None:
         """The objects a reply sends to the target (empty: none), or None for a reply that is not an
-        answer. ``confirm``, ``harm``: yes or no. ``choose``: ``none``, or options separated by commas (in any
-        case, each at most once). ``one``: one option or one of :attr:`others`, or ``none``.
+        answer. ``confirm``, ``harm``: yes or no (or y, n). ``choose``: ``none``, ``all``, or options
+        separated by commas (in any case, each at most once). ``one``: one option or one of
+        :attr:`others`, or ``none``.
         ``reading``: one of the readings, whole (a reading may hold commas), or ``none``."""
         if not isinstance(reply, str):
             return None
         said = " ".join(reply.strip().lower().split())
         if self.kind in YES_NO:
-            return {"yes": self.objects, "no": ()}.get(said)
+            return {"yes": self.objects, "y": self.objects, "no": (), "n": ()}.get(said)
         if said == NONE:
             return ()
+        if self.kind == "choose" and said == ALL and ALL not in (o.lower() for o in self.objects):
+            return self.objects
         if self.kind == "reading":
             whole = {" ".join(o.lower().split()): o for o in self.objects}
             return (whole[said],) if said in whole else None

@@ -246,6 +246,8 @@ class SQLiteGraph:
 
     def concept_id(self, concept: str) -> int | None:
         """The id of an exact (already normalised) concept, or None."""
+        if not concept.isascii() and any(0xD800 <= ord(c) <= 0xDFFF for c in concept):
+            return None  # a lone surrogate (bytes that were not UTF-8) names no stored concept
         with self._reading():
             row = self._conn.execute("SELECT id FROM concepts WHERE text = ?", (concept,)).fetchone()
             return None if row is None else int(row[0])

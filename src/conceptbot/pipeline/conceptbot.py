@@ -46,8 +46,9 @@ from conceptbot.pipeline.goal_planner.decide import Decider, FactFinder
 from conceptbot.pipeline.goal_planner.evidence import GraphEvidence
 from conceptbot.pipeline.goal_planner.planner import GoalPlanner, GoalPlanResult, Thresholds
 from conceptbot.pipeline.goal_planner.targets import TargetFinder
-from conceptbot.pipeline.hazards import HazardCheck, is_person
+from conceptbot.pipeline.hazards import HazardCheck
 from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
+from conceptbot.pipeline.recipients import Recipients, model_question
 from conceptbot.pipeline.retrieval import RelationRetriever
 from conceptbot.pipeline.steps.planner import Planner
 from conceptbot.pipeline.tracing import ope_trace, urp_trace
@@ -133,7 +134,11 @@ class ConceptBot:
         self.ope = ObjectPropertiesExtractor(self._llm_for("ope"), retriever, store, graph_version)
         self.urp = UserRequestProcessor(self._llm_for("urp"), retriever)
         # One veto for both planners: OPE's top ratings and, with a graph, its hazard statements.
-        self.hazards = HazardCheck(retriever.graph if retriever is not None else None)
+        # Who a destination is: its words, the graph's IsA chain, then the model asked plainly
+        # where it scores options (pipeline/recipients.py).
+        graph = retriever.graph if retriever is not None else None
+        ask = model_question(self._llm_for("risk")) if llm.capabilities.scoring else None
+        self.hazards = HazardCheck(graph, recipients=Recipients(graph, ask))
         self.planner = Planner(self._llm_for("planner"), method=planner_method, n=n, hazards=self.hazards)
         if planner == "auto":
             # The goal planner measured better on the dev split (51% against SayCan's 28%, with the
@@ -146,7 +151,6 @@ class ConceptBot:
         # Which model's conformal calibration it reads (conformal.user_file), for calibrate --conformal.
         self.calibration_key = (llm.backend, llm.model)
         facts = FactFinder(retriever)
-        graph = retriever.graph if retriever is not None else None
         # Criterion decisions weigh the graph's statements as evidence beside the model's answer
         # (a combination fitted on the judgement set; without a graph, the ablation's own fit).
         decider = Decider(
@@ -157,7 +161,7 @@ class ConceptBot:
         graphed = retriever is not None
         reader = GoalReader(
             is_dish=facts.may_be_dish if graphed else None,
-            is_person=is_person,
+            is_person=self.hazards.is_person,
             find_dish=facts.dish_concept if graphed else None,
             # the graph tells a "basket" the person speaks of from the scene's "bins"
             same_kind=facts.same_kind if graphed else None,
@@ -173,7 +177,7 @@ class ConceptBot:
         self.goal_planner = GoalPlanner(
             GoalFinder(
                 reader,
-                TargetFinder(self._llm_for("goal"), is_person, food=facts),
+                TargetFinder(self._llm_for("goal"), self.hazards.is_person, food=facts),
                 facts.dish_concept if retriever is not None else None,
                 # The model says the request plainly and the rules read that too: they read plain
                 # commands well and talk badly (docs/notes/2026-12-02-restated-reading.md).
@@ -302,7 +306,8 @@ class ConceptBot:
             result.reason,
             trace,
             usage,
-            confidence=result.confidence,
+            # A refusal carries out nothing: no confidence that its decisions are right to show.
+            confidence=None if result.refused else result.confidence,
             questions=result.questions,
         )
 

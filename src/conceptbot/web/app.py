@@ -37,6 +37,7 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from fastapi import FastAPI, HTTPException, Request, Response
+from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, StreamingResponse
 from pydantic import BaseModel, Field
 from starlette.datastructures import Headers, MutableHeaders
@@ -379,6 +380,21 @@ def _add_results(app: FastAPI, results_dir: Path) -> None:
         return FileResponse(results_dir / name, media_type="image/png")
 
 
+def _encodable(text: object) -> str:
+    """``text`` with what UTF-8 cannot carry (a lone surrogate) written as an escape."""
+    return str(text).encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+async def _invalid_body(request: Request, exc: RequestValidationError) -> JSONResponse:
+    """422 for a body that does not fit, naming where and why but not echoing the input: FastAPI's
+    own reply echoes it, and one holding a lone surrogate (``"\\ud800"``) cannot be encoded (a 500)."""
+    detail = [
+        {"loc": [_encodable(part) for part in e.get("loc", ())], "msg": _encodable(e.get("msg", ""))}
+        for e in exc.errors()
+    ]
+    return JSONResponse({"detail": detail}, status_code=422)
+
+
 def create_app(
     manager: RunManager,
     *,
@@ -402,6 +418,7 @@ def create_app(
     """
     app = FastAPI(title="ConceptBot", docs_url=None, redoc_url=None, openapi_url=None)
     app.add_middleware(_LimitBody)
+    app.add_exception_handler(RequestValidationError, _invalid_body)  # type: ignore[arg-type]
     # Added last, so outermost: it sees every request and reply (but for uncaught errors' 500s).
     app.add_middleware(_Guard, allowed_hosts=frozenset(allowed_hosts))
     # The page sees each backend under a redacted name (a spec's URL may carry a key in its query

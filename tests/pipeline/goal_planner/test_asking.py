@@ -69,7 +69,7 @@ def test_several_unsure_decisions_of_a_target_are_one_question_and_its_answer_se
     )  # most uncertain first
     assert asked[0].text == (
         "Which of these should I put in or on the bowl (an ingredient of hollandaise): "
-        "the lemon or the cup? Any, all or none."
+        "the lemon or the cup? Name them, or say all or none."
     )
     assert [q.answer for q in found.questions] == ["cup"]
     order = [(j.subject, j.score) for j in found.ranked[0]]

@@ -163,7 +163,7 @@ def test_a_threshold_out_of_range_is_refused(tmp_path) -> None:
     user_file(tmp_path, "b", "m").write_text(
         json.dumps({"plan_qhat": good, "plan_qhat_one": ones, "fitted_on": "x"})
     )
-    with pytest.raises(ConfigError, match=r"plan_qhat_one: a threshold is not a number in \[0, 1\]"):
+    with pytest.raises(ConfigError, match=r"plan_qhat_one\.graph\.0\.9 is 1\.5, not a number in \[0, 1\]"):
         calibration_for(tmp_path, "b", "m")
 
 

@@ -15,7 +15,7 @@ from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.conceptbot import ConceptBot
 from conceptbot.pipeline.goal_planner.conformal import shipped
 from conceptbot.pipeline.goal_planner.decide import Decider, FactFinder
-from conceptbot.pipeline.goal_planner.planner import GoalPlanner, is_person
+from conceptbot.pipeline.goal_planner.planner import GoalPlanner
 from conceptbot.pipeline.goal_planner.targets import (
     ALL,
     ReadingDoubt,
@@ -25,6 +25,7 @@ from conceptbot.pipeline.goal_planner.targets import (
     is_stacking,
     mentions,
 )
+from conceptbot.pipeline.hazards import is_person
 from conceptbot.pipeline.ope import ObjectProperties, OPEResult
 from conceptbot.pipeline.retrieval import RelationRetriever
 from tests.pipeline.fakes import DictGraph, risk_reply

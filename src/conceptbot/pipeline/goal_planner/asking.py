@@ -5,7 +5,7 @@ decision get conformal prediction sets (:mod:`.conformal`):
   milk jug plastic?" for the plastic bin): a set with both answers is unsure. A target's unsure
   decisions make one question: about one object, yes or no ("Should I put the lemon in or on the
   bowl (an ingredient of hollandaise)?"); about several, which of them go ("Which of these should I
-  put in or on the salad bowl (...): the kiwi, the olive oil or the sugar? Any, all or none.");
+  put in or on the salad bowl (...): the kiwi, the olive oil or the sugar? Name them, or say all or none.");
 - which object a target taking one gets: a set of two or more is a question of which one ("Which
   one should I give to the user: the coke or the water? One of them, another, or none."); the
   person may name another of the target's candidates, since a set can miss what they meant. By the
@@ -138,11 +138,12 @@ def _listed(objects: list[str]) -> str:
 def question_text(objects: list[str], target: Target) -> str:
     """The question in plain words, with the request's criterion: "Should I put the lemon in or on
     the bowl (an ingredient of hollandaise)?" for one object; "Which of these should I put in or on
-    the salad bowl (...): the kiwi, the olive oil or the sugar? Any, all or none." for several."""
+    the salad bowl (...): the kiwi, the olive oil or the sugar? Name them, or say all or none." for
+    several."""
     why = f" ({target.criterion})" if target.criterion else ""
     if len(objects) == 1:
         return f"Should I {_move(target, objects[0])}{why}?"
-    return f"Which of these should I {_move(target)}{why}: {_listed(objects)}? Any, all or none."
+    return f"Which of these should I {_move(target)}{why}: {_listed(objects)}? Name them, or say all or none."
 
 
 def question_for(number: int, target: Target, unsure: list[Judgement]) -> ClarifyingQuestion:

@@ -223,10 +223,21 @@ def _kind(data: dict[str, Any], key: str, combination: str, kind: str) -> dict[f
     found = data.get(kind_key(key, kind), {})
     if not isinstance(found, dict) or combination not in found:
         return None
-    own = {float(k): float(v) for k, v in found[combination].items()}
-    if not all(0.0 <= q <= 1.0 for q in own.values()):  # NaN fails too
-        raise ValueError(f"{kind_key(key, kind)}: a threshold is not a number in [0, 1]")
-    return own
+    where = f"{kind_key(key, kind)}.{combination}"
+    return {float(k): threshold(v, f"{where}.{k}") for k, v in found[combination].items()}
+
+
+def threshold(value: object, field: str) -> float:
+    """A conformal threshold read from a file: a JSON number in [0, 1].
+
+    ``true`` would read as 1.0 (ask about everything) and ``"0.5"`` as 0.5; neither is a fitted value.
+
+    Raises:
+        ValueError: Not a number (a boolean, a string, null), NaN, or outside [0, 1]; names ``field``.
+    """
+    if isinstance(value, bool) or not isinstance(value, int | float) or not 0.0 <= value <= 1.0:
+        raise ValueError(f"{field} is {json.dumps(value)[:40]}, not a number in [0, 1]")
+    return float(value)
 
 
 @cache
@@ -291,13 +302,13 @@ def calibration_for(
         data = json.loads(path.read_text(encoding="utf-8"))
         key, rule = plan_key(data, rule)
         fitted = data[key][combination]
-        qhat = {float(c): float(fitted[str(c)]) for c in COVERAGES}
+        qhat = {float(c): threshold(fitted[str(c)], f"{key}.{combination}.{c}") for c in COVERAGES}
         where = str(data["fitted_on"])
         yes_no, ones, reading = (_kind(data, key, combination, kind) for kind in KINDS)
+    except RecursionError:
+        raise ConfigError(f"{path} is nested too deeply to be a conformal calibration", hint=fix) from None
     except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError, AttributeError) as exc:
         raise ConfigError(
             f"{path} is not a conformal calibration for this rule ({type(exc).__name__}: {exc})", hint=fix
         ) from None
-    if not all(0.0 <= q <= 1.0 for q in qhat.values()):  # NaN fails too
-        raise ConfigError(f"{path}: a threshold is not a number in [0, 1]", hint=fix)
     return Calibration(qhat, where, True, rule, ones, yes_no, reading, f"{backend}:{model}", str(path))

@@ -74,7 +74,7 @@ from conceptbot.pipeline.goal_planner.companions import (
 from conceptbot.pipeline.goal_planner.conformal import Calibration, shipped
 from conceptbot.pipeline.goal_planner.decide import Decider, Judgement
 from conceptbot.pipeline.goal_planner.targets import ALL, Target, TargetsRead, mentions
-from conceptbot.pipeline.hazards import HazardCheck, is_person, is_vulnerable
+from conceptbot.pipeline.hazards import HazardCheck
 from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
 from conceptbot.pipeline.ope_answers import RiskIndex
 from conceptbot.pipeline.tracing import judgement_trace, target_trace
@@ -345,6 +345,8 @@ class GoalPlanner:
         asked = [j.scoring for js in ranked.values() for j in js if j.scoring]
         # Where a calibrated decision is unsure, a question (asked if someone answers): asking.py.
         decided = ranked  # before any answer: the companions' candidates keep their own scores
+        # A which-one question never offers what the veto would not let the recipient have.
+        ranked = self._unvetoed(targets, ranked)
         clarified = clarify(
             targets,
             ranked,
@@ -384,7 +386,7 @@ class GoalPlanner:
             # Objects handed to a child or an animal are rated first (the veto reads the ratings);
             # others only when the risk question flags their move (see _check): each rating is a
             # JSON generation of several seconds.
-            handed = [o for o, t in fresh if risk or is_vulnerable(t)]
+            handed = [o for o, t in fresh if risk or self.hazards.is_vulnerable(t)]
             self._properties(request, scene, handed, properties, usage, observer)
             for obj, target in fresh:
                 checks[(obj, target)] = self._check(
@@ -710,7 +712,7 @@ class GoalPlanner:
         for obj, place in moves:
             free = [p for p in pads if p not in touched and p != place]
             surface = surfaces.setdefault(place, self.decider.facts.is_surface(place))
-            if not free or not surface or is_person(place) or is_vulnerable(place):
+            if not free or not surface or self.hazards.is_person(place):
                 out.append((obj, place))
                 continue
             observer.progress(f"Underlay: is the {obj} too hot for the {place}?")
@@ -783,16 +785,16 @@ class GoalPlanner:
         asked.append(judgement.scoring)
         if not (math.isfinite(judgement.score) and math.isfinite(judgement.p_yes)):
             return _vetoed(_failed(obj, target, "the backend gave a non-finite score"), move, ope, s_aff)
-        limit = self.thresholds.risk if is_person(target) else self.thresholds.risk_place
+        limit = self.thresholds.risk if self.hazards.is_person(target) else self.thresholds.risk_place
         flagged = judgement.score > limit
         reason = None
-        if flagged or rate or is_vulnerable(target):
+        if flagged or rate or self.hazards.is_vulnerable(target):
             # A flag from the question alone is no reason to drop a move ("give the crayons to the
             # toddler" was flagged on dev): OPE's Risk Index of the object is asked, and the move is
             # dropped for what it names, which the trace shows.
             self._properties(request, scene, [obj], properties, usage, observer)
             reason = self._reason(obj, target, properties, flagged)
-        if reason is None and is_vulnerable(target):
+        if reason is None and self.hazards.is_vulnerable(target):
             # Asked without the request, which sways the small model towards what was asked.
             try:
                 plain, used = self.decider.unsafe(target, obj)
@@ -820,6 +822,21 @@ class GoalPlanner:
             reason=reason or "",
         )
 
+    def _unvetoed(
+        self, targets: list[Target], ranked: dict[int, list[Judgement]]
+    ) -> dict[int, list[Judgement]]:
+        """Each target's ranking less the candidates of a which-one decision that the veto drops
+        for that recipient (by the graph's statements: OPE has rated nothing yet); named objects
+        stay, so that their veto is traced where the move is checked."""
+        out = dict(ranked)
+        for number, judgements in ranked.items():
+            to = targets[number].name
+            if targets[number].count == 1 and self.hazards.is_vulnerable(to):
+                out[number] = [
+                    j for j in judgements if j.p_one is None or self.hazards.veto(j.subject, to, {}) is None
+                ]
+        return out
+
     def _reason(
         self, obj: str, target: str, properties: dict[str, ObjectProperties], flagged: bool
     ) -> str | None:
@@ -838,7 +855,7 @@ class GoalPlanner:
         if with_target is not None and with_target >= limit:
             return f"OPE rates the {obj} {with_target}/5 dangerous with the {target}"
         rated = answer.rated_danger()
-        if is_vulnerable(target) and rated >= limit:
+        if self.hazards.is_vulnerable(target) and rated >= limit:
             return f"OPE rates the {obj} {rated}/5 dangerous for the {target}"
         return None
 
