@@ -157,3 +157,18 @@ def test_the_coverage_is_one_the_calibration_ships() -> None:
     for bad in (0.7, True, "0.9"):
         with pytest.raises(ConfigError, match=r"coverage must be one of 0\.8, 0\.9, 0\.95"):
             SystemOptions(coverage=bad)  # type: ignore[arg-type]
+
+
+def test_calibrate_conformal_plans_without_reading_the_file_it_replaces(fake_settings: Settings) -> None:
+    # A damaged own calibration stops a plan, with a hint to run `calibrate --conformal` again;
+    # that command builds its systems with own_calibration=False, so the hint's fix works.
+    from conceptbot.pipeline.goal_planner.conformal import user_file
+
+    scoring = FakeLLM(scores=[], model="m")
+    user_file(fake_settings.calibration_dir, "fake", "m").parent.mkdir(parents=True, exist_ok=True)
+    user_file(fake_settings.calibration_dir, "fake", "m").write_text("garbage")
+    parts = {"llm": scoring, "graph": DictGraph(), "embedder": FakeEmbedder()}
+    with pytest.raises(ConfigError, match="is not a conformal calibration"):
+        build_system(fake_settings, "conceptbot", SystemOptions(), **parts)
+    system = build_system(fake_settings, "conceptbot", SystemOptions(own_calibration=False), **parts)
+    assert system.planner_kind == "goal"  # type: ignore[attr-defined]

@@ -29,3 +29,15 @@ def test_kg_query_prints_hostile_edges_literally(
 def test_ros2_send_refuses_a_nan_time_out(isolated_home: Path) -> None:
     out = run("ros2", "send", "hi", "--timeout", "nan", home=isolated_home, check_exit=2)
     assert "Traceback" not in out.stderr and "nan" in out.stderr.lower()
+
+
+def test_a_concept_with_bytes_that_are_not_utf8_is_an_input_error_not_damage(
+    isolated_home: Path, omcs_file: Path, wordnet_dir: Path
+) -> None:
+    run("kg", "install", "--file", str(omcs_file), "--wordnet-dir", str(wordnet_dir), home=isolated_home)
+    out = run("kg", "query", "kn\udcffife", "--no-fallback", home=isolated_home, check_exit=2)
+    assert "undecodable bytes" in out.stderr and "damaged" not in out.stderr and "--force" not in out.stderr
+    # The library, asked the same, finds no such concept: the graph is not damaged.
+    from conceptbot.knowledge.sqlite_store import SQLiteGraph
+
+    assert not SQLiteGraph(isolated_home / "kg" / "conceptnet.db").edges("kn\udcffife")

@@ -107,3 +107,11 @@ def test_calibrate_refuses_a_nan_sweep_bound(option: str) -> None:
     outcome = invoke("--embedder", "fake", "calibrate", option, "nan")
     assert_terminal_safe(outcome)
     assert outcome.code == 2 and "not a finite number" in outcome.errors()[0]
+
+
+def test_a_prompt_with_bytes_that_are_not_utf8_is_one_clear_error(tmp_path: Path) -> None:
+    spec = write_replies(tmp_path / "r.json", ["hi"])
+    for args in (("hi \udcff",), ("hi", "--system", "be \udcff")):
+        outcome = invoke("--llm", spec, "llm", *args)
+        assert_terminal_safe(outcome)
+        assert outcome.code == 2 and "undecodable bytes" in outcome.errors()[0], outcome.stderr

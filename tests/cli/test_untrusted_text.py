@@ -144,7 +144,9 @@ def test_markup_and_escapes_in_the_models_words_are_shown_not_obeyed(
 def test_escapes_in_a_request_are_one_clear_error(fresh_home: Home, tmp_path: Path) -> None:
     outcome = _plan(fresh_home(), tmp_path, "bring me an apple \x1b]0;pwned\x07 \x1b[31mRED", TINY_SCENE, [])
     assert_terminal_safe(outcome)
-    assert outcome.code == 2 and "control characters or undecodable bytes '\\x07' '\\x1b'" in outcome.errors()[0]
+    assert (
+        outcome.code == 2 and "control characters or undecodable bytes '\\x07' '\\x1b'" in outcome.errors()[0]
+    )
 
 
 def test_a_nan_theta_is_one_clear_error(fresh_home: Home, tmp_path: Path) -> None:
@@ -256,3 +258,38 @@ def test_doctor_details_quoting_a_server_are_terminal_safe(monkeypatch: pytest.M
     outcome = invoke("doctor")
     assert_terminal_safe(outcome, error_line=False)
     assert outcome.code == 1 and "server said \\x1b]0;pwned\\x07\\x1b[2J [/x]" in outcome.stdout
+
+
+def test_bytes_that_are_not_utf8_in_a_request_are_one_clear_error(fresh_home: Home, tmp_path: Path) -> None:
+    # Python reads the argument's \xff as the lone surrogate U+DCFF, which no cache key can encode.
+    for extra in ((), ("--json",)):
+        outcome = _plan(fresh_home(), tmp_path, "bring me an apple \udcff", TINY_SCENE, [], *extra)
+        assert outcome.code == 2 and "undecodable bytes '\\udcff'" in outcome.errors()[0], outcome.stderr
+
+
+def test_plan_with_standard_input_closed_plans(fresh_home: Home, tmp_path: Path) -> None:
+    import os
+    import subprocess
+    import sys
+
+    home = fresh_home()
+    spec = write_replies(
+        tmp_path / "r.json", _replies(TINY_SCENE["objects"], "because", [[ACTION.format("apple")] * 5])
+    )
+    scene = write_scene(tmp_path / "scene.json", TINY_SCENE)
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("CONCEPTBOT_", "OPENAI_"))}
+    argv = [
+        sys.executable, "-m", "conceptbot", "--home", str(home), "--llm", spec, "--embedder", "fake",
+        "plan", "bring me an apple", "--scene", str(scene), "--no-fallback",
+    ]  # fmt: skip
+    for extra in ((), ("--json", "--no-ask")):
+        done = subprocess.run(
+            [*argv, *extra],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=300,
+            preexec_fn=lambda: os.close(0),
+        )
+        assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
+        assert "pick_and_place(apple, user)" in done.stdout

@@ -62,3 +62,13 @@ def test_line_breaks_and_tabs_in_a_request_become_spaces() -> None:
     assert check_request("bring me\r\n  an apple\tplease\n") == "bring me   an apple please"
     assert check_request("bring me\u2028an apple") == "bring me an apple"
     assert check_request("une crème brûlée, s'il te plaît") == "une crème brûlée, s'il te plaît"
+
+
+def test_bytes_that_were_not_utf8_are_refused_with_the_control_characters() -> None:
+    from conceptbot.core.limits import check_text
+
+    with pytest.raises(ConfigError, match=r"control characters or undecodable bytes '\\x1b' '\\udcff'"):
+        check_request("bring me an apple \udcff \x1b")
+    with pytest.raises(ConfigError, match=r"the prompt contains undecodable bytes '\\ud800'"):
+        check_text("hi \ud800", "prompt")
+    assert check_text("crème\nbrûlée", "prompt") == "crème\nbrûlée"

@@ -167,3 +167,21 @@ def test_a_household_part_writes_its_keys_after_the_config_in_the_planners_order
 def test_a_harm_score_that_cannot_be_compared_refuses() -> None:
     assert HarmVerdict(float("nan"), 0.5).refuse  # a NaN reading: the decision was not made
     assert HarmVerdict(0.5, 0.5).refuse and not HarmVerdict(0.49, 0.5).refuse
+
+
+def test_answers_read_the_same_everywhere_yes_y_and_all() -> None:
+    from conceptbot.core.trace import ClarifyingQuestion
+
+    confirm = ClarifyingQuestion("Should I?", "bowl", ("lemon",), (0.5,))
+    assert [confirm.read(r) for r in ("Yes", " Y ", "YES", "n", "No", "maybe")] == [
+        ("lemon",),
+        ("lemon",),
+        ("lemon",),
+        (),
+        (),
+        None,
+    ]
+    choose = ClarifyingQuestion("Which?", "bowl", ("lemon", "lime"), (0.5, 0.5), kind="choose")
+    assert choose.read("All") == ("lemon", "lime") and choose.read("none") == ()
+    one = ClarifyingQuestion("Which one?", "user", ("coke", "water"), (0.5, 0.5), kind="one")
+    assert one.read("all") is None  # one object only

@@ -91,7 +91,9 @@ def test_the_graph_vetoes_a_hand_over_the_model_calls_safe() -> None:
 @pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
 def test_a_risk_decision_the_backend_cannot_make_refuses_the_move(bad: float) -> None:
     llm = FakeLLM(scores=[PRIOR, [bad, bad]])
-    bot = ConceptBot(llm, RelationRetriever(DictGraph(PLACES), FakeEmbedder(), theta=0.1), "urp", planner="goal")
+    bot = ConceptBot(
+        llm, RelationRetriever(DictGraph(PLACES), FakeEmbedder(), theta=0.1), "urp", planner="goal"
+    )
     plan = bot.plan("Give the child the knife", TINY)
     assert format_actions(plan.actions) == ["done()"] and plan.refused
     assert [v.source for v in plan.trace.vetoes or ()] == ["error"]
@@ -111,7 +113,9 @@ def test_a_reading_preference_the_backend_cannot_give_leaves_the_person_to_say_w
     # which one was meant is asked rather than guessed.
     scene = scene_from_dict({"pickable_objects": ["glue", "chips"], "destinations": ["table", "user"]})
     llm = FakeLLM(["Put the glue on the table."], scores=[[bad, -1.0], PRIOR, SAFE])
-    bot = ConceptBot(llm, RelationRetriever(DictGraph(PLACES), FakeEmbedder(), theta=0.1), "urp", planner="goal")
+    bot = ConceptBot(
+        llm, RelationRetriever(DictGraph(PLACES), FakeEmbedder(), theta=0.1), "urp", planner="goal"
+    )
     plan = bot.plan("Oh, before I forget, would you be a dear and pop the glue on the table?", scene)
     goal = plan.to_dict()["trace"]["goal"]
     assert [r["p"] for r in goal["readings"]] == [0.5, 0.5] and "preference" not in goal

@@ -302,3 +302,15 @@ def test_a_choose_question_takes_the_objects_that_go(make_client) -> None:
     events = events_of(client, run_id)
     assert events[0]["question"] == CHOOSE.to_dict() and events[0]["question"]["kind"] == "choose"
     assert events[1]["plan"] == ["pick_and_place(apple, user)", "pick_and_place(lime, user)", "done()"]
+
+
+def test_a_lone_surrogate_in_a_json_body_is_a_4xx_not_a_500(make_client, caplog) -> None:
+    # Pydantic refuses the value; FastAPI's own 422 echoes the input, which cannot be encoded.
+    client = make_client()
+    headers = {"Content-Type": "application/json"}
+    body = b'{"request": "bring me an apple \\ud800", "scene": "kitchen"}'
+    refused = client.post("/api/runs", content=body, headers=headers)
+    assert 400 <= refused.status_code < 500, refused.text
+    answered = client.post("/api/runs/x/answer", content=b'{"answer": "lemon\\udcff"}', headers=headers)
+    assert 400 <= answered.status_code < 500, answered.text
+    assert "Traceback" not in caplog.text

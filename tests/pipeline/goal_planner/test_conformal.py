@@ -190,3 +190,28 @@ def test_a_calibration_says_which_model_it_was_fitted_for(tmp_path) -> None:
     mine = calibration_for(tmp_path, "openai", "gpt-4o-mini")
     assert (mine.fitted_for, mine.source) == ("openai:gpt-4o-mini", str(path))
     assert mine.fits("openai", "gpt-4o-mini") and not mine.fits("openai-compatible", "gpt-4o-mini")
+
+
+@pytest.mark.parametrize("value", [True, False, "0.5", None, [0.5]])
+def test_a_threshold_of_the_wrong_json_type_names_the_file_and_the_field(tmp_path, value: object) -> None:
+    from conceptbot.core.errors import ConfigError
+    from conceptbot.pipeline.goal_planner.conformal import calibration_for, user_file
+
+    fitted = {"graph": {"0.8": 0.5, "0.9": value, "0.95": 0.7}}
+    path = user_file(tmp_path, "b", "m")
+    path.write_text(json.dumps({"plan_qhat": fitted, "fitted_on": "x"}))
+    with pytest.raises(
+        ConfigError, match=r"plan_qhat\.graph\.0\.9 is .*, not a number in \[0, 1\]"
+    ) as caught:
+        calibration_for(tmp_path, "b", "m")
+    assert str(path) in caught.value.message
+
+
+def test_a_calibration_file_nested_too_deeply_is_one_clear_error(tmp_path) -> None:
+    from conceptbot.core.errors import ConfigError
+    from conceptbot.pipeline.goal_planner.conformal import calibration_for, user_file
+
+    user_file(tmp_path, "b", "m").write_text("[" * 200_000 + "]" * 200_000)
+    with pytest.raises(ConfigError, match="nested too deeply") as caught:
+        calibration_for(tmp_path, "b", "m")
+    assert "calibrate --conformal" in (caught.value.hint or "")

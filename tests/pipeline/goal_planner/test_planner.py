@@ -536,6 +536,7 @@ def test_conceptbot_uses_the_goal_planner_when_asked() -> None:
     bot = ConceptBot(llm, RelationRetriever(DictGraph(), FakeEmbedder(), theta=0.1), "urp", planner="goal")
     plan = bot.plan("Put the glue on the table", SCENE)
     assert plan.trace.planner_kind == "goal" and plan.refused
+    assert plan.confidence is None  # a refusal carries out nothing: no "Confidence: 1.00"
     assert set(plan.usage) >= {"goal", "decide", "risk", "total"}
     json.dumps(plan.to_dict())
     assert ConceptBot(FakeLLM(scores=[]), None, "nokg").planner_kind == "goal"  # the default
