@@ -28,6 +28,7 @@ PLACES = {
     "bowl": [("bowl", "IsA", "container")],
 }
 EDGES.update(PLACES)
+WITH_PLACES = EDGES
 
 
 class DictGraph:

@@ -7,13 +7,13 @@ from conceptbot.core.plan import format_actions
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.conceptbot import ConceptBot
 from conceptbot.pipeline.retrieval import RelationRetriever
-from tests.pipeline.fakes import DictGraph, risk_reply, spill_scene, urp_reply
+from tests.pipeline.fakes import WITH_PLACES, DictGraph, risk_reply, spill_scene, urp_reply
 
 SCENE_OBJECTS = 5
 
 
 def _bot(llm: FakeLLM, config: str = "conceptbot") -> tuple[ConceptBot, DictGraph]:
-    graph = DictGraph()
+    graph = DictGraph(WITH_PLACES)
     # These tests script the paper's pipeline (OPE -> URP -> step planner).
     return ConceptBot(
         llm, RelationRetriever(graph, FakeEmbedder(), theta=0.1), config, planner="steps"

@@ -6,12 +6,13 @@ from conceptbot.core.plan import format_actions
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.conceptbot import ConceptBot
 from conceptbot.pipeline.retrieval import RelationRetriever
-from tests.pipeline.fakes import DictGraph, Recorder, risk_reply, spill_scene, urp_reply
+from tests.pipeline.fakes import WITH_PLACES, DictGraph, Recorder, risk_reply, spill_scene, urp_reply
 from tests.pipeline.goal_planner.test_planner import NAMES, NEUTRAL, PRIOR, SAFE, SCENE, UNSAFE
 
 
 def _bot(llm: FakeLLM, config: str, planner: str) -> ConceptBot:
-    return ConceptBot(llm, RelationRetriever(DictGraph(), FakeEmbedder(), theta=0.1), config, planner=planner)
+    graph = DictGraph(WITH_PLACES)
+    return ConceptBot(llm, RelationRetriever(graph, FakeEmbedder(), theta=0.1), config, planner=planner)
 
 
 def test_the_step_pipeline_reports_ope_urp_and_each_step() -> None:
