@@ -902,3 +902,24 @@ def test_which_one_shares_are_sharpened_and_the_ranking_kept() -> None:
     plain, sharp = shares(1.0), shares(1.5)
     assert sorted(plain, key=plain.get) == sorted(sharp, key=sharp.get)  # the same ranking
     assert sharp["pencil"] > plain["pencil"] and sharp["glue"] < plain["glue"]
+
+
+def test_a_which_one_question_never_offers_what_the_veto_refuses_the_recipient() -> None:
+    from conceptbot.pipeline.goal_planner.conformal import Calibration
+    from conceptbot.pipeline.hazards import HazardCheck
+
+    scores = [*CUT_PAPER, PRIOR, SAFE, PRIOR, SAFE, PRIOR, SAFE]  # the model calls every move safe
+    graph = DictGraph({"scissors": [("scissors", "IsA", "weapon")]})
+
+    def plan(hazards: HazardCheck) -> object:
+        llm = FakeLLM(scores=list(scores))
+        finder, decider = TargetFinder(llm, hazards.is_person), Decider(llm, FactFinder(None))
+        # A threshold that keeps both likeliest candidates: a question of which one, unless vetoed.
+        planner = GoalPlanner(finder, decider, hazards=hazards, calibration=Calibration({0.9: 0.99}, "t"))
+        return planner.plan("Give my son something to cut paper", SCENE, ask=lambda q: "")
+
+    unvetoed = plan(HazardCheck(DictGraph({})))
+    assert [q.objects for q in unvetoed.questions if q.kind == "one"] == [("scissors", "safety scissors")]
+    vetoed = plan(HazardCheck(graph))
+    assert all("scissors" not in q.objects for q in vetoed.questions)
+    assert format_actions(vetoed.actions) == ["pick_and_place(safety scissors, child)", "done()"]
