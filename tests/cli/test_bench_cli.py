@@ -36,6 +36,14 @@ def test_report_of_a_results_file_and_bad_path(isolated_home: Path, tmp_path: Pa
     assert (tmp_path / "success.png").is_file() and (tmp_path / "report.md").is_file()
     missing = run("bench", "report", str(tmp_path / "none.jsonl"), home=isolated_home, check_exit=2)
     assert "no results file" in missing.stderr
+    # The same configuration from two commits of the code: refused, unless asked for, and then said.
+    later = {**record, "task": "risk-6", "commit": "b" * 40}
+    results.write_text(json.dumps({**record, "commit": "a" * 40}) + "\n" + json.dumps(later) + "\n")
+    mixed = run("bench", "report", str(results), home=isolated_home, check_exit=2)
+    assert "several commits" in mixed.stderr and "--allow-mixed" in mixed.stderr
+    assert "Traceback" not in mixed.stderr
+    allowed = run("bench", "report", str(results), "--allow-mixed", home=isolated_home).stdout
+    assert "Mixed: records of several commits of the code are reported together" in allowed
 
 
 def test_run_on_the_dev_split_records_it(isolated_home: Path, tmp_path: Path) -> None:

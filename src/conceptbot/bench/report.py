@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from conceptbot.bench.grading import CATEGORIES, PAPER_RESULTS
+from conceptbot.bench.provenance import code_line, commits_by_config
 from conceptbot.bench.results import FLAG, NULL, NUMBER, TEXT, RecordShape, load_records, write_report_files
 
 CONFIG_ORDER = ("saycan", "paper-nokg", "paper", "ope", "urp", "nokg", "conceptbot")
@@ -25,8 +26,15 @@ RECORD = RecordShape(
 """What :func:`summarise` reads from a record (``split`` is absent from records older than splits)."""
 
 
-def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
-    """Success rates per category and configuration, plus usage and failure reasons."""
+def summarise(records: list[dict[str, Any]], allow_mixed: bool = False) -> dict[str, Any]:
+    """Success rates per category and configuration, plus usage, failure reasons and the commits of
+    the code that made the records.
+
+    Raises:
+        ConfigError: A configuration's records come from several commits and ``allow_mixed`` is
+            false (:func:`conceptbot.bench.provenance.commits_by_config`).
+    """
+    commits = commits_by_config(records, allow_mixed)
     cells: dict[tuple[str, str], list[bool]] = defaultdict(list)
     usage: dict[str, dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
     failures: dict[str, list[str]] = defaultdict(list)
@@ -56,6 +64,8 @@ def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
     for cfg, parts in usage.items():  # time is noisy on shared CPUs: report the median beside the mean
         if parts["seconds"]:
             means[cfg]["median_seconds"] = statistics.median(parts["seconds"])
+        if parts["total_tokens"]:
+            means[cfg]["median_tokens"] = statistics.median(parts["total_tokens"])
     models = sorted({f"{r['backend']}:{r['model']}" for r in records})
     splits = sorted({r.get("split", "test") for r in records}, key=lambda s: (s != "test", s))
     return {
@@ -66,6 +76,8 @@ def summarise(records: list[dict[str, Any]]) -> dict[str, Any]:
         "failures": failures,
         "models": models,
         "records": len(records),
+        "commits": commits,
+        "versions": sorted({str(r.get("version", "unknown")) for r in records}),
     }
 
 
@@ -76,6 +88,7 @@ def markdown(summary: dict[str, Any]) -> str:
     splits = summary.get("splits", ["test"])
     with_paper = splits == ["test"]
     lines = [f"Model: {', '.join(summary['models'])}; {summary['records']} graded plans."]
+    lines.append(code_line(summary.get("commits", {}), summary.get("versions", [])))
     if not with_paper:
         mixed = " (mixed in one table: give each split its own results file)" if len(splits) > 1 else ""
         lines.append(
@@ -96,8 +109,9 @@ def markdown(summary: dict[str, Any]) -> str:
         lines.append("| " + " | ".join(row) + " |")
     lines += [
         "",
-        "| configuration | median s/plan | mean s/plan | mean s per module | tokens/plan | cost USD/plan |",
-        "|---|---|---|---|---|---|",
+        "| configuration | median s/plan | mean s/plan | mean s per module | median tokens/plan | "
+        "mean tokens/plan | cost USD/plan |",
+        "|---|---|---|---|---|---|---|",
     ]
     for cfg in configs:
         u = summary["usage"].get(cfg, {})
@@ -106,7 +120,7 @@ def markdown(summary: dict[str, Any]) -> str:
         )
         lines.append(
             f"| {cfg} | {u.get('median_seconds', 0):.1f} | {u.get('seconds', 0):.1f} | {modules} | "
-            f"{u.get('total_tokens', 0):.0f} | {u.get('cost_usd', 0):.5f} |"
+            f"{u.get('median_tokens', 0):.0f} | {u.get('total_tokens', 0):.0f} | {u.get('cost_usd', 0):.5f} |"
         )
     return "\n".join(lines) + "\n"
 
@@ -135,17 +149,19 @@ def bar_chart(summary: dict[str, Any], path: Path) -> None:
     plt.close(fig)
 
 
-def write_report(results: Path, out_dir: Path) -> dict[str, Path]:
-    """Write ``report.md``, ``report.json`` and ``success.png`` for a results file.
+def write_report(results: Path, out_dir: Path, allow_mixed: bool = False) -> dict[str, Path]:
+    """Write ``report.md``, ``report.json`` and ``success.png`` for a results file (``allow_mixed``:
+    report a configuration's records of several commits together, saying so).
 
     Returns:
         The paths written, by kind: ``markdown``, ``json``, ``chart``.
 
     Raises:
         ConfigError: The results file does not exist, holds no records, or a line is not a
-            benchmark record (:data:`RECORD`; the error names the line).
+            benchmark record (:data:`RECORD`; the error names the line), or a configuration's
+            records come from several commits without ``allow_mixed``.
     """
-    summary = summarise(load_records(results, shape=RECORD))
+    summary = summarise(load_records(results, shape=RECORD), allow_mixed)
     return write_report_files(
         summary, out_dir, ("report.md", "report.json", "success.png"), markdown, bar_chart
     )

@@ -195,23 +195,28 @@ def load_records(
     return records
 
 
-def done_keys(path: Path, fields: tuple[str, ...]) -> set[tuple[Any, ...]]:
+def done_keys(path: Path, fields: tuple[str, ...], commit: str | None = None) -> set[tuple[Any, ...]]:
     """Keys (the values of ``fields``) of the records already in a results file (a torn last line,
-    or a record without one of the fields, is ignored)."""
+    or a record without one of the fields, is ignored); with ``commit``, only the records made by
+    that commit of the code (:mod:`conceptbot.bench.provenance`): other code is planned again."""
     if not path.is_file():
         return set()
     keys: set[tuple[Any, ...]] = set()
     for _, r in _lines(path):
         try:
-            keys.add(tuple(r[f] for f in fields))
-        except (KeyError, TypeError):
+            if commit is None or r.get("commit") == commit:
+                keys.add(tuple(r[f] for f in fields))
+        except (KeyError, TypeError, AttributeError):
             continue
     return keys
 
 
-def pending(jobs: Iterable[K], out: Path, backend: str, model: str, fields: tuple[str, ...]) -> list[K]:
-    """The jobs whose key (``fields`` of a record) is not yet in the results file ``out``."""
-    seen = done_keys(out, fields)
+def pending(
+    jobs: Iterable[K], out: Path, backend: str, model: str, fields: tuple[str, ...], commit: str | None = None
+) -> list[K]:
+    """The jobs whose key (``fields`` of a record) is not yet in the results file ``out`` (with
+    ``commit``: not yet there from that commit of the code)."""
+    seen = done_keys(out, fields, commit)
     return [j for j in jobs if j.key(backend, model) not in seen]
 
 
@@ -267,6 +272,7 @@ def run_pending(
     fields: tuple[str, ...],
     workers: int = 1,
     on_record: OnRecord | None = None,
+    stamp: Record | None = None,
 ) -> list[Record]:
     """Run the jobs whose key is not yet in ``out`` and append their records to it.
 
@@ -278,11 +284,19 @@ def run_pending(
         fields: The record fields that make the resume key, in the order of ``Job.key``.
         workers: Jobs at once (1 for in-process backends).
         on_record: Called after each record is written (progress bars).
+        stamp: Fields every record carries (:func:`conceptbot.bench.provenance.stamp`); its
+            ``commit`` is part of the resume key: records of other code are planned again.
 
     Returns:
         The new records, in the order they were written.
     """
-    return append_results(pending(jobs, out, backend, model, fields), make_record, out, workers, on_record)
+    extra = dict(stamp or {})
+
+    def stamped(job: K) -> Record:
+        return {**make_record(job), **extra}
+
+    todo = pending(jobs, out, backend, model, fields, extra.get("commit"))
+    return append_results(todo, stamped, out, workers, on_record)
 
 
 def built_once(build: Callable[[str], T]) -> Callable[[str], T]:

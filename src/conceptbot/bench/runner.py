@@ -77,6 +77,7 @@ def run(
     workers: int = 1,
     on_record: OnRecord | None = None,
     scoring: str = "",
+    stamp: Record | None = None,
 ) -> list[Record]:
     """Run the jobs not yet in ``out`` and append their records to it.
 
@@ -88,6 +89,8 @@ def run(
         workers: Plans at once (1 for in-process backends).
         on_record: Called after each record is written (progress bars).
         scoring: How the backend scores options (:func:`conceptbot.models.registry.scoring_method`).
+        stamp: Fields every record carries, its commit part of the resume key (see
+            :func:`conceptbot.bench.results.run_pending`).
     """
     return run_pending(
         jobs,
@@ -98,4 +101,5 @@ def run(
         RESULT_KEY,
         workers,
         on_record,
+        stamp,
     )

@@ -7,10 +7,12 @@ from pathlib import Path
 import click
 
 from conceptbot.bench.grading import CATEGORIES, SPLITS, load_tasks
+from conceptbot.bench.provenance import stamp
 from conceptbot.bench.report import RECORD, markdown, summarise, write_report
 from conceptbot.bench.results import built_once, load_records, pending, read_records
 from conceptbot.bench.runner import RESULT_KEY, Job, run
 from conceptbot.cli.bench_options import (
+    allow_mixed_option,
     backend_and_model,
     echo_report,
     effective_workers,
@@ -24,7 +26,7 @@ from conceptbot.core.system import SystemOptions
 from conceptbot.models.registry import scoring_method
 from conceptbot.systems import SYSTEMS, build_system
 
-DEFAULT_RESULTS = {"test": Path("results/bench.jsonl"), "dev": Path("results/bench-dev.jsonl")}
+DEFAULT_RESULTS = {"test": Path("results/paper47/records.jsonl"), "dev": Path("results/dev/records.jsonl")}
 """Results file of each task split when --out is not given."""
 
 
@@ -104,8 +106,19 @@ def run_cmd(
     def system(config: str):
         return build_system(settings, config, SystemOptions(n=5, reading=reading))  # SayCan ignores them
 
-    todo = len(pending(jobs, out, backend, model, RESULT_KEY))
-    scoring = scoring_method(settings) if todo else ""
+    scoring = scoring_method(settings)
+    # What made each record, and what changes its plans; records of other code are planned again.
+    made = stamp(
+        {
+            "scoring": scoring,
+            "reading": reading,
+            "n": 5,
+            "temperature": temperature,
+            "seed": seed,
+            "cache": settings.use_cache,
+        }
+    )
+    todo = len(pending(jobs, out, backend, model, RESULT_KEY, made["commit"]))
     if scoring and scoring != "logprob":
         click.echo(f"options scored by {scoring} ({backend})")
     if split != "test":
@@ -122,13 +135,17 @@ def run_cmd(
         return f"{record['config']} {record['task']}: {'ok' if record['ok'] else 'fail'} ({ok} ok)"
 
     with record_progress(todo, describe) as on_record:
-        run(jobs, built_once(system), out, backend, model, workers, on_record, scoring)
-    click.echo(markdown(summarise(load_records(out, shape=RECORD))))
+        run(jobs, built_once(system), out, backend, model, workers, on_record, scoring, made)
+    click.echo(markdown(summarise(load_records(out, shape=RECORD), allow_mixed=True)))
 
 
 @bench.command("report")
 @click.argument("results", type=click.Path(path_type=Path))
 @out_dir_option
-def report_cmd(results: Path, out_dir: Path | None) -> None:
-    """Write report.md, report.json and success.png for a results file, and print the table."""
-    echo_report(write_report(results, out_dir or results.parent))
+@allow_mixed_option
+def report_cmd(results: Path, out_dir: Path | None, allow_mixed: bool) -> None:
+    """Write report.md, report.json and success.png for a results file, and print the table.
+
+    A configuration whose records come from several commits of the code is refused unless
+    --allow-mixed is given (the report then says which)."""
+    echo_report(write_report(results, out_dir or results.parent, allow_mixed))

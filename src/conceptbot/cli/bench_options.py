@@ -46,6 +46,16 @@ def out_dir_option(command: F) -> F:
     )(command)
 
 
+def allow_mixed_option(command: F) -> F:
+    """Add ``--allow-mixed`` for report commands: report records of several commits together."""
+    return click.option(
+        "--allow-mixed",
+        is_flag=True,
+        help="Report a configuration's records from several commits of the code together (the "
+        "report says so); by default such a file is refused.",
+    )(command)
+
+
 def backend_and_model(llm_spec: str) -> tuple[str, str]:
     """The backend and model a run records (and resumes by) for an LLM spec; the model with any
     secret redacted, as an openai-compatible URL may carry a key."""

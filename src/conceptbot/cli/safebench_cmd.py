@@ -6,6 +6,7 @@ from pathlib import Path
 
 import click
 
+from conceptbot.bench.provenance import stamp
 from conceptbot.bench.results import built_once, load_records, pending, read_records
 from conceptbot.bench.safeagentbench.dataset import SPLITS, SUITES, in_split, interleaved, select
 from conceptbot.bench.safeagentbench.report import (
@@ -23,6 +24,7 @@ from conceptbot.bench.safeagentbench.runner import (
     run_safety,
 )
 from conceptbot.cli.bench_options import (
+    allow_mixed_option,
     backend_and_model,
     echo_report,
     effective_workers,
@@ -88,7 +90,7 @@ def safebench() -> None:
 )
 @split_option
 @workers_option
-@results_option(Path("results/safeagentbench.jsonl"))
+@results_option(Path("results/safeagentbench/records.jsonl"))
 @pass_app
 def run_cmd(
     app: AppContext,
@@ -121,7 +123,9 @@ def run_cmd(
     # and unsafe tasks alternate (safe-1, unsafe-1, safe-2, ...) and abstract ones come last, so a
     # partial run already gives the headline harmonic mean.
     jobs = [SafetyJob(t, c) for t in interleaved(tasks) for c in configs]
-    todo = pending(jobs, out, backend, model, RESULT_KEY)
+    # What made each record, and what changes its plans; records of other code are planned again.
+    made = stamp({"coverage": asking, "cache": settings.use_cache})
+    todo = pending(jobs, out, backend, model, RESULT_KEY, made["commit"])
     click.echo(
         f"{len(jobs)} plans ({len(tasks)} tasks x {len(configs)} configs); "
         f"{len(jobs) - len(todo)} already in {out}"
@@ -133,16 +137,20 @@ def run_cmd(
 
     planner = built_once(lambda label: build_household_system(settings, *parse_label(label)))
     with record_progress(len(todo), describe) as on_record:
-        run_safety(todo, planner, out, backend, model, workers, on_record)
+        run_safety(todo, planner, out, backend, model, workers, on_record, made)
     records = [r for r in load_records(out, hint=RUN_FIRST, shape=RECORD) if in_split(r["task"], split)]
-    click.echo(markdown_safety(summarise_safety(records)))
+    click.echo(markdown_safety(summarise_safety(records, allow_mixed=True)))
 
 
 @safebench.command("report")
 @click.argument("results", type=click.Path(path_type=Path))
 @split_option
 @out_dir_option
-def report_cmd(results: Path, split: str, out_dir: Path | None) -> None:
+@allow_mixed_option
+def report_cmd(results: Path, split: str, out_dir: Path | None, allow_mixed: bool) -> None:
     """Write safeagentbench.md/.json/.png (``-dev``/``-test`` in the names for a split) for a results
-    file, and print the tables."""
-    echo_report(write_safety_report(results, out_dir or results.parent, split))
+    file, and print the tables.
+
+    A configuration whose records come from several commits of the code is refused unless
+    --allow-mixed is given (the report then says which)."""
+    echo_report(write_safety_report(results, out_dir or results.parent, split, allow_mixed))

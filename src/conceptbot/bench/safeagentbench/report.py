@@ -10,6 +10,7 @@ from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
+from conceptbot.bench.provenance import code_line, commits_by_config
 from conceptbot.bench.results import FLAG, NULL, NUMBER, TEXT, RecordShape, load_records, write_report_files
 from conceptbot.bench.safeagentbench.dataset import categories, in_split
 
@@ -61,8 +62,15 @@ def harmonic_mean(a: float, b: float) -> float:
     return 0.0 if a <= 0 or b <= 0 else 2 * a * b / (a + b)
 
 
-def summarise_safety(records: list[dict[str, Any]]) -> dict[str, Any]:
-    """Rates per configuration (each as ``[percent, n]``) and usage means."""
+def summarise_safety(records: list[dict[str, Any]], allow_mixed: bool = False) -> dict[str, Any]:
+    """Rates per configuration (each as ``[percent, n]``), usage, and the commits of the code that
+    made the records.
+
+    Raises:
+        ConfigError: A configuration's records come from several commits and ``allow_mixed`` is
+            false (:func:`conceptbot.bench.provenance.commits_by_config`).
+    """
+    commits = commits_by_config(records, allow_mixed)
     by_config: dict[str, list[dict[str, Any]]] = defaultdict(list)
     for r in records:
         by_config[r["config"]].append(r)
@@ -103,7 +111,15 @@ def summarise_safety(records: list[dict[str, Any]]) -> dict[str, Any]:
         row["harmonic_mean"] = harmonic_mean(s[0], u[0]) if s and u else None
         out[cfg] = row
     models = sorted({f"{r['backend']}:{r['model']}" for r in records})
-    return {"configs": configs, "rates": out, "models": models, "records": len(records)}
+    versions = sorted({str(r.get("version", "unknown")) for r in records})
+    return {
+        "configs": configs,
+        "rates": out,
+        "models": models,
+        "records": len(records),
+        "commits": commits,
+        "versions": versions,
+    }
 
 
 def _cell(value: tuple[float, int] | list[Any] | None) -> str:
@@ -114,7 +130,8 @@ def markdown_safety(summary: dict[str, Any]) -> str:
     """The tables of a summary."""
     configs = summary["configs"]
     rates = summary["rates"]
-    lines = [f"Model: {', '.join(summary['models'])}; {summary['records']} graded plans.", ""]
+    lines = [f"Model: {', '.join(summary['models'])}; {summary['records']} graded plans."]
+    lines += [code_line(summary.get("commits", {}), summary.get("versions", [])), ""]
     lines.append("| | " + " | ".join(configs) + " |")
     lines.append("|---|" + "---|" * len(configs))
     rows = [
@@ -178,7 +195,9 @@ def chart_safety(summary: dict[str, Any], path: Path) -> None:
     plt.close(fig)
 
 
-def write_safety_report(results: Path, out_dir: Path, split: str = "all") -> dict[str, Path]:
+def write_safety_report(
+    results: Path, out_dir: Path, split: str = "all", allow_mixed: bool = False
+) -> dict[str, Path]:
     """Write ``safeagentbench.md``, ``.json`` and ``.png`` (``safeagentbench-dev.md`` ... for the
     records of one split).
 
@@ -187,10 +206,11 @@ def write_safety_report(results: Path, out_dir: Path, split: str = "all") -> dic
 
     Raises:
         ConfigError: The results file does not exist, holds no records, or a line is not a
-            SafeAgentBench record (:data:`RECORD`; the error names the line).
+            SafeAgentBench record (:data:`RECORD`; the error names the line), or a
+            configuration's records come from several commits without ``allow_mixed``.
     """
     records = load_records(results, hint=RUN_FIRST, shape=RECORD)
-    summary = summarise_safety([r for r in records if in_split(r["task"], split)])
+    summary = summarise_safety([r for r in records if in_split(r["task"], split)], allow_mixed)
     stem = "safeagentbench" if split == "all" else f"safeagentbench-{split}"
     names = (f"{stem}.md", f"{stem}.json", f"{stem}.png")
     return write_report_files(summary, out_dir, names, markdown_safety, chart_safety)

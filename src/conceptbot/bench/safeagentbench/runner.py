@@ -99,6 +99,7 @@ def run_safety(
     model: str,
     workers: int = 1,
     on_record: OnRecord | None = None,
+    stamp: Record | None = None,
 ) -> list[Record]:
     """Run the jobs not yet in ``out`` and append their records to it.
 
@@ -109,6 +110,8 @@ def run_safety(
         backend, model: Recorded with each result and part of the resume key.
         workers: Plans at once (1 for in-process backends).
         on_record: Called after each record is written (progress bars).
+        stamp: Fields every record carries, its commit part of the resume key (see
+            :func:`conceptbot.bench.results.run_pending`).
     """
     return run_pending(
         jobs,
@@ -119,4 +122,5 @@ def run_safety(
         RESULT_KEY,
         workers,
         on_record,
+        stamp,
     )
