@@ -4,7 +4,8 @@ with and without a simulated person who answers every question from the gold
 
 Per split, system and coverage: success without questions and with the gold answers, the share of
 tasks with a question (help rate), questions per task, and the empirical coverage of the calibrated
-decisions' prediction sets against the gold. Rows go to ``results/asking.json`` (``--write``).
+decisions' prediction sets against the gold. Rows go to ``results/asking/report.json`` (``--write``),
+each naming the commit of the code that made it (:mod:`conceptbot.bench.provenance`).
 
     .venv/bin/python benchmarks/bench_asking.py --split dev [--systems conceptbot,nokg] [--write]
 
@@ -12,8 +13,8 @@ decisions' prediction sets against the gold. Rows go to ``results/asking.json`` 
 questions); such rows are not written (they are not the split's figures).
 
 With ``--write`` each task's outcome is also kept, as it is measured, in
-``results/asking-tasks.jsonl``: the evidence behind the rows (which tasks fail, what was asked), and
-what ``--write --resume`` continues from after a stop.
+``results/asking/records.jsonl``: the evidence behind the rows (which tasks fail, what was asked), and
+what ``--write --resume`` continues from after a stop (outcomes of other code are planned again).
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from typing import Any
 
 from conceptbot.bench.conformal_fit import labelled
 from conceptbot.bench.grading import Task, gold_reading, gold_reply, grade, load_tasks, task_scene
+from conceptbot.bench.provenance import stamp
 from conceptbot.core.config import load_settings
 from conceptbot.core.plan import Plan
 from conceptbot.core.system import ASK_ALL, COVERAGES, LEVELS, READINGS, WHICH_ONE, SystemOptions
@@ -34,12 +36,12 @@ from conceptbot.core.trace import ClarifyingQuestion
 from conceptbot.pipeline.goal_planner.conformal import OLD_RULE, shipped
 from conceptbot.systems import build_system
 
-OUT = Path("results/asking.json")
-FIGURE = Path("results/asking.png")
-RELIABILITY = Path("results/asking-reliability.png")
+OUT = Path("results/asking/report.json")
+FIGURE = Path("results/asking/asking.png")
+RELIABILITY = Path("results/asking/reliability.png")
 # Each task's outcome, one JSON line per task as it is measured (``--write``): the rows' evidence,
 # and what ``--resume`` continues from after a stop.
-TASKS = Path("results/asking-tasks.jsonl")
+TASKS = Path("results/asking/records.jsonl")
 BINS = 10
 # How the planner reads the request here (the default, SystemOptions.reading); the rows measured
 # with the rules alone, before 2026-12-02, say "words".
@@ -166,11 +168,13 @@ def _key(r: dict[str, Any]) -> tuple[Any, ...]:
     )
 
 
-def _outcomes(resume: bool) -> list[dict[str, Any]]:
-    """The per-task outcomes kept in :data:`TASKS` (none unless ``resume``)."""
+def _outcomes(resume: bool, commit: str | None = None) -> list[dict[str, Any]]:
+    """The per-task outcomes kept in :data:`TASKS` (none unless ``resume``; with ``commit``, only
+    those made by that commit of the code)."""
     if not resume or not TASKS.exists():
         return []
-    return [json.loads(line) for line in TASKS.read_text(encoding="utf-8").splitlines() if line.strip()]
+    found = [json.loads(line) for line in TASKS.read_text(encoding="utf-8").splitlines() if line.strip()]
+    return [o for o in found if commit is None or o.get("commit") == commit]
 
 
 def _in_bin(pairs: list[tuple[float, float]], k: int, bins: int = BINS) -> list[tuple[float, float]]:
@@ -308,8 +312,11 @@ def main() -> None:
         for s in args.systems.split(",")
         for c in coverages
     ]
-    earlier = _outcomes(args.resume)
+    # What made each outcome and row: outcomes of other code are planned again on --resume.
+    made = stamp({"level": args.level, "reading": args.reading, "which_one": rule, "asked": readings})
+    earlier = _outcomes(args.resume, made["commit"])
     if args.write:
+        TASKS.parent.mkdir(parents=True, exist_ok=True)
         # Without --resume, this run's keys start afresh; other keys' outcomes stay.
         kept = earlier if args.resume else [o for o in _outcomes(True) if _key(o) not in keys]
         TASKS.write_text("".join(json.dumps(o) + "\n" for o in kept), encoding="utf-8")
@@ -322,10 +329,11 @@ def main() -> None:
 
         def keep(found: dict[str, Any], fields: dict[str, Any] = fields) -> None:
             with TASKS.open("a", encoding="utf-8") as out:
-                out.write(json.dumps({**fields, **found}) + "\n")
+                out.write(json.dumps({**fields, **made, **found}) + "\n")
 
         rows.append(
-            measure(
+            made
+            | measure(
                 split,
                 system_name,
                 coverage,

@@ -33,13 +33,18 @@ def test_the_commit_is_the_last_one_that_changed_the_source_and_dirty_source_say
     _git(repo, "-c", "user.name=t", "-c", "user.email=t@t", "add", ".")
     _git(repo, "-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "code")
     code = _git(repo, "rev-parse", "HEAD")
-    (repo / "results.jsonl").write_text("{}\n")  # a later commit of results only
+    (repo / "results.jsonl").write_text("{}\n")  # a later commit of results and a front end only
+    (package / "web").mkdir()
+    (package / "web" / "page.py").write_text("y = 1\n")
     _git(repo, "-c", "user.name=t", "-c", "user.email=t@t", "add", ".")
     _git(repo, "-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "results")
     monkeypatch.setattr(provenance, "PACKAGE", package)
     code_commit.cache_clear()
     try:
-        assert code_commit() == code  # committing results does not change the code's commit
+        assert code_commit() == code  # committing results or a front end does not change it
+        (package / "web" / "page.py").write_text("y = 2\n")
+        code_commit.cache_clear()
+        assert code_commit() == code  # nor does editing a front end
         (package / "a.py").write_text("x = 2\n")
         code_commit.cache_clear()
         assert code_commit() == f"{code}+dirty"

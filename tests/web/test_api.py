@@ -159,14 +159,15 @@ def test_run_pictures_by_fixed_names_only(make_client) -> None:
 def test_results_page_data(make_client, tmp_path: Path) -> None:
     client = make_client()
     assert client.get("/api/results").json() == {"reports": []}
-    results = tmp_path / "results"
-    results.mkdir()
+    results = tmp_path / "results" / "paper47"
+    results.mkdir(parents=True)
     (results / "report.md").write_text("| category | saycan |\n|---|---|\n| all | 86% (n=14) |\n")
     (results / "success.png").write_bytes(b"\x89PNG fake")
     reports = client.get("/api/results").json()["reports"]
-    assert reports[0]["title"] == "paper benchmark" and "86%" in reports[0]["markdown"]
+    assert reports[0]["title"] == "the paper's 47 tasks" and "86%" in reports[0]["markdown"]
     assert client.get(reports[0]["chart"]).status_code == 200
-    assert client.get("/api/results/files/report.md").status_code == 404
+    assert client.get("/api/results/files/paper47/report.md").status_code == 404
+    assert client.get("/api/results/files/../paper47/success.png").status_code == 404
 
 
 class _FixedPlan:

@@ -3,11 +3,12 @@
 Every record a benchmark writes carries these fields (:func:`stamp`), so a report can say which
 code its figures describe and refuse to mix records of different code (:func:`commits_by_config`).
 
-The commit is the last git commit that changed the package's own source (``src/conceptbot``), not
-the checkout's HEAD: committing results or docs does not change it, so a long run stays resumable
-across those commits, and any change to the code that plans starts a new set of records. Source
-with uncommitted changes is that commit plus ``+dirty``; outside a git checkout (an installed
-wheel) it is ``unknown``.
+The commit is the last git commit that changed the code that plans and grades: the package's source
+(``src/conceptbot``) less the front ends and the reports (:data:`NOT_PLANNING`), not the checkout's
+HEAD. Committing results, docs, the web page or a report's layout does not change it, so a long run
+stays resumable across those commits; any change to the code that plans starts a new set of
+records. Source with uncommitted changes is that commit plus ``+dirty``; outside a git checkout (an
+installed wheel) it is ``unknown``.
 """
 
 from __future__ import annotations
@@ -24,6 +25,16 @@ from conceptbot.core.version import __version__
 
 UNKNOWN = "unknown"
 PACKAGE = Path(__file__).resolve().parents[1]  # src/conceptbot
+NOT_PLANNING = (
+    "cli",
+    "web",
+    "ros2",
+    "sim",
+    "bench/report.py",
+    "bench/safeagentbench/report.py",
+    "bench/provenance.py",
+)
+"""Parts of the package that neither plan nor grade (paths under ``src/conceptbot``)."""
 
 
 def _git(*args: str) -> str | None:
@@ -39,12 +50,13 @@ def _git(*args: str) -> str | None:
 
 @cache
 def code_commit() -> str:
-    """The last commit that changed the package's source, ``+dirty`` with uncommitted changes to
-    it, or ``unknown`` outside a git checkout."""
-    found = _git("log", "-1", "--format=%H", "--", ".")
+    """The last commit that changed the code that plans and grades, ``+dirty`` with uncommitted
+    changes to it, or ``unknown`` outside a git checkout."""
+    paths = (".", *(f":(exclude){p}" for p in NOT_PLANNING))
+    found = _git("log", "-1", "--format=%H", "--", *paths)
     if not found:
         return UNKNOWN
-    changed = _git("status", "--porcelain", "--untracked-files=no", "--", ".")
+    changed = _git("status", "--porcelain", "--untracked-files=no", "--", *paths)
     return f"{found}+dirty" if changed else found
 
 

@@ -55,9 +55,14 @@ from conceptbot.web.runs import MAX_STREAMS, BusyError, Run, RunManager, RunSpec
 COOKIE = "conceptbot_session"
 MAX_BODY = 32 * 1024
 REPORTS = {
-    "paper benchmark": ("report.md", "success.png"),
-    "SafeAgentBench": ("safeagentbench.md", "safeagentbench.png"),
+    "the paper's 47 tasks": ("paper47/report.md", "paper47/success.png"),
+    "dev tasks": ("dev/report.md", "dev/success.png"),
+    "SafeAgentBench (test split)": (
+        "safeagentbench/safeagentbench-test.md",
+        "safeagentbench/safeagentbench-test.png",
+    ),
 }
+"""The reports the results page shows, as (Markdown, chart) under the results folder (results/README.md)."""
 MEDIA = {".png": "image/png", ".gif": "image/gif"}
 # The pages load only their own scripts, styles, pictures (run files, charts) and API: no inline
 # script or style (app.js sets bar widths through element.style, which CSP allows), no data: or
@@ -372,8 +377,8 @@ def _add_results(app: FastAPI, results_dir: Path) -> None:
                 )
         return {"reports": found}
 
-    @app.get("/api/results/files/{name}")
-    def result_file(name: str) -> FileResponse:
+    @app.get("/api/results/files/{name:path}")
+    def result_file(name: str) -> FileResponse:  # only the charts named in REPORTS: no other path
         charts = {chart for _, chart in REPORTS.values()}
         if name not in charts or not (results_dir / name).is_file():
             raise HTTPException(404, "no such file")
