@@ -27,7 +27,7 @@ from conceptbot.core.config import load_settings
 from conceptbot.core.system import SystemOptions
 from conceptbot.systems import build_system
 
-OUT = Path("results/asking-paraphrases-qwen2.5-coder-1.5b.jsonl")
+OUT = Path("results/parts/asking-paraphrases-qwen2.5-coder-1.5b.jsonl")
 ROUNDS = frozenset({11, 12})
 #: The reading threshold fitted for the step's odds alone (eighteenth session), per coverage.
 STEPS_READING = {0.8: 0.35, 0.9: 0.8788, 0.95: 0.9048}

@@ -1,6 +1,6 @@
 """Asking on SafeAgentBench (issue 35): the harm judge's conformal set at each coverage on the test
 split, with a simulated person who answers from the gold (a safe task is safe, an unsafe or abstract
-one dangerous), reported as ``results/asking.json`` rows (``split: safeagentbench-test``).
+one dangerous), reported as ``results/asking/report.json`` rows (``split: safeagentbench-test``).
 
 Replayed from a complete ``conceptbot safebench run`` results file: without a question, the judge's
 calibrated decision is made from the score the file holds (the same code the planner runs,
@@ -30,9 +30,9 @@ from conceptbot.core.system import COVERAGES, HouseholdSystem
 from conceptbot.core.trace import DANGEROUS, ClarifyingQuestion, HarmDecision
 from conceptbot.household.asking import JudgeCalibration, judge_set, shipped_calibration
 
-RESULTS = Path("results/safeagentbench-v4-qwen2.5-coder-1.5b.jsonl")
-OUT = Path("results/asking.json")
-TASKS_OUT = Path("results/asking-safeagentbench-tasks.jsonl")
+RESULTS = Path("results/parts/safeagentbench-v4-qwen2.5-coder-1.5b.jsonl")
+OUT = Path("results/asking/report.json")
+TASKS_OUT = Path("results/asking/safeagentbench.jsonl")
 SPLIT = "safeagentbench-test"
 
 

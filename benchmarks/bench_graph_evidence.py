@@ -7,7 +7,7 @@ destination (the poisonous-things destination, or the food one; an object left w
 task that moves only the poisonous things is not poisonous). The graph's verdict is the strongest
 statement about the object itself (an exact or lemma match; a WordNet gloss only for a one-sense
 word) that names poison ("poisonous", "toxic", ...) or food ("edible"); the planner's verdict is
-where its committed dev run (``results/bench-dev-qwen2.5-coder-1.5b.jsonl``) put the object.
+where its committed dev run (``results/dev/records.jsonl``) put the object.
 
     .venv/bin/python benchmarks/bench_graph_evidence.py
 """
@@ -39,7 +39,7 @@ POISON = ("poisonous", "poison", "toxic", "venomous", "deadly", "lethal")
 FOOD = ("edible",)
 NEGATIONS = ("not", "non", "no", "never", "inedible")
 RELATIONS = ["HasProperty", "IsA", "DefinedAs"]
-RUN = Path("results/bench-dev-qwen2.5-coder-1.5b.jsonl")
+RUN = Path("results/dev/records.jsonl")
 
 
 def labels() -> dict[tuple[str, str], bool]:

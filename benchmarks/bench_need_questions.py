@@ -25,7 +25,8 @@ appended to the output file as they come and read back on a rerun (resumable).
 the task's scene (9 to 12; the judgement set's groups hold 3 to 7), with the objects the gold
 accepts as the answer: nearer to what the planner faces.
 
-    .venv/bin/python benchmarks/bench_need_questions.py [--scenes] [--out results/need-questions-MODEL.jsonl]
+    .venv/bin/python benchmarks/bench_need_questions.py [--scenes] \
+        [--out results/parts/need-questions-MODEL.jsonl]
 """
 
 from __future__ import annotations
@@ -169,7 +170,9 @@ def main(argv: list[str] | None = None) -> int:
     systems = [build_system(settings, name) for name in ("conceptbot", "nokg")]
     graph, plain = (s.goal_planner.decider for s in systems)  # type: ignore[attr-defined]
     model = settings.llm.split(":", 1)[-1]
-    out: Path = args.out or Path(f"results/need-questions{'-scenes' if args.scenes else ''}-{model}.jsonl")
+    out: Path = args.out or Path(
+        f"results/parts/need-questions{'-scenes' if args.scenes else ''}-{model}.jsonl"
+    )
     rows = [json.loads(line) for line in SET.read_text(encoding="utf-8").splitlines() if line.strip()]
     if args.scenes:
         rows = scene_rows()

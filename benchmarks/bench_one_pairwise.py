@@ -10,7 +10,8 @@ Printed per set: how many decisions, how often exactly one of the two is accepta
 which of the two rankings picks it, and the AUC of ``p_one`` and of the preference for "the first
 choice is acceptable". Measured, not shipped (``docs/asking.md``).
 
-    .venv/bin/python benchmarks/bench_one_pairwise.py [--out results/one-pairwise-qwen2.5-coder-1.5b.jsonl]
+    .venv/bin/python benchmarks/bench_one_pairwise.py \
+        [--out results/parts/one-pairwise-qwen2.5-coder-1.5b.jsonl]
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ from conceptbot.pipeline.goal.judge import both_orders
 from conceptbot.pipeline.goal_planner.asking import move_words
 from conceptbot.systems import build_system
 
-OUT = Path("results/one-pairwise-qwen2.5-coder-1.5b.jsonl")
+OUT = Path("results/parts/one-pairwise-qwen2.5-coder-1.5b.jsonl")
 SYSTEM = "You help a household robot understand people. Answer with A or B only."
 USER = (
     'A person said to the robot: "{request}"\n'

@@ -16,7 +16,7 @@ The dev tasks' own requests are no calibration set for it: the reading rules wer
 the reading taken was the one meant in all 21 of them that read two ways.
 
     .venv/bin/python benchmarks/bench_reading_labels.py [--rounds 11,12] [--category implicit]
-        [--out results/reading-labels-qwen2.5-coder-1.5b.jsonl] [--resume [--rescore]] [--write]
+        [--out results/parts/reading-labels-qwen2.5-coder-1.5b.jsonl] [--resume [--rescore]] [--write]
 
 ``--rescore`` gives the kept paraphrases' two readings the odds the planner gives them today (the
 step's odds and the model's preference, :mod:`conceptbot.pipeline.goal.judge`) without planning them
@@ -35,6 +35,7 @@ from pathlib import Path
 from bench_paraphrase_plans import chosen_rows
 from conceptbot.bench.conformal_fit import reading_label
 from conceptbot.bench.grading import Task, load_tasks, task_scene
+from conceptbot.bench.provenance import stamp
 from conceptbot.core.config import load_settings
 from conceptbot.core.system import ASK_ALL, COVERAGES, PlannerSystem, SystemOptions
 from conceptbot.core.trace import ReadingOption
@@ -44,8 +45,13 @@ from conceptbot.pipeline.goal_planner.asking import reading_set
 from conceptbot.pipeline.goal_planner.conformal import conformal_threshold, shipped
 from conceptbot.systems import build_system
 
-OUT = Path("results/reading-labels-qwen2.5-coder-1.5b.jsonl")
+OUT = Path("results/parts/reading-labels-qwen2.5-coder-1.5b.jsonl")
 CONFORMAL = Path(__file__).resolve().parents[1] / "src" / "conceptbot" / "pipeline" / "conformal.json"
+
+
+def made() -> dict[str, object]:
+    """What made each record: version, commit of the code, model (conceptbot.bench.provenance)."""
+    return stamp({"llm": load_settings().llm})
 
 
 def label(system: PlannerSystem, task: Task, request: str) -> dict:
@@ -188,7 +194,7 @@ def main() -> None:
             found.update(label(system, tasks[row["task"]], row["request"]))
             found["seconds"] = round(time.perf_counter() - started, 1)
             results.append(found)
-            out.write(json.dumps(found) + "\n")
+            out.write(json.dumps({**found, **made()}) + "\n")
             out.flush()
             kinds = [r["kind"] for r in found["readings"]]
             print(

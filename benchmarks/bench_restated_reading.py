@@ -12,7 +12,7 @@ The rows go to ``--out`` (JSON lines) as they are read; a second run skips rows 
 read with the same prompt (its hash is part of each row's key), so a long run resumes. The model's
 calls go through the answer cache.
 
-    .venv/bin/python benchmarks/bench_restated_reading.py --rounds 9 10 --out results/restate/dev.jsonl
+    .venv/bin/python benchmarks/bench_restated_reading.py --rounds 9 10 --out results/parts/restate-dev.jsonl
 
 ``--changed test|dev`` instead lists the split's tasks whose goal the restated reading changes (with
 the graph's dish checks, and without them, as the no-graph ablation reads), so that only those are
@@ -24,7 +24,7 @@ how often the reading kept and the reading dropped are the gold, on the records 
 ``--write`` they go to ``src/conceptbot/pipeline/goal/reading_odds.json``, which the goal planner
 reads to decide whether to ask which reading was meant. No model is run.
 
-    .venv/bin/python benchmarks/bench_restated_reading.py --fit-odds --out results/restate/goal-set.jsonl
+    .venv/bin/python benchmarks/bench_restated_reading.py --fit-odds --out results/parts/goal-set.jsonl
 
 ``--fit-judge`` asks the model which of the two readings was meant (:mod:`conceptbot.pipeline.goal.judge`,
 through the answer cache) on every record that reads two ways with the gold one of them, fits how
@@ -33,7 +33,7 @@ ranking of the meant reading (AUC) with the steps' odds alone and with the prefe
 rounds and on the held-out rounds 11 and 12; with ``--write`` the weights go into the odds file's
 ``judge``.
 
-    .venv/bin/python benchmarks/bench_restated_reading.py --fit-judge --out results/restate/goal-set.jsonl
+    .venv/bin/python benchmarks/bench_restated_reading.py --fit-judge --out results/parts/goal-set.jsonl
 """
 
 from __future__ import annotations
@@ -51,6 +51,7 @@ from pathlib import Path
 from typing import Any
 
 from conceptbot.bench.grading import load_dev_scene, load_tasks, task_scene
+from conceptbot.bench.provenance import stamp
 from conceptbot.core.config import load_settings
 from conceptbot.models.registry import open_llm
 from conceptbot.pipeline import prompts
@@ -59,6 +60,11 @@ from conceptbot.pipeline.goal.aided import POLICIES, AidedReader, choose
 from conceptbot.pipeline.goal.doubt import JudgeWeights, Odds, describe, judged
 from conceptbot.pipeline.goal.judge import ReadingJudge
 from conceptbot.pipeline.goal.restate import Restater
+
+
+def made() -> dict[str, object]:
+    """What made each record: version, commit of the code, model (conceptbot.bench.provenance)."""
+    return stamp({"llm": load_settings().llm})
 
 
 def _sibling(name: str) -> Any:
@@ -119,7 +125,7 @@ def read_rows(rows: Sequence[dict[str, Any]], out: Path, reader: GoalReader, res
                 "seconds": round(time.perf_counter() - started, 2),
                 "model_calls": said.usage.calls,
             }
-            sink.write(json.dumps(record) + "\n")
+            sink.write(json.dumps({**record, **made()}) + "\n")
             sink.flush()
             print(f"\r{i}/{len(todo)} read", end="", file=sys.stderr, flush=True)
     if todo:

@@ -10,7 +10,7 @@ flagged on each round.
 
     .venv/bin/python benchmarks/bench_risk_set.py [--wordings shipped,plain] [--rounds tune,held]
 
-Scores are written per row and wording to ``--out`` (default ``results/risk/risk-MODEL.jsonl``); a
+Scores are written per row and wording to ``--out`` (default ``results/parts/risk-MODEL.jsonl``); a
 rerun goes on where it stopped and ``--report`` only reads that file.
 """
 
@@ -25,6 +25,7 @@ from collections import defaultdict
 from collections.abc import Callable
 from pathlib import Path
 
+from conceptbot.bench.provenance import stamp
 from conceptbot.core.config import load_settings
 from conceptbot.core.scene import Scene, SceneObject
 from conceptbot.pipeline.goal_planner.asking import move_words
@@ -34,6 +35,11 @@ from conceptbot.pipeline.hazards import is_person
 from conceptbot.systems import build_system
 
 SET = Path(__file__).resolve().parent / "data" / "risk_set.jsonl"
+
+
+def made() -> dict[str, object]:
+    """What made each record: version, commit of the code, model (conceptbot.bench.provenance)."""
+    return stamp({"llm": load_settings().llm})
 
 
 def load_rows(path: Path = SET) -> list[dict]:
@@ -139,7 +145,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     settings = load_settings()
     model = settings.llm.split(":", 1)[-1]
-    out: Path = args.out or Path(f"results/risk/risk-{model}.jsonl")
+    out: Path = args.out or Path(f"results/parts/risk-{model}.jsonl")
     out.parent.mkdir(parents=True, exist_ok=True)
     done = load_rows(out) if out.exists() else []
     if not args.report:
@@ -164,7 +170,7 @@ def main(argv: list[str] | None = None) -> int:
                         "wording": wording,
                         "score": round(calibrated, 4),
                     }
-                    sink.write(json.dumps(record) + "\n")
+                    sink.write(json.dumps({**record, **made()}) + "\n")
                     sink.flush()
                     done.append(record)
                     read += 1

@@ -12,7 +12,7 @@ Rows go to ``--out`` (JSON lines) as they are read; a second run skips rows alre
 same prompt, ``n``, temperature and seed (resume). The model's calls go through the answer cache.
 
     .venv/bin/python benchmarks/bench_sampled_reading.py --rounds 9 10 11 \
-        --out results/restate/sampled.jsonl
+        --out results/parts/sampled.jsonl
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ import bench_restated_reading as restated
 
 PROMPT: str = restated.PROMPT
 graph_reader = restated.graph_reader
-GREEDY = Path("results/restate/goal-set.jsonl")
+GREEDY = Path("results/parts/goal-set.jsonl")
 
 
 def _key(record: dict[str, Any], n: int, temperature: float, seed: int) -> str:

@@ -22,7 +22,7 @@ from conceptbot.bench.safeagentbench.dataset import dev_ids
 from conceptbot.core.errors import ConfigError
 from conceptbot.household.asking import judge_set
 
-RESULTS = Path("results/safeagentbench-v4-qwen2.5-coder-1.5b.jsonl")
+RESULTS = Path("results/parts/safeagentbench-v4-qwen2.5-coder-1.5b.jsonl")
 OUT = Path("src/conceptbot/household/judge_conformal.json")
 
 

@@ -227,7 +227,9 @@ def coverage(rows: list[dict]) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--readings", type=Path, default=Path("results/judgements-qwen2.5-coder-1.5b.jsonl"))
+    parser.add_argument(
+        "--readings", type=Path, default=Path("results/parts/judgements-qwen2.5-coder-1.5b.jsonl")
+    )
     parser.add_argument("--write", action="store_true", help=f"write the fitted weights to {WEIGHTS}")
     parser.add_argument("--errors", action="store_true", help="print the combination's held-out errors")
     parser.add_argument("--conformal", action="store_true", help="calibrate conformal prediction too")

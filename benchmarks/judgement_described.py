@@ -40,7 +40,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--limit", type=int, default=0, help="read at most this many new rows")
     args = parser.parse_args(argv)
     _, plain_decider, model = deciders()
-    out: Path = args.out or Path(f"results/judgements-described-{model}.jsonl")
+    out: Path = args.out or Path(f"results/parts/judgements-described-{model}.jsonl")
     done = {key(r) for r in load_rows(out)} if out.exists() else set()
     kinds = {k for k in args.kinds.split(",") if k}
     groups: dict[tuple[str, str], list[dict]] = defaultdict(list)

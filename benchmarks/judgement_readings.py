@@ -12,7 +12,7 @@ Rows sharing a request and a criterion are asked together (one calibration quest
 Results are appended as they come to the output file, which is read back on a rerun: a stopped run
 goes on where it stopped (the model's answers are also in the response cache).
 
-    .venv/bin/python benchmarks/judgement_readings.py [--out results/judgements-MODEL.jsonl] [--limit N]
+    .venv/bin/python benchmarks/judgement_readings.py [--out results/parts/judgements-MODEL.jsonl] [--limit N]
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ import time
 from collections import defaultdict
 from pathlib import Path
 
+from conceptbot.bench.provenance import stamp
 from conceptbot.core.config import load_settings
 from conceptbot.core.scene import Scene
 from conceptbot.pipeline.goal_planner.decide import Decider
@@ -32,6 +33,11 @@ from conceptbot.pipeline.goal_planner.evidence import criterion_terms
 from conceptbot.systems import build_system
 
 SET = Path(os.environ.get("JUDGEMENT_SET", "benchmarks/data/judgement_set.jsonl"))
+
+
+def made() -> dict[str, object]:
+    """What made each record: version, commit of the code, model (conceptbot.bench.provenance)."""
+    return stamp({"llm": load_settings().llm})
 
 
 def key(row: dict) -> tuple[str, str, str]:
@@ -61,7 +67,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--limit", type=int, default=0, help="read at most this many new rows")
     args = parser.parse_args(argv)
     graph_decider, plain_decider, model = deciders()
-    out: Path = args.out or Path(f"results/judgements-{model}.jsonl")
+    out: Path = args.out or Path(f"results/parts/judgements-{model}.jsonl")
     done = {key(r) for r in load_rows(out)} if out.exists() else set()
     groups: dict[tuple[str, str], list[dict]] = defaultdict(list)
     for row in load_rows():
@@ -92,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
                     "p_plain": round(p.p_yes, 4),
                     "facts": list(m.facts),
                 }
-                sink.write(json.dumps(record) + "\n")
+                sink.write(json.dumps({**record, **made()}) + "\n")
             sink.flush()
             read += len(rows)
             rate = (time.perf_counter() - started) / read

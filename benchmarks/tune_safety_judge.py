@@ -23,7 +23,7 @@ on dev, the grounded plain plans).
 Rows go to ``--out`` (JSONL, resumable: a task already there is not asked again).
 
 Run: .venv/bin/python benchmarks/tune_safety_judge.py --variants full none other_examples ordinary \
-         --planner-results results/safeagentbench-v2-qwen2.5-coder-1.5b.jsonl
+         --planner-results results/parts/safeagentbench-v4-qwen2.5-coder-1.5b.jsonl
 """
 
 from __future__ import annotations
@@ -114,7 +114,7 @@ def main() -> None:
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--limit", type=int, default=None, help="first N tasks of each suite")
-    parser.add_argument("--out", type=Path, default=Path("results/dev/safety-judge-dev-fewshot.jsonl"))
+    parser.add_argument("--out", type=Path, default=Path("results/parts/safety-judge-dev-fewshot.jsonl"))
     parser.add_argument("--plan-success", type=float, default=0.6)
     parser.add_argument("--planner-results", type=Path, default=None, help="plain planner's dev results")
     parser.add_argument(

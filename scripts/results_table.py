@@ -1,0 +1,218 @@
+"""Write the README's results table from the committed reports (between two marker lines).
+
+    .venv/bin/python scripts/results_table.py          # rewrite the tables of README.md, results/README.md
+    .venv/bin/python scripts/results_table.py --check  # exit 1 when either is stale
+
+The reports are the files ``conceptbot bench report``, ``conceptbot safebench report`` and
+``benchmarks/bench_asking.py --write`` make (listed in ``results/README.md``); a report that is not
+there yet leaves its table out. ``tests/test_results_table.py`` fails when the README differs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+INDEX = ROOT / "results" / "README.md"
+START, END = "<!-- results-table:start -->", "<!-- results-table:end -->"
+PAPER47 = Path("results/paper47/report.json")
+DEV = Path("results/dev/report.json")
+SAFETY = Path("results/safeagentbench/safeagentbench-test.json")
+ASKING = Path("results/asking/report.json")
+CATEGORIES = ("unambiguous", "ambiguous", "implicit", "risk", "materials", "toxic", "all")
+NAMES = {"saycan": "SayCan", "paper": "paper's pipeline", "nokg": "no graph", "conceptbot": "**ConceptBot**"}
+PAPER = {"saycan": "SayCan", "conceptbot": "ConceptBot"}
+
+
+def _load(root: Path, path: Path) -> dict[str, Any] | None:
+    file = root / path
+    return json.loads(file.read_text(encoding="utf-8")) if file.is_file() else None
+
+
+def _rate(cell: list[float] | None) -> str:
+    """``[percent, n]`` as ``57% (27/47)``."""
+    if not cell:
+        return "—"
+    percent, n = cell
+    return f"{percent:.0f}% ({round(percent * n / 100)}/{n})"
+
+
+def _commits(report: dict[str, Any]) -> str:
+    newest = sorted({v[0][:7] for v in report.get("commits", {}).values() if v})
+    return ", ".join(newest) or "unknown"
+
+
+def _tasks_table(report: dict[str, Any], title: str, source: Path, paper: bool) -> list[str]:
+    """Success per category and configuration, then median seconds and tokens per plan."""
+    configs = [c for c in NAMES if c in report["configs"]]
+    head = [NAMES[c] for c in configs] + (["the paper (gpt-4o-mini): SayCan / ConceptBot"] if paper else [])
+    lines = [
+        f"**{title}** ({', '.join(report['models'])}; code {_commits(report)}; [{source}]({source}))",
+        "",
+        "| | " + " | ".join(head) + " |",
+        "|---|" + "---|" * len(head),
+    ]
+    from_paper = _paper_figures() if paper else {}
+    for category in CATEGORIES:
+        row = [_rate(report["success"][c].get(category)) for c in configs]
+        if paper:
+            ours = [from_paper.get(c, {}).get(category) for c in PAPER]
+            row.append(" / ".join("—" if v is None else f"{v:.0f}%" for v in ours))
+        name = "**all**" if category == "all" else category
+        lines.append(f"| {name} | " + " | ".join(row) + " |")
+    usage = (
+        ("median_seconds", "median s per plan", ".1f"),
+        ("median_tokens", "median tokens per plan", ".0f"),
+    )
+    for key, label, form in usage:
+        row = [format(report["usage"].get(c, {}).get(key, 0.0), form) for c in configs]
+        lines.append(f"| {label} | " + " | ".join(row) + (" | |" if paper else " |"))
+    return [*lines, ""]
+
+
+def _paper_figures() -> dict[str, dict[str, float]]:
+    """The paper's published success rates (bench.grading.PAPER_RESULTS), without importing the
+    package: the table is rendered from the reports alone."""
+    sys.path.insert(0, str(ROOT / "src"))
+    from conceptbot.bench.grading import PAPER_RESULTS
+
+    return PAPER_RESULTS
+
+
+def _safety_table(report: dict[str, Any], source: Path) -> list[str]:
+    configs = [c for c in ("plain", "conceptbot") if c in report["configs"]]
+    rows = (
+        ("safe tasks done", "safe_success"),
+        ("hazardous tasks refused", "unsafe_rejection"),
+        ("safe tasks refused", "false_rejection"),
+    )
+    lines = [
+        f"**SafeAgentBench, test split** ({', '.join(report['models'])}; code {_commits(report)}; "
+        f"[{source}]({source}))",
+        "",
+        "| | " + " | ".join(f"`{c}`" for c in configs) + " |",
+        "|---|" + "---|" * len(configs),
+    ]
+    for label, key in rows:
+        lines.append(f"| {label} | " + " | ".join(_rate(report["rates"][c][key]) for c in configs) + " |")
+    harmonic = [f"{report['rates'][c]['harmonic_mean'] or 0:.0f}%" for c in configs]
+    lines.append("| **harmonic mean** | " + " | ".join(harmonic) + " |")
+    seconds = [f"{(report['rates'][c]['seconds'] or [0])[0]:.1f}" for c in configs]
+    tokens = [f"{(report['rates'][c]['tokens'] or [0])[0]:.0f}" for c in configs]
+    lines.append("| median s per plan | " + " | ".join(seconds) + " |")
+    lines.append("| mean tokens per plan | " + " | ".join(tokens) + " |")
+    return [*lines, ""]
+
+
+def _asking_table(report: dict[str, Any], source: Path) -> list[str]:
+    rows = sorted(report.get("asking", []), key=lambda r: (r["split"] != "test", r["system"], r["coverage"]))
+    lines = [
+        f"**Asking when unsure** (answers from the gold; [{source}]({source}))",
+        "",
+        "| tasks | system | coverage | done without asking | done with the answers | tasks with a question |",
+        "|---|---|---|---|---|---|",
+    ]
+    split_names = {"test": "the paper's 47", "dev": "dev"}
+    for r in rows:
+        lines.append(
+            f"| {split_names.get(r['split'], r['split'])} | {r['system']} | {r['coverage']} | "
+            f"{r['success_without_questions']:.0f}% | {r['success']:.0f}% | {r['help_rate']:.0f}% |"
+        )
+    return [*lines, ""]
+
+
+def render(root: Path = ROOT) -> str:
+    """The table (Markdown) from the reports under ``root``."""
+    parts: list[str] = []
+    if (found := _load(root, PAPER47)) is not None:
+        parts += _tasks_table(found, "The paper's 47 tasks", PAPER47.with_name("report.md"), paper=True)
+    if (found := _load(root, DEV)) is not None:
+        title = "Dev tasks (our own, in new scenes; tuned on)"
+        parts += _tasks_table(found, title, DEV.with_name("report.md"), paper=False)
+    if (found := _load(root, ASKING)) is not None:
+        parts += _asking_table(found, ASKING)
+    if (found := _load(root, SAFETY)) is not None:
+        parts += _safety_table(found, SAFETY.with_suffix(".md"))
+    return "\n".join(parts).rstrip("\n") + "\n" if parts else "No reports yet.\n"
+
+
+#: Each report: what it measures, its file, and the one command that regenerates it.
+COMMANDS = (
+    (
+        "the paper's 47 tasks: SayCan, the paper's pipeline, no graph, ConceptBot",
+        PAPER47,
+        "conceptbot --no-cache bench run -c saycan -c nokg -c conceptbot && conceptbot bench run -c paper"
+        " && conceptbot bench report results/paper47/records.jsonl",
+    ),
+    (
+        "the dev tasks (ours, new scenes): SayCan, no graph, ConceptBot",
+        DEV,
+        "conceptbot --no-cache bench run --split dev -c saycan -c nokg -c conceptbot"
+        " && conceptbot bench report results/dev/records.jsonl",
+    ),
+    (
+        "asking when unsure, dev and the 47, coverage 0.8 / 0.9 / 0.95",
+        ASKING,
+        "python benchmarks/bench_asking.py --split test --systems conceptbot --coverage 0.8 --coverage 0.9"
+        " --coverage 0.95 --write --resume (then --split dev)",
+    ),
+    (
+        "SafeAgentBench test split: plain, ConceptBot",
+        SAFETY,
+        "conceptbot safebench run --split test -c plain -c conceptbot"
+        " && conceptbot safebench report results/safeagentbench/records.jsonl --split test",
+    ),
+)
+
+
+def render_index(root: Path = ROOT) -> str:
+    """The index of ``results/README.md``: each report, its file, its commit, its command."""
+    lines = ["| figures | report | commit of the code | command |", "|---|---|---|---|"]
+    for what, path, command in COMMANDS:
+        found = _load(root, path)
+        commit = _commits(found) if found is not None else "not run yet"
+        lines.append(f"| {what} | `{path}` | {commit} | `{command}` |")
+    return "\n".join(lines) + "\n"
+
+
+def replaced(readme: str, table: str) -> str:
+    """``readme`` with ``table`` between the markers (README.md's or results/README.md's).
+
+    Raises:
+        ValueError: The markers are missing or out of order.
+    """
+    start, end = readme.find(START), readme.find(END)
+    if start < 0 or end < start:
+        raise ValueError(f"README.md needs the lines {START} and {END}, in that order")
+    return readme[: start + len(START)] + "\n" + table + readme[end:]
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--check", action="store_true", help="exit 1 when README.md's table is stale")
+    args = parser.parse_args()
+    stale = 0
+    for path, table in ((README, render()), (INDEX, render_index())):
+        text = path.read_text(encoding="utf-8")
+        try:
+            new = replaced(text, table)
+        except ValueError as exc:
+            print(f"{path.relative_to(ROOT)}: {exc}", file=sys.stderr)
+            return 2
+        if args.check:
+            if new != text:
+                print(f"{path.relative_to(ROOT)}: the table differs from the reports: run {__file__}")
+                stale = 1
+            continue
+        path.write_text(new, encoding="utf-8")
+        print(f"{path.relative_to(ROOT)}: table written")
+    return stale
+
+
+if __name__ == "__main__":
+    sys.exit(main())
