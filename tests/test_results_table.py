@@ -1,0 +1,46 @@
+"""The README's results table is what the committed reports say (scripts/results_table.py)."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+from pathlib import Path
+from types import ModuleType
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _script() -> ModuleType:
+    spec = importlib.util.spec_from_file_location("results_table", ROOT / "scripts" / "results_table.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_readme_table_is_the_one_the_reports_give() -> None:
+    table = _script()
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert table.replaced(readme, table.render()) == readme, "run scripts/results_table.py"
+
+
+def test_the_table_follows_a_report_and_a_missing_marker_is_an_error(tmp_path: Path) -> None:
+    table = _script()
+    report = {
+        "configs": ["saycan", "conceptbot"],
+        "models": ["llamacpp:m"],
+        "commits": {"saycan": ["a" * 40], "conceptbot": ["a" * 40]},
+        "success": {"saycan": {"all": [25.0, 4]}, "conceptbot": {"all": [75.0, 4], "risk": [50.0, 2]}},
+        "usage": {"conceptbot": {"median_seconds": 12.34, "median_tokens": 900}},
+    }
+    (tmp_path / "results" / "dev").mkdir(parents=True)
+    (tmp_path / "results" / "dev" / "report.json").write_text(json.dumps(report))
+    rendered = table.render(tmp_path)
+    assert "| **all** | 25% (1/4) | 75% (3/4) |" in rendered and "| risk | — | 50% (1/2) |" in rendered
+    assert "| median s per plan | 0.0 | 12.3 |" in rendered and "code aaaaaaa" in rendered
+    before = f"intro\n{table.START}\nold\n{table.END}\nrest\n"
+    assert table.replaced(before, rendered) == f"intro\n{table.START}\n{rendered}{table.END}\nrest\n"
+    with pytest.raises(ValueError, match="results-table:start"):
+        table.replaced("no markers", rendered)
