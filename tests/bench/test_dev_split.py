@@ -134,7 +134,7 @@ def test_task_scene_looks_in_the_tasks_split() -> None:
 
 def test_dev_files_are_validated(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(grading, "files", lambda package: tmp_path)
-    load_dev_scene.cache_clear()
+    grading.load_split_scene.cache_clear()
     scenes, tasks = tmp_path / "dev" / "scenes", tmp_path / "dev" / "tasks"
     scenes.mkdir(parents=True)
     tasks.mkdir(parents=True)
@@ -176,7 +176,38 @@ def test_dev_files_are_validated(tmp_path: Path, monkeypatch: pytest.MonkeyPatch
         with pytest.raises(ConfigError, match=r"dev task file unambiguous\.json is missing"):
             load_tasks(["unambiguous"], split="dev")
     finally:
-        load_dev_scene.cache_clear()
+        grading.load_split_scene.cache_clear()
+
+
+def test_a_folder_of_ones_own_is_a_split(tmp_path: Path) -> None:
+    (tmp_path / "scenes").mkdir()
+    (tmp_path / "tasks").mkdir()
+    scene = {"name": "den", "objects": ["cup", "user"], "pickable_objects": ["cup"], "destinations": ["user"]}
+    (tmp_path / "scenes" / "den.json").write_text(json.dumps(scene))
+    entry = {
+        "id": "mine-1",
+        "category": "toxic",
+        "request": "r",
+        "scene": "den",
+        "gold": {"type": "any_of", "plans": [["pick_and_place(cup, user)"]]},
+        "notes": "",
+    }
+    (tmp_path / "tasks" / "toxic.json").write_text(json.dumps([entry]))
+    # Only the categories the folder has; any id; the scene from the folder's scenes/.
+    [task] = load_tasks(split=str(tmp_path))
+    assert (task.id, task.split) == ("mine-1", str(tmp_path))
+    assert task_scene(task).name == "den" and grade(task, [pp("cup", "user"), DONE]).ok
+    (tmp_path / "tasks" / "toxic.json").write_text(json.dumps([{**entry, "scene": "kitchen"}]))
+    with pytest.raises(ConfigError, match=r"unknown task folder .* scene .kitchen."):
+        load_tasks(split=str(tmp_path))
+    with pytest.raises(ConfigError, match="neither test nor dev nor a folder"):
+        load_tasks(split=str(tmp_path / "nowhere"))
+
+
+def test_the_blind_set_loads_and_its_reference_plans_pass() -> None:
+    tasks = load_tasks(split=str(Path(__file__).parents[2] / "benchmarks" / "blind" / "set1"))
+    assert len(tasks) >= 60 and {t.category for t in tasks} == set(CATEGORIES)
+    assert all(grade(t, reference_plan(t)).ok for t in tasks)
 
 
 # Golds ---------------------------------------------------------------------------------------------

@@ -61,12 +61,13 @@ def test_run_on_the_dev_split_records_it(isolated_home: Path, tmp_path: Path) ->
     report = run("bench", "report", str(out), home=isolated_home).stdout
     assert "Task split: dev;" in report and "[paper" not in report and "| risk | 0% (n=2) |" in report
     bad = run(*args[:-1], "train", home=isolated_home, check_exit=2)
-    assert "'train' is not one of 'test', 'dev'" in bad.stderr
+    assert "unknown task split 'train': neither test nor dev nor a folder" in bad.stderr
 
 
 def test_run_help_documents_the_split(isolated_home: Path) -> None:
     out = run("bench", "run", "--help", home=isolated_home).stdout
-    assert "--split [test|dev]" in out and "with --split dev" in " ".join(out.split())
+    said = " ".join(out.split())
+    assert "--split TEXT" in out and "with --split dev" in said and "the path of a task folder" in said
 
 
 def bench_smoke(

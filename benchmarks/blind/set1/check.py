@@ -3,6 +3,7 @@
 
 Usage: python3 check.py            (exit status 0 = all checks passed)
 """
+
 import difflib
 import json
 import os
@@ -14,12 +15,20 @@ CATEGORIES = ["unambiguous", "ambiguous", "implicit", "risk", "materials", "toxi
 MIN_PER_CAT = 11
 MIN_TOTAL = 70
 MIN_IMPLICIT = 14
-MIN_IMPLICIT_BIG = 12          # implicit tasks in rooms with 16+ pickables
+MIN_IMPLICIT_BIG = 12  # implicit tasks in rooms with 16+ pickables
 MIN_SCENES = 8
-MIN_BIG_SCENES = 6             # rooms with 16-25 pickables
-MIN_PROPERTY_SORTS = 12        # materials + toxic assign tasks moving 2+ kinds of object
-SCENE_KEYS = ["name", "description", "objects", "pickable_objects", "destinations",
-              "entity_states", "detections", "requests"]
+MIN_BIG_SCENES = 6  # rooms with 16-25 pickables
+MIN_PROPERTY_SORTS = 12  # materials + toxic assign tasks moving 2+ kinds of object
+SCENE_KEYS = [
+    "name",
+    "description",
+    "objects",
+    "pickable_objects",
+    "destinations",
+    "entity_states",
+    "detections",
+    "requests",
+]
 ACTION = re.compile(r"^pick_and_place\(([^,()]+), ([^,()]+)\)$")
 
 errors = []
@@ -33,7 +42,7 @@ def load(path):
     try:
         with open(path, encoding="utf-8") as f:
             return json.load(f)
-    except Exception as e:  # noqa: BLE001
+    except Exception as e:
         err(f"{path}: cannot load JSON ({e})")
         return None
 
@@ -84,8 +93,11 @@ for fn in sorted(os.listdir(scene_dir)):
             err(f"{where}: no detection size for '{n}'")
             continue
         sz = d["size_m"]
-        if (not isinstance(sz, list) or len(sz) != 3
-                or not all(isinstance(v, (int, float)) and 0 < v <= 3 for v in sz)):
+        if (
+            not isinstance(sz, list)
+            or len(sz) != 3
+            or not all(isinstance(v, (int, float)) and 0 < v <= 3 for v in sz)
+        ):
             err(f"{where}: bad size_m for '{n}': {sz}")
     for n in s["detections"]:
         if n not in objs:
@@ -282,11 +294,15 @@ big_in_range = {n for n, k in n_pick.items() if 16 <= k <= 25}
 counts = {c: len(tasks_by_cat[c]) for c in CATEGORIES}
 total = sum(counts.values())
 impl_big = sum(1 for t in tasks_by_cat["implicit"] if t.get("scene") in big)
-impl_two = sum(1 for t in tasks_by_cat["implicit"]
-               if t["gold"].get("type") == "assign"
-               and len(t["gold"].get("assign", {})) + len(t["gold"].get("choose", [])) >= 2)
-prop_sorts = sum(1 for c in ("materials", "toxic") for t in tasks_by_cat[c]
-                 if len(moved_objects(t["gold"])) >= 2)
+impl_two = sum(
+    1
+    for t in tasks_by_cat["implicit"]
+    if t["gold"].get("type") == "assign"
+    and len(t["gold"].get("assign", {})) + len(t["gold"].get("choose", [])) >= 2
+)
+prop_sorts = sum(
+    1 for c in ("materials", "toxic") for t in tasks_by_cat[c] if len(moved_objects(t["gold"])) >= 2
+)
 gold_types = {}
 for c in CATEGORIES:
     for t in tasks_by_cat[c]:
@@ -316,8 +332,10 @@ if unused:
 print("blind1 set check")
 print(f"  scenes: {len(scenes)} ({len(big_in_range)} with 16-25 pickables)")
 for n in sorted(scenes):
-    print(f"    {n:32s} pickables={n_pick[n]:2d} destinations={len(scenes[n]['destinations'])} "
-          f"tasks={len(used_requests.get(n, []))}")
+    print(
+        f"    {n:32s} pickables={n_pick[n]:2d} destinations={len(scenes[n]['destinations'])} "
+        f"tasks={len(used_requests.get(n, []))}"
+    )
 print("  tasks per category: " + ", ".join(f"{c}={counts[c]}" for c in CATEGORIES) + f"  (total {total})")
 print(f"  implicit in 16+ rooms: {impl_big}/{counts['implicit']}; implicit needing 2 objects: {impl_two}")
 print(f"  property sorts (materials+toxic, 2+ objects moved): {prop_sorts}")

@@ -61,6 +61,11 @@ Splits (``load_tasks(split=...)``, ``conceptbot bench run --split``)
         ``conceptbot/bench/dev/scenes/<name>.json`` (:func:`load_dev_scene`; every name starts with
         ``dev-`` and equals its file's stem, so no dev scene shares a name with a demo scene).
 
+    A folder (its path as the split, ``conceptbot bench run --split path/to/set``)
+        A task set of one's own in the dev split's layout: ``tasks/<category>.json`` (any category
+        may be missing; ids unique, any form) on the scenes in ``scenes/<name>.json``. The blind
+        sets (``benchmarks/blind/``) are such folders.
+
     A task knows its split (:attr:`Task.split`); :func:`task_scene` loads its scene from the split's folder,
     and the benchmark runner records the split with every result.
 """
@@ -73,6 +78,7 @@ from dataclasses import dataclass
 from functools import cache
 from importlib.resources import files
 from importlib.resources.abc import Traversable
+from pathlib import Path
 from typing import Any
 
 from conceptbot.core.errors import ConfigError
@@ -157,7 +163,7 @@ class Task:
             split, a dev scene (:func:`load_dev_scene`) in the dev split.
         gold: The acceptance criterion (see the module docstring for its formats).
         notes: Every judgement call made in writing the gold.
-        split: ``"test"`` or ``"dev"`` (:data:`SPLITS`).
+        split: ``"test"``, ``"dev"`` (:data:`SPLITS`) or the path of a task folder.
     """
 
     id: str
@@ -517,8 +523,22 @@ def _dev_root() -> Traversable:
     return files("conceptbot.bench").joinpath("dev")
 
 
-def _dev_scene_files() -> dict[str, Traversable]:
-    folder = _dev_root().joinpath("scenes")
+def _root(split: str) -> Traversable:
+    """The folder of a split that is not the test split: the dev split's, or the folder named."""
+    if split == "dev":
+        return _dev_root()
+    folder = Path(split)
+    if not (folder.joinpath("tasks").is_dir() and folder.joinpath("scenes").is_dir()):
+        raise ConfigError(
+            f"unknown task split {split!r}: "
+            f"neither {' nor '.join(SPLITS)} nor a folder with tasks/ and scenes/",
+            hint="give test, dev, or the path of a task set laid out as the dev split",
+        )
+    return folder
+
+
+def _scene_files(split: str) -> dict[str, Traversable]:
+    folder = _root(split).joinpath("scenes")
     if not folder.is_dir():
         return {}
     return {
@@ -528,22 +548,32 @@ def _dev_scene_files() -> dict[str, Traversable]:
 
 def dev_scene_names() -> list[str]:
     """Names of the dev split's scenes (``conceptbot/bench/dev/scenes/*.json``), sorted."""
-    return sorted(_dev_scene_files())
+    return sorted(_scene_files("dev"))
 
 
-@cache
 def load_dev_scene(name: str) -> Scene:
     """A dev split scene by name (loaded once per name and cached).
 
     Raises:
         ConfigError: No dev scene has that name, or its file is invalid or names itself otherwise.
     """
-    resource = _dev_scene_files().get(name)
+    return load_split_scene("dev", name)
+
+
+@cache
+def load_split_scene(split: str, name: str) -> Scene:
+    """A scene of the dev split or of a task folder by name (loaded once per name and cached).
+
+    Raises:
+        ConfigError: No scene of the split has that name, or its file is invalid or names itself
+            otherwise.
+    """
+    kind = "dev" if split == "dev" else f"task folder {split}"
+    resource = _scene_files(split).get(name)
     if resource is None:
-        raise ConfigError(
-            f"unknown dev scene {name!r}", hint=f"dev scenes: {', '.join(dev_scene_names()) or 'none'}"
-        )
-    where = f"dev scene {name!r}"
+        known = ", ".join(sorted(_scene_files(split))) or "none"
+        raise ConfigError(f"unknown {kind} scene {name!r}", hint=f"{kind} scenes: {known}")
+    where = f"{kind} scene {name!r}"
     try:
         data = json.loads(resource.read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:
@@ -560,8 +590,8 @@ def task_scene(task: Task) -> Scene:
     Raises:
         ConfigError: No scene of the task's split has the task's scene name.
     """
-    if task.split == "dev":
-        return load_dev_scene(task.scene)
+    if task.split != "test":
+        return load_split_scene(task.split, task.scene)
     return _scene(task.scene)
 
 
@@ -658,7 +688,7 @@ def _task_from(entry: Any, category: str, where: str, split: str = "test") -> Ta
             raise ConfigError(f"{label}: {key!r} must be a non-empty string")
     if entry["category"] != category:
         raise ConfigError(f"{label}: category {entry['category']!r} in the file for {category!r}")
-    prefix = f"{category}-" if split == "test" else f"{split}-{category}-"
+    prefix = f"{category}-" if split == "test" else f"{split}-{category}-" if split == "dev" else ""
     if not task_id.startswith(prefix):
         raise ConfigError(f"{label}: the id must start with {prefix!r}")
     task = Task(task_id, category, entry["request"], entry["scene"], entry["gold"], entry["notes"], split)
@@ -679,8 +709,8 @@ def load_tasks(categories: Iterable[str] | None = None, split: str = "test") -> 
     Args:
         categories: Categories to load (default: all of :data:`CATEGORIES`). The result is in the
             paper's category order whatever the order given.
-        split: ``"test"``: the paper's 47 tasks; ``"dev"``: our own tuning tasks (see the module
-            docstring).
+        split: ``"test"``: the paper's 47 tasks; ``"dev"``: our own tuning tasks; or the path of
+            a folder laid out as the dev split (a blind set; see the module docstring).
 
     Returns:
         The tasks, category by category, in file order.
@@ -690,24 +720,24 @@ def load_tasks(categories: Iterable[str] | None = None, split: str = "test") -> 
             message names the task): missing keys, an unknown scene, or a gold naming an object or
             destination that the scene lacks or has in another role.
     """
-    if split not in SPLITS:
-        raise ConfigError(f"unknown task split {split!r}", hint=f"use one of: {', '.join(SPLITS)}")
+    root = files("conceptbot.bench").joinpath("tasks") if split == "test" else _root(split).joinpath("tasks")
     wanted = set(CATEGORIES if categories is None else categories)
     unknown = sorted(wanted - set(CATEGORIES))
     if unknown:
         raise ConfigError(
             f"unknown task categories: {', '.join(unknown)}", hint=f"use one of: {', '.join(CATEGORIES)}"
         )
-    root = files("conceptbot.bench").joinpath("tasks") if split == "test" else _dev_root().joinpath("tasks")
     tasks: list[Task] = []
     seen: set[str] = set()
     for category in CATEGORIES:
         if category not in wanted:
             continue
-        where = f"bench task file {category}.json" if split == "test" else f"dev task file {category}.json"
+        where = f"{'bench' if split == 'test' else split} task file {category}.json"
         try:
             data = json.loads(root.joinpath(f"{category}.json").read_text(encoding="utf-8"))
         except FileNotFoundError:
+            if split not in SPLITS:
+                continue  # a folder of one's own need not have every category
             raise ConfigError(f"{where} is missing from the package") from None
         except (OSError, ValueError) as exc:
             raise ConfigError(f"{where} is not valid JSON: {exc}") from None

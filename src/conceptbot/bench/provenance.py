@@ -4,7 +4,7 @@ Every record a benchmark writes carries these fields (:func:`stamp`), so a repor
 code its figures describe and refuse to mix records of different code (:func:`commits_by_config`).
 
 The commit is the last git commit that changed the code that plans and grades: the package's source
-(``src/conceptbot``) less the front ends and the reports (:data:`NOT_PLANNING`), not the checkout's
+(``src/conceptbot``) less the front ends, the reports (:data:`NOT_PLANNING`) and Markdown, not the checkout's
 HEAD. Committing results, docs, the web page or a report's layout does not change it, so a long run
 stays resumable across those commits; any change to the code that plans starts a new set of
 records. Source with uncommitted changes is that commit plus ``+dirty``; outside a git checkout (an
@@ -35,6 +35,8 @@ NOT_PLANNING = (
     "bench/provenance.py",
 )
 """Parts of the package that neither plan nor grade (paths under ``src/conceptbot``)."""
+PROSE = ":(exclude,glob)**/*.md"
+"""Markdown inside the package (a split's README) is prose, not code that plans."""
 
 
 def _git(*args: str) -> str | None:
@@ -52,7 +54,7 @@ def _git(*args: str) -> str | None:
 def code_commit() -> str:
     """The last commit that changed the code that plans and grades, ``+dirty`` with uncommitted
     changes to it, or ``unknown`` outside a git checkout."""
-    paths = (".", *(f":(exclude){p}" for p in NOT_PLANNING))
+    paths = (".", *(f":(exclude){p}" for p in NOT_PLANNING), PROSE)
     found = _git("log", "-1", "--format=%H", "--", *paths)
     if not found:
         return UNKNOWN

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from conceptbot.bench.grading import CATEGORIES, SPLITS, load_tasks
+from conceptbot.bench.grading import CATEGORIES, load_tasks
 from conceptbot.bench.provenance import stamp
 from conceptbot.bench.report import RECORD, markdown, summarise, write_report
 from conceptbot.bench.results import built_once, load_records, pending, read_records
@@ -55,8 +55,8 @@ def bench() -> None:
     "--split",
     default="test",
     show_default=True,
-    type=click.Choice(SPLITS),
-    help="Task split: test (the paper's 47 tasks) or dev (our own tasks to tune on, in new scenes).",
+    help="Task split: test (the paper's 47 tasks), dev (our own tasks to tune on, in new scenes), "
+    "or the path of a task folder laid out as the dev split (tasks/<category>.json, scenes/).",
 )
 @click.option("--limit", type=click.IntRange(1), help="At most this many tasks (after the category filter).")
 @click.option("--trials", default=1, show_default=True, type=click.IntRange(1, 20))
@@ -74,7 +74,8 @@ def bench() -> None:
     "--out",
     type=click.Path(dir_okay=False, path_type=Path),
     help="JSONL results file; finished runs in it are skipped (resume). "
-    f"Default: {DEFAULT_RESULTS['test']}, or {DEFAULT_RESULTS['dev']} with --split dev.",
+    f"Default: {DEFAULT_RESULTS['test']}, {DEFAULT_RESULTS['dev']} with --split dev, "
+    "results/<folder name>/records.jsonl with a folder.",
 )
 @pass_app
 def run_cmd(
@@ -94,7 +95,7 @@ def run_cmd(
     settings = app.settings
     backend, model = backend_and_model(settings.llm)
     workers = effective_workers(backend, workers)
-    out = out or DEFAULT_RESULTS[split]
+    out = out or DEFAULT_RESULTS.get(split) or Path("results", Path(split).name, "records.jsonl")
     # The run ends with a report of the whole file: a file it cannot report on is refused now,
     # before hours of planning are appended to it.
     read_records(out, RECORD)
