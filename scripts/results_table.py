@@ -24,6 +24,13 @@ PAPER47 = Path("results/paper47/report.json")
 DEV = Path("results/dev/report.json")
 SAFETY = Path("results/safeagentbench/safeagentbench-test.json")
 ASKING = Path("results/asking/report.json")
+BLIND1 = Path("results/blind1/report.json")
+TASK_REPORTS = (
+    (PAPER47, "the paper's 47"),
+    (BLIND1, "blind set 1"),
+    (DEV, "dev (tuned on)"),
+)
+"""The task benchmarks' reports and their names in the table."""
 CATEGORIES = ("unambiguous", "ambiguous", "implicit", "risk", "materials", "toxic", "all")
 NAMES = {"saycan": "SayCan", "paper": "paper's pipeline", "nokg": "no graph", "conceptbot": "**ConceptBot**"}
 PAPER = {"saycan": "SayCan", "conceptbot": "ConceptBot"}
@@ -47,31 +54,35 @@ def _commits(report: dict[str, Any]) -> str:
     return ", ".join(newest) or "unknown"
 
 
-def _tasks_table(report: dict[str, Any], title: str, source: Path, paper: bool) -> list[str]:
-    """Success per category and configuration, then median seconds and tokens per plan."""
-    configs = [c for c in NAMES if c in report["configs"]]
-    head = [NAMES[c] for c in configs] + (["the paper (gpt-4o-mini): SayCan / ConceptBot"] if paper else [])
+def _tasks_rows(report: dict[str, Any], title: str, source: Path, paper: bool) -> list[str]:
+    """One row per configuration: success per category, then median seconds and tokens per plan;
+    under the paper's 47, the paper's published figures."""
+    rows = []
+    where = f"[{title}]({source}) (code {_commits(report)})"
+    for config in (c for c in NAMES if c in report["configs"]):
+        cells = [_rate(report["success"][config].get(category)) for category in CATEGORIES]
+        usage = report["usage"].get(config, {})
+        cells += [f"{usage.get('median_seconds', 0.0):.1f}", f"{usage.get('median_tokens', 0.0):.0f}"]
+        rows.append(f"| {where} | {NAMES[config]} | ".replace("|  |", "| |") + " | ".join(cells) + " |")
+        where = ""
+    for config, published in (_paper_figures() if paper else {}).items():
+        cells = [f"{published[c]:.0f}%" if c in published else "—" for c in CATEGORIES]
+        rows.append(f"| | {PAPER[config]} in the paper (gpt-4o-mini) | " + " | ".join(cells) + " | | |")
+    return rows
+
+
+def _tasks_table(found: list[tuple[dict[str, Any], str, Path, bool]]) -> list[str]:
+    """The task benchmarks in one table."""
+    models = sorted({m for report, *_ in found for m in report["models"]})
+    head = ("tasks", "system", *(c if c != "all" else "**all**" for c in CATEGORIES), "s/plan", "tokens/plan")
     lines = [
-        f"**{title}** ({', '.join(report['models'])}; code {_commits(report)}; [{source}]({source}))",
+        f"**Task benchmarks** ({', '.join(models)}; success per category; median s and tokens per plan)",
         "",
-        "| | " + " | ".join(head) + " |",
-        "|---|" + "---|" * len(head),
+        "| " + " | ".join(head) + " |",
+        "|" + "---|" * len(head),
     ]
-    from_paper = _paper_figures() if paper else {}
-    for category in CATEGORIES:
-        row = [_rate(report["success"][c].get(category)) for c in configs]
-        if paper:
-            ours = [from_paper.get(c, {}).get(category) for c in PAPER]
-            row.append(" / ".join("—" if v is None else f"{v:.0f}%" for v in ours))
-        name = "**all**" if category == "all" else category
-        lines.append(f"| {name} | " + " | ".join(row) + " |")
-    usage = (
-        ("median_seconds", "median s per plan", ".1f"),
-        ("median_tokens", "median tokens per plan", ".0f"),
-    )
-    for key, label, form in usage:
-        row = [format(report["usage"].get(c, {}).get(key, 0.0), form) for c in configs]
-        lines.append(f"| {label} | " + " | ".join(row) + (" | |" if paper else " |"))
+    for report, title, source, paper in found:
+        lines += _tasks_rows(report, title, source, paper)
     return [*lines, ""]
 
 
@@ -129,11 +140,13 @@ def _asking_table(report: dict[str, Any], source: Path) -> list[str]:
 def render(root: Path = ROOT) -> str:
     """The table (Markdown) from the reports under ``root``."""
     parts: list[str] = []
-    if (found := _load(root, PAPER47)) is not None:
-        parts += _tasks_table(found, "The paper's 47 tasks", PAPER47.with_name("report.md"), paper=True)
-    if (found := _load(root, DEV)) is not None:
-        title = "Dev tasks (our own, in new scenes; tuned on)"
-        parts += _tasks_table(found, title, DEV.with_name("report.md"), paper=False)
+    tasks = [
+        (report, title, path.with_name("report.md"), path == PAPER47)
+        for path, title in TASK_REPORTS
+        if (report := _load(root, path)) is not None
+    ]
+    if tasks:
+        parts += _tasks_table(tasks)
     if (found := _load(root, ASKING)) is not None:
         parts += _asking_table(found, ASKING)
     if (found := _load(root, SAFETY)) is not None:
@@ -148,6 +161,13 @@ COMMANDS = (
         PAPER47,
         "conceptbot --no-cache bench run -c saycan -c nokg -c conceptbot && conceptbot bench run -c paper"
         " && conceptbot bench report results/paper47/records.jsonl",
+    ),
+    (
+        "blind set 1 (82 tasks in 11 new rooms, written without seeing the planner): SayCan, no graph,"
+        " ConceptBot",
+        BLIND1,
+        "conceptbot --no-cache bench run --split benchmarks/blind/set1 -c saycan -c nokg -c conceptbot"
+        " && conceptbot bench report results/blind1/records.jsonl",
     ),
     (
         "the dev tasks (ours, new scenes): SayCan, no graph, ConceptBot",

@@ -38,8 +38,10 @@ def test_the_table_follows_a_report_and_a_missing_marker_is_an_error(tmp_path: P
     (tmp_path / "results" / "dev").mkdir(parents=True)
     (tmp_path / "results" / "dev" / "report.json").write_text(json.dumps(report))
     rendered = table.render(tmp_path)
-    assert "| **all** | 25% (1/4) | 75% (3/4) |" in rendered and "| risk | — | 50% (1/2) |" in rendered
-    assert "| median s per plan | 0.0 | 12.3 |" in rendered and "code aaaaaaa" in rendered
+    dashes = " | ".join(["—"] * 6)
+    assert f"| SayCan | {dashes} | 25% (1/4) | 0.0 | 0 |" in rendered
+    assert "| | **ConceptBot** | — | — | — | 50% (1/2) | — | — | 75% (3/4) | 12.3 | 900 |" in rendered
+    assert "(code aaaaaaa)" in rendered and "in the paper" not in rendered
     before = f"intro\n{table.START}\nold\n{table.END}\nrest\n"
     assert table.replaced(before, rendered) == f"intro\n{table.START}\n{rendered}{table.END}\nrest\n"
     with pytest.raises(ValueError, match="results-table:start"):
