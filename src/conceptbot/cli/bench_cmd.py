@@ -122,8 +122,10 @@ def run_cmd(
     todo = len(pending(jobs, out, backend, model, RESULT_KEY, made["commit"]))
     if scoring and scoring != "logprob":
         click.echo(f"options scored by {scoring} ({backend})")
-    if split != "test":
-        click.echo(f"split: {split} (our own tasks for tuning, not the paper's 47)")
+    if split == "dev":
+        click.echo("split: dev (our own tasks for tuning, not the paper's 47)")
+    elif split != "test":
+        click.echo(f"tasks: {split} (not the paper's 47)")
     click.echo(
         f"{len(jobs)} plans ({len(tasks)} tasks x {len(configs)} configs x {trials} trials); "
         f"{len(jobs) - todo} already in {out}"
