@@ -22,9 +22,9 @@ It prints the top-1 hits of each reading and of weighted sums of standardised re
 tasks and over those in rooms of 16 or more objects, and the leave-one-out top-1 of the weights
 chosen on a grid (chosen on the other tasks, counted on the one left out), with the graph's
 reading and without it (the same readings: see ``summary``). ``--fit`` writes the weights chosen
-on all tasks, and the softmax scale that makes the gold's objects likeliest, to ``src/conceptbot/pipeline/choice_weights.json`` (read
-by ``conceptbot.pipeline.goal_planner.choice``). Readings are appended to the output as they come
-and read back on a rerun (resumable).
+on all tasks, and the softmax scale that makes the gold's objects likeliest, to
+``src/conceptbot/pipeline/choice_weights.json`` (read by ``conceptbot.pipeline.goal_planner.choice``).
+Readings are appended to the output as they come and read back on a rerun (resumable).
 
     .venv/bin/python benchmarks/bench_choice.py [--tasks DIR ...] [--shipped] [--fit] \\
         [--out results/parts/choice-MODEL.jsonl]
