@@ -147,29 +147,6 @@ def test_the_risk_set_benchmark_ranks_and_counts_over_a_threshold() -> None:
     assert risk.planner_limit("shipped", {"to": "oven"}) == limits.risk_place
 
 
-def test_the_need_question_benchmark_scores_rankings_within_each_request() -> None:
-    needs = _script("bench_need_questions")
-    rows = [
-        {"request": "I'm cold", "object": "blanket", "answer": True, "help": 2.0, "use": 0.5, "kind": "need"},
-        {"request": "I'm cold", "object": "fan", "answer": False, "help": 1.0, "use": None, "kind": "need"},
-        {"request": "I'm cold", "object": "cards", "answer": False, "help": -1.0, "use": 0.1, "kind": "need"},
-        {"request": "a drink", "object": "juice", "answer": True, "help": -1.0, "use": 0.9, "kind": "need"},
-        {"request": "a drink", "object": "soap", "answer": False, "help": 1.0, "use": 0.1, "kind": "need"},
-    ]
-    groups = needs.groups_of(rows)
-    assert list(groups) == ["I'm cold", "a drink"]
-    assert needs.report(groups, {"help": 1.0}) == (pytest.approx(2 / 3), 1)  # the drink is ranked wrong
-    assert needs.report(groups, {"use": 1.0}) == (1.0, 2)  # a statement the graph lacks counts as the average
-    assert needs.standardised([1.0, None, 3.0]) == [-1.0, 0.0, 1.0]
-    # the dev scenes' needs: every pickable object of the scene, the gold's one object the answer
-    scenes = needs.groups_of(needs.scene_rows())
-    tiny = scenes["I can't make out this tiny print."]
-    assert [r["object"] for r in tiny if r["answer"]] == ["reading glasses"] and len(tiny) == 9
-    assert [r["object"] for r in scenes["I just spilled red wine on my white shirt!"] if r["answer"]] == [
-        "stain remover"  # the detergent may come too, but alone fails the task
-    ]
-
-
 def test_the_paraphrase_benchmark_takes_the_rounds_asked_for() -> None:
     paraphrases = _script("bench_paraphrase_plans")
     held = paraphrases.chosen_rows({"dev-implicit-4"}, None, False, {11, 12})

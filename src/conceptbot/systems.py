@@ -139,12 +139,13 @@ def _conceptbot(config: str, settings: Settings, options: SystemOptions, parts: 
     llm = _llm(settings, store, parts.llm, "pipeline")
     retriever = None
     version = ""
+    # The embedder is not the graph: the no-graph ablation ranks objects with it too (choice.py).
+    embedder = _embedder(settings, store, parts.embedder)
     if config != "nokg":
         if parts.graph is not None:
             graph, label = parts.graph, parts.graph.name
         else:
             graph, label = open_graph(settings, fallback=options.fallback), settings.kg
-        embedder = _embedder(settings, store, parts.embedder)
         version = graph_version(label, graph)
         theta = options.theta if options.theta is not None else default_theta(embedder.model)
         retriever = RelationRetriever(graph, embedder, theta)
@@ -166,6 +167,7 @@ def _conceptbot(config: str, settings: Settings, options: SystemOptions, parts: 
         which_one=options.which_one,
         # A model calibrated with `conceptbot calibrate --conformal` asks by its own thresholds.
         calibration_dir=settings.calibration_dir if options.own_calibration else None,
+        embedder=embedder,
     )
 
 

@@ -34,6 +34,7 @@ from conceptbot.core.system import PLANNERS, Ask
 from conceptbot.core.trace import CalibrationNote, OPETrace, PlannerSummary, PlanTrace, URPTrace
 from conceptbot.core.usage import Usage
 from conceptbot.models.cache_db import CacheStore
+from conceptbot.models.embedder import Embedder
 from conceptbot.models.llm import LLM
 from conceptbot.pipeline import modes, prompts
 from conceptbot.pipeline.goal import GoalFinder, GoalReader
@@ -41,6 +42,8 @@ from conceptbot.pipeline.goal.adapter import SAMPLES
 from conceptbot.pipeline.goal.judge import ReadingJudge
 from conceptbot.pipeline.goal.restate import Restater
 from conceptbot.pipeline.goal_planner import conformal
+from conceptbot.pipeline.goal_planner.choice import ObjectChooser
+from conceptbot.pipeline.goal_planner.choice import shipped_weights as shipped_choice
 from conceptbot.pipeline.goal_planner.combine import combination
 from conceptbot.pipeline.goal_planner.decide import Decider, FactFinder
 from conceptbot.pipeline.goal_planner.evidence import GraphEvidence
@@ -104,6 +107,8 @@ class ConceptBot:
         which_one: How a target taking one object is judged sure (``fits`` or ``softmax``); None:
             the rule the calibration names.
         calibration_dir: Where ``conceptbot calibrate --conformal`` wrote a model's thresholds.
+        embedder: The sentence embedder for the goal planner's choice among objects (not a graph:
+            the no-graph ablation uses it too); default: the retriever's, if any.
     """
 
     def __init__(
@@ -122,6 +127,7 @@ class ConceptBot:
         calibration_dir: Path | None = None,
         reading: str = "restated",
         which_one: str | None = None,
+        embedder: Embedder | None = None,
     ) -> None:
         if config not in SWITCHES:
             raise ValueError(f"config must be one of {CONFIGS}")
@@ -196,6 +202,11 @@ class ConceptBot:
             # The model's own where `conceptbot calibrate --conformal` wrote one in calibration_dir.
             calibration=calibration,
             coverage=coverage,
+            chooser=ObjectChooser(
+                decider,
+                embedder or (retriever.embedder if retriever is not None else None),
+                shipped_choice(graph is not None),
+            ),
         )
         # Every plan says whose thresholds it asked by: another model's break the coverage promised.
         self.calibration_note = CalibrationNote(

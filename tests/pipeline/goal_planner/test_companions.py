@@ -12,6 +12,7 @@ from conceptbot.core.plan import format_actions
 from conceptbot.core.scene import scene_from_dict
 from conceptbot.core.usage import Usage
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
+from conceptbot.pipeline.goal_planner.choice import ChoiceWeights, ObjectChooser
 from conceptbot.pipeline.goal_planner.companions import (
     CompanionWeights,
     candidates,
@@ -37,11 +38,9 @@ UNSAFE = [-3.0, -0.05]
 YES = [-0.1, -3.0]
 NO = [-3.0, -0.1]
 HELPS = [
-    PRIOR,  # "would the object help with what the person said?"
-    [-0.1, -3.0],  # toothbrush: yes, best
-    [-0.3, -2.0],  # toothpaste: yes
-    [-2.0, -0.3],  # hairbrush: no (not asked as a companion: no likelier to help than an object)
-]
+    [-0.5, -1.0, -4.0],  # the name ranking: toothbrush best, toothpaste next, hairbrush far below
+    [-2.0, -2.0, -2.0],  # and for the neutral request (the hairbrush, below the average, is not
+]  # asked about as a companion)
 GRAPH = DictGraph(
     {
         "toothpaste": [("toothpaste", "UsedFor", "clean tooth toothbrush")],
@@ -57,10 +56,17 @@ class _Need:
         return TargetsRead(False, [Target("user", 1, "speaker", [], helps=True)], Usage(calls=0))
 
 
+def _decider(llm: FakeLLM, finder: FactFinder) -> tuple[Decider, ObjectChooser]:
+    """The decider, and a chooser that ranks by the names alone (these tests are about companions)."""
+    decider = Decider(llm, finder)
+    return decider, ObjectChooser(decider, None, ChoiceWeights({"names": 1.0}, 2.0))
+
+
 def _plan(scores: list[list[float]], graph: DictGraph | None = GRAPH):
     llm = FakeLLM(scores=scores)
     finder = FactFinder(RelationRetriever(graph, FakeEmbedder(), theta=0.1) if graph is not None else None)
-    planner = GoalPlanner(_Need(), Decider(llm, finder))
+    decider, chooser = _decider(llm, finder)
+    planner = GoalPlanner(_Need(), decider, chooser=chooser)
     result = planner.plan("I want to brush my teeth", BATHROOM)
     return format_actions(result.actions), result, llm
 
@@ -133,7 +139,8 @@ def test_the_weights_combine_the_answer_and_the_link() -> None:
 def test_after_a_which_one_answer_what_goes_with_the_chosen_object_is_still_asked() -> None:
     llm = FakeLLM(scores=[*HELPS, YES, PRIOR, SAFE, PRIOR, SAFE])
     finder = FactFinder(RelationRetriever(GRAPH, FakeEmbedder(), theta=0.1))
-    planner = GoalPlanner(_Need(), Decider(llm, finder), coverage=1.0)  # every decision asked
+    decider, chooser = _decider(llm, finder)
+    planner = GoalPlanner(_Need(), decider, coverage=1.0, chooser=chooser)  # every decision asked
     questions = []
 
     def person(question) -> str:

@@ -99,31 +99,6 @@ def test_an_ingredient_question_asks_about_the_dish_as_it_was_said() -> None:
     assert "an ingredient of salad?" in llm.score_requests[-1].messages[-1].content
 
 
-def test_a_need_asks_whether_each_object_would_help_and_carries_what_the_graph_says_it_is_for() -> None:
-    graph = DictGraph(
-        {"glue": [("glue", "UsedFor", "stick paper together")], "chips": [("chips", "IsA", "snack")]}
-    )
-    finder = FactFinder(RelationRetriever(graph, FakeEmbedder(), theta=0.1))
-    llm = FakeLLM(scores=[[-1.0, -1.0], [-0.1, -3.0], [-3.0, -0.1]])
-    judgements, usage = Decider(llm, finder).helps("I need to stick paper together", ["glue", "chips"])
-    asked = [r.messages[-1].content for r in llm.score_requests]
-    assert 'A person said: "I need to stick paper together"' in asked[0]
-    assert (
-        "would the object help" in asked[0] and "would the glue help with what the person said?" in asked[1]
-    )
-    assert not any("Facts" in a for a in asked)  # the graph's statements are evidence, not prompt text
-    by = {j.subject: j for j in judgements}
-    assert by["glue"].score == pytest.approx(2.9) and by["chips"].score == pytest.approx(-2.9)
-    glue = by["glue"].evidence
-    assert glue is not None and glue.features["use"] > 0.5
-    assert (
-        glue.statements[0].startswith("use 0.")
-        and "glue is used for stick paper together" in glue.statements[0]
-    )
-    assert by["chips"].evidence is None  # "chips IsA snack" says nothing of what they are for
-    assert usage.calls == 3
-
-
 def test_without_a_graph_nothing_is_stated_of_what_an_object_is_for() -> None:
     found = FactFinder(None).uses(["glue"], "I need to stick paper together")
     assert math.isnan(found["glue"][0]) and found["glue"][1] == ""

@@ -187,13 +187,9 @@ def _planner(scores: list[list[float]]) -> GoalPlanner:
     return GoalPlanner(TargetFinder(llm, is_person), Decider(llm, FactFinder(None)))
 
 
-#: The decisions of "Give my son something to cut paper" in SCENE, before any risk question.
+#: The decisions of "Give my son something to cut paper" in SCENE, before any risk question: the
+#: name ranking ranks the scissors first, then the safety scissors (choice.py).
 CUT_PAPER = [
-    [-1.0, -1.0],  # content-free object for "give ... to the child"
-    [-0.1, -3.0],  # scissors: best
-    [-0.2, -2.5],  # safety scissors: next
-    [-3.0, -0.1],  # glue
-    [-3.0, -0.1],  # chips
     NAMES,  # "which object should the robot give to the child?": the request, then neutral
     NEUTRAL,
 ]
@@ -276,9 +272,6 @@ TOYS = scene_from_dict({"pickable_objects": ["crayons", "box cutter"], "destinat
 
 def _toddler_plan(ratings: dict) -> tuple[object, RatingOPE]:
     scores = [
-        PRIOR,  # content-free object for "give ... to the toddler"
-        [-0.1, -3.0],  # crayons: yes
-        [-3.0, -0.1],  # box cutter: no
         [-1.0, -3.0],  # name ranking: the request
         [-2.0, -2.0],  # and neutral
         PRIOR,  # risk: giving "the object" to the toddler
@@ -355,13 +348,8 @@ def test_with_risk_every_move_is_rated_and_one_rated_dangerous_is_dropped_unflag
     assert ope.rated == []
 
 
-def test_a_target_taking_one_object_ranks_by_the_decision_and_the_name_ranking_together() -> None:
+def test_a_target_taking_one_object_is_one_ranking_of_every_candidate() -> None:
     scores = [
-        [-1.0, -1.0],  # content-free object
-        [-3.0, -0.1],  # scissors: no
-        [-1.0, -1.2],  # safety scissors: barely yes
-        [-0.5, -1.5],  # glue: the decision's best
-        [-3.0, -0.1],  # chips: no
         [-6.0, -0.5, -4.0, -6.0],  # names for the request: safety scissors far above the rest
         NEUTRAL,
         PRIOR,
@@ -369,11 +357,16 @@ def test_a_target_taking_one_object_ranks_by_the_decision_and_the_name_ranking_t
         PRIOR,  # asked plainly
         SAFE,
     ]
-    result = _planner(scores).plan("Give my son something to cut paper", SCENE)
+    llm = FakeLLM(scores=scores)
+    planner = GoalPlanner(TargetFinder(llm, is_person), Decider(llm, FactFinder(None)))
+    result = planner.plan("Give my son something to cut paper", SCENE)
     assert format_actions(result.actions) == ["pick_and_place(safety scissors, child)", "done()"]
+    # Two prompts rank the four objects: no question per object (then the risk questions).
+    ranking = [r for r in llm.score_requests if r.options == tuple(SCENE.pickable)]
+    assert len(ranking) == 2 and len(llm.score_requests) == 6
     objects = {o.object: o for o in (result.trace.decisions or ())[0].objects}
-    assert objects["safety scissors"].name_score == pytest.approx(1.5)
-    assert objects["glue"].score > objects["safety scissors"].score  # the decision alone: glue
+    assert objects["safety scissors"].p_one > 0.5 > objects["glue"].p_one
+    assert objects["safety scissors"].evidence["features"]["names"] == pytest.approx(1.5)
 
 
 def test_named_objects_skip_the_decisions_and_an_only_move_judged_unsafe_is_a_refusal() -> None:
@@ -592,10 +585,6 @@ def test_two_targets_for_one_place_each_take_their_own_objects() -> None:
     # ranking must not replace the first's (the chips were lost, and two decided objects went)
     targets = [Target("user", 1, "named", ["chips"]), Target("user", 1, "named", [])]
     scores = [
-        PRIOR,  # "give ... to the user": the content-free object
-        [-0.1, -3.0],  # scissors: yes
-        [-0.5, -1.5],  # safety scissors: lean yes
-        [-3.0, -0.1],  # glue: no
         [-1.0, -2.0, -4.0],  # the name ranking of the three, for the request
         [-2.0, -2.0, -2.0],  # and for the neutral request
         PRIOR,
@@ -616,24 +605,14 @@ def test_two_targets_for_one_place_each_take_their_own_objects() -> None:
 
 
 def test_several_kinds_of_thing_are_each_asked_about_with_their_own_words() -> None:
-    # "Give me something to cut with and something to eat": each part's questions say what it is
+    # "Give me something to cut with and something to eat": each part's ranking says what it is
     # for, so each target ranks by its own answers (not both by the request's best two)
     cut = Target("user", 1, "named", [], part="as something to cut with")
     eat = Target("user", 1, "named", [], part="as something to eat")
     scores = [
-        PRIOR,  # "give ... to the user as something to cut with": the content-free object
-        [-0.1, -3.0],  # scissors: yes
-        [-0.5, -1.5],  # safety scissors: lean yes
-        [-3.0, -0.1],  # glue: no
-        [-3.0, -0.1],  # chips: no
-        [-1.0, -2.0, -4.0, -4.0],  # the name ranking, for the request
+        [-0.5, -4.0, -4.0, -4.0],  # the name ranking "... as something to cut with", for the request
         NEUTRAL,
-        PRIOR,  # "... as something to eat"
-        [-3.0, -0.1],  # scissors: no
-        [-3.0, -0.1],  # safety scissors: no
-        [-2.0, -0.5],  # glue: no
-        [-0.1, -3.0],  # chips: yes
-        [-4.0, -4.0, -3.0, -1.0],
+        [-4.0, -4.0, -3.0, -1.0],  # "... as something to eat"
         NEUTRAL,
         PRIOR,
         SAFE,  # scissors to the user
@@ -649,23 +628,21 @@ def test_several_kinds_of_thing_are_each_asked_about_with_their_own_words() -> N
         "done()",
     ]
     asked = [m.content for r in llm.score_requests for m in r.messages if m.role == "user"]
-    assert any("give the scissors to the user as something to cut with?" in q for q in asked)
-    assert any("give the chips to the user as something to eat?" in q for q in asked)
+    assert any("Which object should the robot give to the user as something to cut with?" in q for q in asked)
     assert any("Which object should the robot give to the user as something to eat?" in q for q in asked)
     assert [d.target.part for d in result.trace.decisions or ()] == [cut.part, eat.part]
 
 
 def test_each_of_two_needs_is_decided_on_its_own_words() -> None:
-    # "I'm cold and I'm hungry": each need is asked about as if it were the whole request; with the
-    # whole request beside it, the other need swayed the answers towards its own objects
+    # "I'm cold and I'm hungry": each need is ranked as if it were the whole request; with the
+    # whole request beside it, the other need swayed the ranking towards its own objects
     cold = Target("user", 1, "speaker", [], part='for "I\'m cold"', need="I'm cold", helps=True)
     hungry = Target("user", 1, "speaker", [], part='for "I\'m hungry"', need="I'm hungry", helps=True)
-    no, yes = [-3.0, -0.1], [-0.1, -3.0]
     scores = [
-        PRIOR,  # "I'm cold": the content-free object
-        *(no, no, yes, no),  # scissors, safety scissors, glue (the fake's stand-in for a blanket), chips
-        PRIOR,  # "I'm hungry"
-        *(no, no, no, yes),  # the chips
+        [-4.0, -4.0, -1.0, -4.0],  # "I'm cold": the glue (the fake's stand-in for a blanket)
+        NEUTRAL,
+        [-4.0, -4.0, -4.0, -1.0],  # "I'm hungry": the chips
+        NEUTRAL,
         *(PRIOR, SAFE) * 2,  # the glue, then the chips, to the user
     ]
     llm = FakeLLM(scores=scores)
@@ -677,23 +654,16 @@ def test_each_of_two_needs_is_decided_on_its_own_words() -> None:
         "done()",
     ]
     asked = [m.content for r in llm.score_requests for m in r.messages if m.role == "user"]
-    decisions = [q for q in asked if "help with what the person said?" in q]
-    assert len(decisions) == 10 and not any("I'm cold and I'm hungry" in q for q in decisions)
-    assert (
-        sum('said: "I\'m cold"' in q for q in decisions)
-        == sum('said: "I\'m hungry"' in q for q in decisions)
-        == 5
-    )
+    rankings = [q for q in asked if "Which object should the robot" in q]
+    assert len(rankings) == 4 and not any("I'm cold and I'm hungry" in q for q in rankings)
+    assert 'said: "I\'m cold"' in rankings[0] and 'said: "I\'m hungry"' in rankings[2]
 
 
 def _need_plan(graph: DictGraph | None) -> tuple[list[str], FakeLLM, object]:
-    """'I need to stick these pages together' with the glue and the chips answered alike."""
+    """'I need to stick these pages together' with the glue and the chips named alike."""
     scores = [
-        PRIOR,  # "would the object help with what the person said?"
-        [-3.0, -0.1],  # scissors: no
-        [-3.0, -0.1],  # safety scissors: no
-        [-0.5, -1.5],  # glue: lean yes
-        [-0.5, -1.5],  # chips: the same
+        [-4.0, -4.0, -1.0, -1.0],  # the name ranking: the glue and the chips alike
+        NEUTRAL,
         [-3.0, -0.1],  # "would they also need the chips, used together with the glue?": no
         PRIOR,
         SAFE,  # the one given, to the user
@@ -707,7 +677,7 @@ def _need_plan(graph: DictGraph | None) -> tuple[list[str], FakeLLM, object]:
     return format_actions(result.actions), llm, result
 
 
-def test_a_need_takes_what_the_model_says_helps_ranked_with_what_the_graph_says_it_is_for() -> None:
+def test_a_need_is_ranked_with_what_the_graph_says_each_object_is_for() -> None:
     graph = DictGraph(
         {
             "glue": [("glue", "UsedFor", "stick pages together")],
@@ -717,23 +687,22 @@ def test_a_need_takes_what_the_model_says_helps_ranked_with_what_the_graph_says_
     plan, llm, result = _need_plan(graph)
     assert plan == ["pick_and_place(glue, user)", "done()"]
     asked = [m.content for r in llm.score_requests for m in r.messages if m.role == "user"]
-    assert sum("would the" in q and "help with what the person said?" in q for q in asked) == 5
-    assert not any("Which object" in q for q in asked)  # no name ranking for a need
+    assert not any("help with what the person said?" in q for q in asked)  # no question per object
     (decision,) = [d for d in result.trace.decisions or () if d.decided]
     rows = {row.object: row for row in decision.objects}
     assert (
         rows["glue"].evidence is not None
         and "glue is used for stick pages together" in rows["glue"].evidence["statements"][0]
     )
-    assert rows["glue"].p_one > rows["chips"].p_one  # the graph's statement decides between equal answers
+    assert rows["glue"].p_one > rows["chips"].p_one  # the graph's statement decides between equal names
 
 
-def test_without_the_graph_a_need_is_the_model_s_answer_alone() -> None:
+def test_without_the_graph_a_need_is_the_model_s_ranking_alone() -> None:
     _, _, result = _need_plan(None)
     (decision,) = [d for d in result.trace.decisions or () if d.decided]
     rows = {row.object: row for row in decision.objects}
     assert rows["glue"].p_one == pytest.approx(rows["chips"].p_one)
-    assert all(row.evidence is None for row in decision.objects)
+    assert all(set(row.evidence["features"]) == {"names"} for row in decision.objects)
 
 
 @pytest.mark.parametrize("bad", [float("nan"), float("inf")])
@@ -883,18 +852,18 @@ def test_an_object_the_request_leaves_out_is_never_a_candidate() -> None:
 
 
 def test_which_one_shares_are_sharpened_and_the_ranking_kept() -> None:
-    from conceptbot.pipeline.goal_planner.planner import Thresholds
+    from conceptbot.pipeline.goal_planner.choice import ChoiceWeights, ObjectChooser
 
     scene = scene_from_dict({"pickable_objects": ["pencil", "pen", "glue"], "destinations": ["user"]})
 
     def shares(sharpness: float) -> dict[str, float]:
-        scores = [PRIOR, [-0.2, -2.0], [-0.4, -1.5], [-3.0, -0.1]]  # "should I give ...?"
-        scores += [[-1.0, -1.5, -4.0], [-2.0, -2.0, -2.0], PRIOR, SAFE]  # names, neutral, risk
+        scores = [[-1.0, -1.5, -4.0], [-2.0, -2.0, -2.0], PRIOR, SAFE]  # names, neutral, risk
         llm = FakeLLM(scores=scores)
+        decider = Decider(llm, FactFinder(None))
         planner = GoalPlanner(
             FixedTargets([Target("user", 1, "named")]),
-            Decider(llm, FactFinder(None)),
-            thresholds=Thresholds(one_sharpness=sharpness),
+            decider,
+            chooser=ObjectChooser(decider, None, ChoiceWeights({"names": 1.0}, sharpness)),
         )
         [decision] = planner.plan("something to write with", scene).trace.decisions
         return {j.object: j.p_one for j in decision.objects}

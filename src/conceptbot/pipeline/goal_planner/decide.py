@@ -33,7 +33,6 @@ from conceptbot.pipeline.goal_planner.targets import tokens, words
 from conceptbot.pipeline.retrieval import RelationRetriever, edge_text
 
 ANSWERS = ("Yes", "No")
-NEUTRAL_REQUEST = "Please help me."  # the request the name ranking is calibrated against
 DEFINING = ("DefinedAs", "MadeOf")  # a word's own definition and ingredients
 USES = ("UsedFor", "CapableOf", "DefinedAs")  # what an object is for, as the graph states it
 CONTENT_FREE = "object"
@@ -461,30 +460,6 @@ class Decider:
         judgements, usage = self._judge_each(objects, about, target, question)
         return judgements, context, usage.with_latency(time.perf_counter() - started)
 
-    def helps(self, need: str, objects: Sequence[str]) -> tuple[list[Judgement], Usage]:
-        """Whether each object would help with ``need`` ("I can't make out this tiny print"), asked
-        without graph facts and calibrated against a content-free object; each judgement carries,
-        as its evidence, what the graph states the object is for and how close that is to the
-        need (feature ``use``, a cosine; :meth:`FactFinder.uses`), where the graph states it."""
-        started = time.perf_counter()
-
-        def question(obj: str | None, facts: Sequence[str]) -> str:
-            name = obj if obj is not None else CONTENT_FREE
-            return prompts.render("help_user", request=need, object=name)
-
-        judgements, usage = self._judge_each(objects, {o: () for o in objects}, need, question)
-        uses = self.facts.uses(objects, need)
-
-        def stated(j: Judgement) -> Judgement:
-            similarity, statement = uses[j.subject]
-            if not math.isfinite(similarity):
-                return j  # the graph states nothing the object is for
-            said = (f"use {similarity:.2f}: {statement}",)
-            return replace(j, evidence=Evidence(j.subject, need, {"use": similarity}, said))
-
-        judgements = [stated(j) for j in judgements]
-        return judgements, usage.with_latency(time.perf_counter() - started)
-
     def fits(
         self,
         request: str,
@@ -576,30 +551,6 @@ class Decider:
         evidence = self.evidence.read(judgement.subject, criterion) if self.evidence is not None else None
         score = self.combination.log_odds(readings, evidence)
         return replace(judgement, p_yes=sigmoid(score), score=score, model=judgement.score, evidence=evidence)
-
-    def name_scores(self, request: str, move: str, objects: Sequence[str]) -> tuple[dict[str, float], Usage]:
-        """How much the request raises the probability of naming each object: "which object should
-        the robot give to the user?" with every object listed, each name scored as the answer, minus
-        the same for a neutral request (domain-conditional PMI, Holtzman et al. 2021, "Surface form
-        competition"). Ranks the objects a request needs in a different way than the per-object
-        yes/no question: the objects compete in one question.
-
-        Args:
-            move: What the robot would do with the object, without it ("give to the user").
-        """
-        started = time.perf_counter()
-        usage = Usage(calls=0)
-        found = []
-        for said in (request, NEUTRAL_REQUEST):
-            user = prompts.render("pick_user", request=said, objects=", ".join(objects), move=move)
-            messages = (Message("system", prompts.render("pick_system")), Message("user", user))
-            scored = self.llm.score(
-                ScoreRequest(options=tuple(objects), messages=messages, assistant_prefix="The ")
-            )
-            usage = usage + scored.usage
-            found.append(scored.logprobs)
-        scores = {o: lp - neutral for o, lp, neutral in zip(objects, found[0], found[1], strict=True)}
-        return scores, usage.with_latency(time.perf_counter() - started)
 
     def dangerous(
         self, request: str, move: str, obj: str, scene: Scene, evidence: Sequence[str]

@@ -4,11 +4,14 @@
    things to, how many objects each takes, and the objects the request names for each, from the
    request's words (scored questions only where it names no destination).
 2. Decisions (:mod:`conceptbot.pipeline.goal_planner.decide`): where a target needs more objects than the
-   request names, every other object is asked about, one yes/no question each ("to do what the
-   person asked, should the robot give the sponge to the user?"), scored by log-probability with
-   the object's graph facts in the question and calibrated against a content-free object. A target
-   taking N objects takes the N best above ``one_floor``; one taking all that fit takes every
-   object above ``fit``. An object two targets want goes where it scored best.
+   request names, the other objects are decided. A target taking one or a few objects (a need,
+   "something to write with") ranks every candidate at once (:mod:`.choice`: the name ranking,
+   the embedder and the graph's statement of use, fitted) and takes the best N above
+   ``one_floor``; one taking all that fit a criterion asks one yes/no question per object ("is
+   the foxglove poisonous?"), combined with the graph's evidence, and takes every object above
+   ``fit``; any other asks "to do what the person asked, should the robot give the sponge to the
+   user?" per object, calibrated against a content-free object. An object two targets want goes
+   where it scored best.
 3. Stacking orders the objects by how good a base each makes (a decision too) and puts each on the
    one below.
 4. Constraints: each move's affordance (detection confidence) and a risk decision. A move is
@@ -65,6 +68,8 @@ from conceptbot.pipeline.goal_planner.asking import (
     reading_options,
     reading_question,
 )
+from conceptbot.pipeline.goal_planner.choice import ObjectChooser
+from conceptbot.pipeline.goal_planner.choice import shipped_weights as shipped_choice
 from conceptbot.pipeline.goal_planner.companions import (
     CompanionWeights,
     candidates,
@@ -121,18 +126,8 @@ class Thresholds:
         ingredients: A dish's ingredients are the objects within this of the best-scored one
             ("is the kiwi an ingredient of fruit salad?": every answer leans towards No, so a
             fixed threshold fails, but the ranking is good; 0.6-0.7 on the dev split).
-        name_weight: Weight of the name ranking (:meth:`Decider.name_scores`) against the yes/no
-            decision when a target takes N objects (0: the decision alone).
-        use_weight: Weight of what the graph states an object is for (:meth:`FactFinder.uses`)
-            against the answer to "would the X help?" when a target takes what helps with a need
-            (chosen on the dev scenes' needs and the judgement set's, 0.25 against 0, 0.5, 1 and the
-            name ranking: ``benchmarks/bench_need_questions.py``).
-        need_sharpness: The scale of a need's ranking in the which-one softmax (``p_one``): it
-            orders as before, but its share is sharper (2.1 maximised the likelihood of the gold's
-            objects over the 19 dev need decisions; at 1 their shares were too flat, and needs
-            right without a question were asked which one).
-        one_sharpness: The scale of every which-one softmax (``p_one``; a need's on top of
-            ``need_sharpness``): the ranking is unchanged, the shares sharper. Over the 47 dev
+        one_sharpness: The scale of the which-one softmax (``p_one``) of a ranking that gives no
+            probability of its own: the ranking is unchanged, the shares sharper. Over the 47 dev
             which-one decisions the mean log-likelihood of drawing an object the gold accepts was
             -0.345 at 1, -0.335 at 1.5 (the best), -0.372 at 2, -0.616 at 4
             (``benchmarks/bench_one_sharpness.py``); sharper would claim more than the rankings
@@ -160,9 +155,6 @@ class Thresholds:
     replacements: int = 2
     partition: float = -5.0
     ingredients: float = 0.7
-    name_weight: float = 1.0
-    use_weight: float = 0.25
-    need_sharpness: float = 2.0
     one_sharpness: float = 1.5
     combined: float = 0.0
     unsafe_vulnerable: float = 0.3
@@ -203,20 +195,6 @@ def _softmax(judgements: list[Judgement], order: dict[str, float]) -> list[float
     weights = [math.exp(v - top) for v in values]
     total = sum(weights)
     return [w / total for w in weights]
-
-
-def _standardised_known(scores: dict[str, float]) -> dict[str, float]:
-    """:func:`_standardised` over the finite scores alone (fewer than two: none)."""
-    known = {k: v for k, v in scores.items() if math.isfinite(v)}
-    return _standardised(known) if len(known) >= 2 else {}
-
-
-def _standardised(scores: dict[str, float]) -> dict[str, float]:
-    """Scores as z-scores (0 mean, unit spread) so that two rankings can be added."""
-    values = list(scores.values())
-    mean = sum(values) / len(values)
-    spread = (sum((v - mean) ** 2 for v in values) / len(values)) ** 0.5 or 1.0
-    return {k: (v - mean) / spread for k, v in scores.items()}
 
 
 def _why(check: RiskCheck) -> str:
@@ -267,6 +245,9 @@ class GoalPlanner:
             ones, :func:`~conceptbot.pipeline.goal_planner.conformal.shipped`).
         coverage: How often a decision's prediction set must hold the right answer; a set with both
             answers is a question (:mod:`~conceptbot.pipeline.goal_planner.asking`).
+        companions: The fitted weights of things used together (default: the shipped ones).
+        chooser: Ranks the candidates of a target taking one or a few objects (default: the
+            shipped weights, the graph's embedder where there is a graph).
     """
 
     def __init__(
@@ -280,6 +261,7 @@ class GoalPlanner:
         calibration: Calibration | None = None,
         coverage: float = 0.9,
         companions: CompanionWeights | None = None,
+        chooser: ObjectChooser | None = None,
     ) -> None:
         self.targets = targets
         self.decider = decider
@@ -292,6 +274,9 @@ class GoalPlanner:
         # Things used together (companions.py): the no-graph ablation has its own, model-only fit.
         graph = decider.facts.retriever is not None
         self.companions = companions if companions is not None else shipped_weights(graph)
+        retriever = decider.facts.retriever
+        embedder = retriever.embedder if retriever is not None else None
+        self.chooser = chooser or ObjectChooser(decider, embedder, shipped_choice(graph))
 
     def plan(
         self,
@@ -507,48 +492,22 @@ class GoalPlanner:
                 judgements, context, used = self.decider.fits(
                     request, target.criterion, others, scene, dish=target.dish, said=target.dish_said
                 )
-            elif target.helps:
-                # What helps with a need: "would the reading glasses help with what the person
-                # said?", without graph facts (on the dev scenes' needs the move question with the
-                # facts ranked the stapler first for "I can't make out this tiny print"), ranked
-                # with what the graph states each object is for (docs/planning.md, needs).
-                # One of two or more needs is asked about on its own words, as if it were the whole
-                # request: with the whole request beside it, the other need swayed the answers
-                # towards its own objects (the TV remote for "I'm chilly", dev, 2026-12-05).
-                judgements, used = self.decider.helps(target.need or request, others)
+            elif target.count != ALL and len(others) > 1:
+                # One or a few objects (a need, "something to write with", "a fruit"): one ranking
+                # of every candidate (choice.py). One of two or more needs is ranked on its own
+                # words: with the whole request, the other need swayed it towards its own objects.
+                pick = move_words(target.name, part=target.part)  # without the object: "give to ..."
+                judgements, used = self.chooser.rank(target.need or request, pick, others)
                 context = ()
             else:
                 move = move_words(target.name, "{object}", target.part)
                 judgements, context, used = self.decider.moves(request, target.name, move, others, scene)
             usage = usage + used
             order = {j.subject: j.score for j in judgements}
-            names: dict[str, float] = {}
-            if target.helps and target.count != ALL and len(others) > 1:
-                # Which one helps: the answer and the graph's statement together (each standardised;
-                # the graph's weighted by ``use_weight``; an object it says nothing of counts as
-                # the average). Without a graph, the answer alone.
-                yes_no = _standardised(order)
-                uses = _standardised_known(
-                    {j.subject: j.evidence.features["use"] for j in judgements if j.evidence}
-                )
-                sharp = self.thresholds.need_sharpness
-                order = {
-                    o: sharp * (yes_no[o] + self.thresholds.use_weight * uses.get(o, 0.0)) for o in order
-                }
-            elif target.count != ALL and not target.criterion and len(others) > 1:
-                # Which N objects: rank by the yes/no decision and the name ranking together (each
-                # standardised; the name ranking weighted by ``name_weight``); the floor still
-                # applies to the decision's own score.
-                pick = move_words(target.name, part=target.part)  # without the object: "give to ..."
-                names, used = self.decider.name_scores(request, pick, others)
-                usage = usage + used
-                yes_no, named_z = _standardised(order), _standardised(names)
-                order = {o: yes_no[o] + self.thresholds.name_weight * named_z[o] for o in order}
-            if target.count == 1 and len(others) > 1:
-                # Which one: the ranking as a distribution over the candidates, for the conformal
-                # set of which one (asking.py).
-                # sharpened by ``one_sharpness`` (the ranking unchanged): the likelihood of the
-                # gold's objects over the dev which-one decisions peaks there
+            if target.count == 1 and len(others) > 1 and judgements[0].p_one is None:
+                # Which one, where the choice gave no probability: the ranking as a distribution
+                # over the candidates, for the conformal set of which one (asking.py), sharpened
+                # by ``one_sharpness`` (the ranking unchanged).
                 sharp = self.thresholds.one_sharpness
                 chances = _softmax(judgements, {o: sharp * v for o, v in order.items()})
                 judgements = [replace(j, p_one=p) for j, p in zip(judgements, chances, strict=True)]
@@ -557,9 +516,7 @@ class GoalPlanner:
                 DecisionTrace(
                     target_trace(target),
                     decided=True,
-                    objects=tuple(
-                        judgement_trace(j, names[j.subject] if names else None) for j in judgements
-                    ),
+                    objects=tuple(judgement_trace(j, None) for j in judgements),
                     context=tuple(context),
                 )
             )
