@@ -49,8 +49,7 @@ def _step_plan(observer: Any) -> Plan:
 
 
 def _goal_plan(observer: Any) -> Plan:
-    scores = [[-1.0, -1.0], [-0.1, -3.0], [-0.2, -2.5], [-3.0, -0.1], [-3.0, -0.1]]
-    scores += [NAMES, NEUTRAL, PRIOR, UNSAFE, PRIOR, SAFE, PRIOR, SAFE]
+    scores = [NAMES, NEUTRAL, PRIOR, UNSAFE, PRIOR, SAFE, PRIOR, SAFE]
     bot = _bot(FakeLLM(scores=scores), "urp", "goal")
     return bot.plan("Give my son something to cut paper", SCENE, observer=observer)
 

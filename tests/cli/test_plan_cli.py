@@ -148,9 +148,9 @@ def test_readable_output_of_the_goal_planner_shows_targets_decisions_and_risk() 
     from conceptbot.pipeline.conceptbot import ConceptBot
 
     scene = scene_from_dict(SCENE)
-    prior, yes, no = [-1.0, -1.0], [-0.1, -3.0], [-3.0, -0.1]
+    prior, yes = [-1.0, -1.0], [-0.1, -3.0]
     names, neutral = [-1.0, -3.0], [-2.0, -2.0]  # the name ranking (apple, sponge), then neutral
-    llm = FakeLLM(scores=[prior, yes, no, names, neutral, prior, yes])  # decisions, names, one risk check
+    llm = FakeLLM(scores=[names, neutral, prior, yes])  # the ranking of every object, one risk check
     plan = ConceptBot(llm, None, "urp", planner="goal").plan("Bring me something to eat", scene)
     console = Console(record=True, width=160)
     show(plan, console)
@@ -174,9 +174,9 @@ def test_a_plan_says_whose_conformal_thresholds_it_asked_by(model: str, noted: b
     from conceptbot.pipeline.conceptbot import ConceptBot
 
     jsonschema = pytest.importorskip("jsonschema")
-    prior, yes, no = [-1.0, -1.0], [-0.1, -3.0], [-3.0, -0.1]
+    prior, yes = [-1.0, -1.0], [-0.1, -3.0]
     names, neutral = [-1.0, -3.0], [-2.0, -2.0]
-    llm = FakeLLM(scores=[prior, yes, no, names, neutral, prior, yes], model=model)
+    llm = FakeLLM(scores=[names, neutral, prior, yes], model=model)
     bot = ConceptBot(llm, None, "urp", planner="goal")
     plan = bot.plan("Bring me something to eat", scene_from_dict(SCENE))
     assert plan.trace.calibration is not None

@@ -47,8 +47,8 @@ def test_the_step_pipeline_reports_ope_urp_and_each_step() -> None:
 
 
 def test_the_goal_planner_reports_goal_decisions_risk_and_the_steps() -> None:
-    scores = [[-1.0, -1.0], [-0.1, -3.0], [-0.2, -2.5], [-3.0, -0.1], [-3.0, -0.1]]  # decisions
-    scores += [NAMES, NEUTRAL, PRIOR, UNSAFE, PRIOR, SAFE, PRIOR, SAFE]  # names; risk of each move, plainly
+    # the ranking of every object (names, then neutral); the risk of each move, then plainly
+    scores = [NAMES, NEUTRAL, PRIOR, UNSAFE, PRIOR, SAFE, PRIOR, SAFE]
     seen = Recorder()
     plan = _bot(FakeLLM(scores=scores), "urp", "goal").plan(
         "Give my son something to cut paper", SCENE, observer=seen
@@ -68,8 +68,7 @@ def test_the_goal_planner_reports_goal_decisions_risk_and_the_steps() -> None:
 
 def test_without_an_observer_a_plan_is_the_same() -> None:
     def plan(observer):
-        scores = [[-1.0, -1.0], [-0.1, -3.0], [-0.2, -2.5], [-3.0, -0.1], [-3.0, -0.1]]
-        scores += [NAMES, NEUTRAL, PRIOR, UNSAFE, PRIOR, SAFE, PRIOR, SAFE]
+        scores = [NAMES, NEUTRAL, PRIOR, UNSAFE, PRIOR, SAFE, PRIOR, SAFE]
         bot = _bot(FakeLLM(scores=scores), "urp", "goal")
         return bot.plan("Give my son something to cut paper", SCENE, observer=observer).to_dict()
 

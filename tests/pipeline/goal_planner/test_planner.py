@@ -13,6 +13,7 @@ from conceptbot.core.scene import Scene, scene_from_dict
 from conceptbot.core.usage import Usage
 from conceptbot.models.fake import FakeEmbedder, FakeLLM
 from conceptbot.pipeline.conceptbot import ConceptBot
+from conceptbot.pipeline.goal_planner.choice import ChoiceWeights, ObjectChooser
 from conceptbot.pipeline.goal_planner.conformal import shipped
 from conceptbot.pipeline.goal_planner.decide import Decider, FactFinder
 from conceptbot.pipeline.goal_planner.planner import GoalPlanner
@@ -659,7 +660,7 @@ def test_each_of_two_needs_is_decided_on_its_own_words() -> None:
     assert 'said: "I\'m cold"' in rankings[0] and 'said: "I\'m hungry"' in rankings[2]
 
 
-def _need_plan(graph: DictGraph | None) -> tuple[list[str], FakeLLM, object]:
+def _need_plan(graph: DictGraph | None, use: float = 0.0) -> tuple[list[str], FakeLLM, object]:
     """'I need to stick these pages together' with the glue and the chips named alike."""
     scores = [
         [-4.0, -4.0, -1.0, -1.0],  # the name ranking: the glue and the chips alike
@@ -671,7 +672,9 @@ def _need_plan(graph: DictGraph | None) -> tuple[list[str], FakeLLM, object]:
     llm = FakeLLM(scores=scores)
     finder = FactFinder(RelationRetriever(graph, FakeEmbedder(), theta=0.1) if graph is not None else None)
     need = Target("user", 1, "speaker", [], helps=True)
-    result = GoalPlanner(_FixedTargets([need]), Decider(llm, finder)).plan(
+    decider = Decider(llm, finder)
+    chooser = ObjectChooser(decider, None, ChoiceWeights({"names": 1.0, "use": use}, 1.0))
+    result = GoalPlanner(_FixedTargets([need]), decider, chooser=chooser).plan(
         "I need to stick these pages together", SCENE
     )
     return format_actions(result.actions), llm, result
@@ -684,7 +687,7 @@ def test_a_need_is_ranked_with_what_the_graph_says_each_object_is_for() -> None:
             "chips": [("chips", "UsedFor", "eat as a snack")],
         }
     )
-    plan, llm, result = _need_plan(graph)
+    plan, llm, result = _need_plan(graph, use=1.0)  # weighted: the shipped fit gives it none
     assert plan == ["pick_and_place(glue, user)", "done()"]
     asked = [m.content for r in llm.score_requests for m in r.messages if m.role == "user"]
     assert not any("help with what the person said?" in q for q in asked)  # no question per object
@@ -877,14 +880,15 @@ def test_a_which_one_question_never_offers_what_the_veto_refuses_the_recipient()
     from conceptbot.pipeline.goal_planner.conformal import Calibration
     from conceptbot.pipeline.hazards import HazardCheck
 
-    scores = [*CUT_PAPER, PRIOR, SAFE, PRIOR, SAFE, PRIOR, SAFE]  # the model calls every move safe
+    # the names: the scissors and the safety scissors far above the rest; every move called safe
+    scores = [[-1.0, -1.5, -9.0, -9.0], NEUTRAL, PRIOR, SAFE, PRIOR, SAFE, PRIOR, SAFE]
     graph = DictGraph({"scissors": [("scissors", "IsA", "weapon")]})
 
     def plan(hazards: HazardCheck) -> object:
         llm = FakeLLM(scores=list(scores))
         finder, decider = TargetFinder(llm, hazards.is_person), Decider(llm, FactFinder(None))
         # A threshold that keeps both likeliest candidates: a question of which one, unless vetoed.
-        planner = GoalPlanner(finder, decider, hazards=hazards, calibration=Calibration({0.9: 0.99}, "t"))
+        planner = GoalPlanner(finder, decider, hazards=hazards, calibration=Calibration({0.9: 0.9}, "t"))
         return planner.plan("Give my son something to cut paper", SCENE, ask=lambda q: "")
 
     unvetoed = plan(HazardCheck(DictGraph({})))

@@ -516,7 +516,10 @@ class GoalPlanner:
                 DecisionTrace(
                     target_trace(target),
                     decided=True,
-                    objects=tuple(judgement_trace(j, None) for j in judgements),
+                    objects=tuple(
+                        judgement_trace(j, j.evidence.features.get("names") if j.evidence else None)
+                        for j in judgements
+                    ),
                     context=tuple(context),
                 )
             )
