@@ -117,22 +117,6 @@ def test_a_plan_fit_of_one_system_keeps_the_other_system_s_thresholds() -> None:
     assert data["plan_qhat"]["graph"] == {"0.9": 0.8}  # the file read is not changed in place
 
 
-def _goal(*named: str) -> dict[str, Any]:
-    return {"targets": [{"to": "shoe box", "takes": "named", "named": list(named), "count": len(named)}]}
-
-
-def test_the_sampled_reading_set_keeps_readings_by_votes_and_counts_questions() -> None:
-    sampled = _script("bench_sampled_reading")
-    right, wrong = _goal("conch shell"), _goal("conch shell", "pebble")
-    greedy = {
-        "a": {"request": "Shell to the box.", "plain": "Put the pebble in the shoe box.", "words_goal": wrong,
-              "plain_goal": wrong, "gold": right, "words_ok": False, "plain_ok": False, "agree": True},
-    }  # fmt: skip
-    rows = [{"key": "a|n4|t0.8|s0", "round": 12, "sampled_goals": [right, right, wrong, wrong]}]
-    assert sampled.vote_sets(greedy, rows, 2) == (1, 1, 2)  # both readings kept: a question
-    assert sampled.vote_sets(greedy, rows, 3) == (0, 0, 1)  # only the taken (4 votes): no question
-
-
 def test_the_risk_set_benchmark_ranks_and_counts_over_a_threshold() -> None:
     risk = _script("bench_risk_set")
     assert risk.auc([2.0, 1.0], [0.0, -1.0]) == 1.0 and risk.auc([0.0], [0.0]) == 0.5

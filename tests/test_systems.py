@@ -43,6 +43,7 @@ def test_every_system_by_name() -> None:
         ({"n": 0}, "n must be a whole number of completions >= 1"),
         ({"n": True}, "n must be a whole number"),
         ({"fallback": "yes"}, "fallback must be True, False or None"),
+        ({"reading": "sampled"}, "reading 'sampled' was removed"),
     ],
 )
 def test_options_are_checked_when_made(options: dict, message: str) -> None:

@@ -38,7 +38,5 @@ def reading_option(command: F) -> F:
         default="restated",
         show_default=True,
         help="How the goal planner reads the request: restated (the model says it plainly first and "
-        "the better of the two readings is kept; one more model call), words (the rules alone) or "
-        "sampled (as restated, and four more plain forms sampled: where their readings differ, "
-        "the person may be asked which was meant).",
+        "the better of the two readings is kept; one more model call) or words (the rules alone).",
     )(command)

@@ -34,7 +34,7 @@ holds the right one, so it needs no fit): the most a person's answers can do for
 LEVELS = ("plan", "decision")
 #: How the goal planner reads a request: ``restated`` (the rules on its words and on the model's
 #: plain form of it, the better kept; ``pipeline/goal/aided.py``) or ``words`` (the rules alone).
-READINGS = ("restated", "words", "sampled")
+READINGS = ("restated", "words")
 #: How a target taking one object is judged sure (:mod:`conceptbot.pipeline.goal_planner.asking`):
 #: ``fits``, by the calibrated P(yes) that its likeliest candidate fits (any object that fits will
 #: do); ``softmax``, by that candidate's share of a softmax over the ranking (as before 2026-12-03).
@@ -101,9 +101,8 @@ class SystemOptions:
         level: What the coverage holds for (:data:`LEVELS`): ``plan``, all of a plan's calibrated
             decisions together, or ``decision``, each one (asks less, is wrong more often).
         reading: How the goal planner reads the request (:data:`READINGS`): ``restated`` (one more
-            model call, a median of 1.0 s on the embedded model), ``words`` (the rules alone, as
-            before 2026-12-02) or ``sampled`` (as ``restated``, and four more plain forms sampled,
-            whose readings the person may be asked to choose among; about 3 s more).
+            model call, a median of 1.0 s on the embedded model) or ``words`` (the rules alone, as
+            before 2026-12-02). ``sampled`` was removed (2026-12-06): it is refused with a clear error.
         which_one: How a target taking one object is judged sure (:data:`WHICH_ONE`); None: the
             rule the calibration names (``softmax`` for the shipped one: on dev, ``fits`` asked a
             little less and succeeded a little less, docs/asking.md).
@@ -141,6 +140,12 @@ class SystemOptions:
         _choice("planner", self.planner, PLANNERS)
         _choice("coverage", self.coverage, (*COVERAGES, ASK_ALL))
         _choice("level", self.level, LEVELS)
+        if self.reading == "sampled":
+            raise ConfigError(
+                "reading 'sampled' was removed: in plans it changed 1 of 145 outcomes "
+                "(docs/notes/2026-12-04-sampled-readings.md)",
+                hint=f"use one of {', '.join(READINGS)}",
+            )
         _choice("reading", self.reading, READINGS)
         if self.which_one is not None:
             _choice("which_one", self.which_one, WHICH_ONE)

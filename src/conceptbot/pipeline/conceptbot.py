@@ -38,7 +38,6 @@ from conceptbot.models.embedder import Embedder
 from conceptbot.models.llm import LLM
 from conceptbot.pipeline import modes, prompts
 from conceptbot.pipeline.goal import GoalFinder, GoalReader
-from conceptbot.pipeline.goal.adapter import SAMPLES
 from conceptbot.pipeline.goal.judge import ReadingJudge
 from conceptbot.pipeline.goal.restate import Restater
 from conceptbot.pipeline.goal_planner import conformal
@@ -102,8 +101,7 @@ class ConceptBot:
         coverage: The goal planner's conformal coverage (see ``SystemOptions``).
         level: What the coverage holds for (``plan`` or ``decision``).
         reading: ``restated``: the goal planner reads the request's words and the model's plain
-            form of it and keeps the better reading; ``words``: the rules alone; ``sampled``: as
-            ``restated``, with sampled plain forms' readings offered where the person is asked.
+            form of it and keeps the better reading; ``words``: the rules alone.
         which_one: How a target taking one object is judged sure (``fits`` or ``softmax``); None:
             the rule the calibration names.
         calibration_dir: Where ``conceptbot calibrate --conformal`` wrote a model's thresholds.
@@ -187,12 +185,10 @@ class ConceptBot:
                 facts.dish_concept if retriever is not None else None,
                 # The model says the request plainly and the rules read that too: they read plain
                 # commands well and talk badly (docs/notes/2026-12-02-restated-reading.md).
-                Restater(self._llm_for("restate")) if reading in ("restated", "sampled") else None,
-                # Sampled plain forms: more readings to offer where they disagree (goal/adapter.py).
-                samples=SAMPLES if reading == "sampled" else 0,
+                Restater(self._llm_for("restate")) if reading == "restated" else None,
                 # Where the two readings differ, the model is asked which was meant: on held-out
                 # paraphrases it ranks them far better than the step that chose (goal/judge.py).
-                judge=ReadingJudge(self._llm_for("reading")) if reading in ("restated", "sampled") else None,
+                judge=ReadingJudge(self._llm_for("reading")) if reading == "restated" else None,
             ),
             decider,
             self.ope if self.switches.ope else None,

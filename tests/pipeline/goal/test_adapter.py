@@ -210,38 +210,3 @@ def test_without_a_restater_the_goal_finder_reads_the_words_alone() -> None:
     )
     assert (read.reading, read.plain, read.other) == ("", "", None)
     assert [(t.name, t.named) for t in read.targets] == [("shoe box", ["conch shell"])]
-
-
-def test_sampled_readings_two_of_six_agree_on_are_offered_even_where_the_two_readings_agree() -> None:
-    command = "Put the conch shell in the shoe box."
-    tin = "Put the conch shell in the biscuit tin."
-    finder = GoalFinder(
-        GoalReader(),
-        TargetFinder(FakeLLM(), is_person),
-        restater=Restater(FakeLLM([command, tin, tin, command, "Give me the sand dollar."])),
-        samples=4,
-    )
-    read = finder.read(command, SHELLS)
-    doubt = read.doubt
-    assert read.reading == "both" and doubt is not None and (doubt.other, doubt.p_other) == ("", 0.0)
-    # One vote (the sand dollar) is not enough; two of six are.
-    assert [(m.text, round(m.p, 3)) for m in doubt.more] == [
-        ("put the conch shell in or on the biscuit tin", 0.333)
-    ]
-    chosen = doubt.more[0].read()
-    assert chosen.reading == "sampled" and [(t.name, t.named) for t in chosen.targets] == [
-        ("biscuit tin", ["conch shell"])
-    ]
-
-
-def test_a_sampled_reading_that_differs_only_in_a_criterion_s_words_is_not_offered() -> None:
-    said = "Put the shells that are spiral in the shoe box."
-    other = "Put the spiral shells in the shoe box."
-    finder = GoalFinder(
-        GoalReader(),
-        TargetFinder(FakeLLM(), is_person),
-        restater=Restater(FakeLLM([said, other, other, said, said])),
-        samples=4,
-    )
-    read = finder.read(said, SHELLS)
-    assert read.doubt is None or read.doubt.more == ()

@@ -107,29 +107,6 @@ def test_only_a_criterion_s_wording_differing_keeps_the_person_s_words() -> None
     assert choose(own, other, "grounded", request, said).source == "words"
 
 
-def test_sampled_plain_forms_add_the_readings_they_agree_on_with_their_votes() -> None:
-    request = "Put the conch shell in the shoe box."
-    greedy = "Put the conch shell in the shoe box."
-    samples = ["Put the conch shell in the biscuit tin.", "Put the conch shell in the biscuit tin.", greedy]
-    samples.append("Give me the sand dollar.")
-    llm = FakeLLM([greedy, *samples])
-    reading = AidedReader(READER, Restater(llm), "grounded", samples=4).read(request, SHELLS)
-    assert reading.source == "both" and reading.pool == 6
-    tin = GoalTarget("biscuit tin", "named", ("conch shell",), "", 1)
-    assert reading.sampled[0][0].targets == (tin,)  # most votes first
-    assert [n for _, n in reading.sampled] == [2, 1]  # the reading taken (3 votes) is not repeated
-    assert llm.requests[1].n == 4 and llm.requests[1].temperature > 0
-    assert reading.usage.calls == 2
-
-
-def test_without_samples_nothing_is_sampled() -> None:
-    llm = FakeLLM(["Put the conch shell in the shoe box."])
-    reading = AidedReader(READER, Restater(llm), "grounded").read(
-        "Put the conch shell in the shoe box.", SHELLS
-    )
-    assert (reading.sampled, reading.pool, len(llm.requests)) == ((), 0, 1)
-
-
 def test_what_the_words_leave_out_stays_out_of_the_plain_reading() -> None:
     # the model's plain form drops the exception, or names the excluded object itself
     request = "Excluding the conch shell, put the shells in the shoe box."

@@ -32,27 +32,13 @@ def test_empty_and_overlong_requests_are_not_sent() -> None:
     assert llm.requests == []
 
 
-def test_sampled_plain_forms_are_one_call_at_the_given_temperature() -> None:
-    llm = FakeLLM(["Plain: Put the conch shell in the shoe box.", "Give me the conch shell.", "  ...  "])
-    said = Restater(llm).variants("Shell, box, please.", 3, temperature=0.7, seed=5)
-    assert [s.text for s in said] == ["Put the conch shell in the shoe box.", "Give me the conch shell.", ""]
-    assert said[2].problem == "no words in the reply"
-    (request,) = llm.requests
-    assert (request.n, request.temperature, request.seed) == (3, 0.7, 5)
-    assert said[0].usage.calls == 1 and said[1].usage.calls == 0
-
-
 def test_a_plain_form_copying_the_prompt_s_placeholder_is_no_plain_form() -> None:
-    said = Restater(FakeLLM(["Make D.", "Put everything W in the Y.", "Make a PB&J."])).variants("Lunch?", 3)
+    said = [
+        Restater(FakeLLM([reply])).restate("Lunch?")
+        for reply in ("Make D.", "Put everything W in the Y.", "Make a PB&J.")
+    ]
     assert [s.text for s in said] == ["", "", "Make a PB&J."]
     assert said[0].problem == "the reply copies a placeholder of the prompt"
-
-
-def test_sampling_fails_to_no_plain_forms() -> None:
-    assert Restater(FakeLLM([BackendRequestError("server said 500")])).variants("Shells away.", 2) == []
-    llm = FakeLLM([])
-    assert Restater(llm).variants("   ", 2) == [] and Restater(llm).variants("Shells away.", 0) == []
-    assert llm.requests == []
 
 
 def _grams(text: str, n: int = 4) -> set[tuple[str, ...]]:

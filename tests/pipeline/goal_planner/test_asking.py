@@ -349,30 +349,3 @@ def test_the_reading_set_keeps_the_reading_taken_and_what_is_likely_enough_never
     assert reading_set([taken, ReadingOption("tea and cake", nan, "other")], 0.5)[1].kind == "other"
     assert reading_set([ReadingOption("tea", nan), other], 0.5)[1] == other
     assert reading_set([taken, ReadingOption("cake", nan, "sampled")], 0.9) == [taken]  # no number, no offer
-
-
-def test_sampled_readings_likely_enough_are_listed_after_the_two_readings_once_each() -> None:
-    from conceptbot.pipeline.goal_planner.targets import Alternative
-
-    def never() -> TargetsRead:
-        raise AssertionError("not made by the question")
-
-    more = (
-        Alternative("give the user the cake", 0.33, never),
-        Alternative("give the user the tea", 0.2, never),  # reads as the reading taken: left out
-        Alternative("give the user the jam", 0.05, never),  # below 1 - qhat at 0.9
-    )
-    doubt = ReadingDoubt("give the user the tea", "", 0.9, 0.0, "agree", never, more)
-    question = reading_question(doubt, 0.9066)
-    assert question is not None and question.objects == ("give the user the tea", "give the user the cake")
-    assert question.p_yes == (0.9, 0.33)
-    assert (
-        question.text
-        == "Did you mean: give the user the tea, or give the user the cake? One of them, or none."
-    )
-    assert (
-        reading_question(
-            ReadingDoubt("give the user the tea", "", 0.9, 0.0, "agree", never, more[1:]), 0.9066
-        )
-        is None
-    )

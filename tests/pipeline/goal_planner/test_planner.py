@@ -813,31 +813,6 @@ def test_a_reading_whose_other_is_unlikely_is_not_asked_about() -> None:
     assert [q.kind for q in planner.plan("chips", SCENE).questions] == ["reading"]
 
 
-def test_a_sampled_reading_the_person_chooses_is_planned() -> None:
-    from conceptbot.pipeline.goal_planner.targets import Alternative
-
-    def glue() -> TargetsRead:
-        return TargetsRead(False, [Target("user", 1, "named", ["glue"])], Usage(calls=1), "p", "sampled")
-
-    def unused() -> TargetsRead:
-        raise AssertionError("the other reading is not made")
-
-    class _Sampled:
-        def read(self, request: str, scene: Scene) -> TargetsRead:
-            more = (Alternative("give the user the glue", 0.5, glue),)
-            doubt = ReadingDoubt("give the user the chips", "", 0.8, 0.0, "agree", unused, more)
-            chips = [Target("user", 1, "named", ["chips"])]
-            return TargetsRead(False, chips, Usage(calls=0), "p", "both", None, doubt)
-
-    llm = FakeLLM(scores=[PRIOR, SAFE])
-    asked: list = []
-    planner = GoalPlanner(_Sampled(), Decider(llm, FactFinder(None)))
-    result = planner.plan("chips", SCENE, ask=lambda q: asked.append(q) or q.objects[1])
-    assert [q.objects for q in asked] == [("give the user the chips", "give the user the glue")]
-    assert format_actions(result.actions) == ["pick_and_place(glue, user)", "done()"]
-    assert result.trace.goal.reading == "sampled" and result.usage["goal"].calls == 1
-
-
 def test_an_object_the_request_leaves_out_is_never_a_candidate() -> None:
     # "Pass me a drink other than the juice box": the juice box is not asked about, nor taken
     scene = scene_from_dict(

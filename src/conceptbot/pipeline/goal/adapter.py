@@ -39,7 +39,6 @@ from dataclasses import replace
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline.goal.aided import Policy, Reading, read_twice
-from conceptbot.pipeline.goal.compare import same_goal, structure
 from conceptbot.pipeline.goal.doubt import describe
 from conceptbot.pipeline.goal.judge import ReadingJudge, reading_odds
 from conceptbot.pipeline.goal.reader import GoalReader
@@ -50,20 +49,11 @@ from conceptbot.pipeline.goal_planner.targets import (
     ALL,
     CONTENT_FREE_DISH,
     CONTENT_FREE_REQUEST,
-    Alternative,
     ReadingDoubt,
     Target,
     TargetFinder,
     TargetsRead,
 )
-
-#: How many of the counted readings (the words', the greedy plain form's and each sampled plain
-#: form's) must read a sampled reading alike for the person to be offered it: on held-out goal-set
-#: rounds 11 and 12, two of six kept the gold in the set as often as the two readings do, with a
-#: question on 35-40% of requests instead of 54-55% (benchmarks/bench_sampled_reading.py).
-MIN_VOTES = 2
-#: Plain forms sampled for ``--reading sampled`` (at ``restate.TEMPERATURE``).
-SAMPLES = 4
 
 #: Chooses the destinations of a target whose goal names none: ``(destination, score)`` pairs, best
 #: first (the score is kept in :attr:`Target.score`).
@@ -223,9 +213,6 @@ class GoalFinder:
         restater: Says the request plainly first, and the rules read both (:mod:`.aided`, with
             ``policy``); None: the rules read the words alone.
         policy: Which reading wins where the two differ (:data:`~conceptbot.pipeline.goal.aided.POLICIES`).
-        samples: Plain forms sampled besides the greedy one (``--reading sampled``); the readings
-            :data:`MIN_VOTES` of them (with the words' and the greedy one's) read alike are offered
-            in the question of which reading was meant. 0: none.
         judge: Where the two readings differ, the model's view of which was meant weighs with the
             step's odds (:mod:`.judge`, :func:`.doubt.judged`); None: the step's odds alone.
     """
@@ -237,7 +224,6 @@ class GoalFinder:
         dish_concept: Callable[[str, Sequence[str]], str | None] | None = None,
         restater: Restater | None = None,
         policy: Policy = "grounded",
-        samples: int = 0,
         judge: ReadingJudge | None = None,
     ) -> None:
         self.reader = reader
@@ -245,7 +231,6 @@ class GoalFinder:
         self.dish_concept = dish_concept
         self.restater = restater
         self.policy = policy
-        self.samples = samples
         self.judge = judge
 
     def read(self, request: str, scene: Scene) -> TargetsRead:
@@ -261,19 +246,17 @@ class GoalFinder:
                 request,
                 scene,
                 self.policy,
-                self.samples,
             )
         read = self._targets(request, scene, reading.goal, reading.usage, started)
         # No plain form (no restater, or the model failed or said nothing): the words alone were
         # read, and the trace says no reading.
         source = reading.source if reading.restated is not None else ""
         other = reading.other
-        more = tuple(self._sampled(request, scene, reading))
-        if other is None and not more:
+        if other is None:
             return replace(read, plain=reading.plain, reading=source)
         flipped = "words" if reading.source == "plain" else "plain"
         taken_text = describe(reading.goal)
-        other_text = describe(other) if other is not None else ""
+        other_text = describe(other)
         found, judged_by = reading_odds(reading.step, request, taken_text, other_text, self.judge)
         if judged_by is not None:
             read = replace(read, usage=read.usage + judged_by.usage)
@@ -288,42 +271,12 @@ class GoalFinder:
             taken_text,
             other_text,
             found.taken,
-            found.other if other is not None else 0.0,
+            found.other,
             reading.step,
             alternative,
-            more,
             judged_by.log_odds if judged_by is not None else None,
         )
-        kept = other.to_dict() if other is not None else None
-        return replace(read, plain=reading.plain, reading=source, other=kept, doubt=doubt)
-
-    def _sampled(self, request: str, scene: Scene, reading: Reading) -> list[Alternative]:
-        """The sampled readings that enough of the pool read alike (:data:`MIN_VOTES`), in words: each
-        distinct in words from the readings before it (the person could not tell them apart) and in
-        more than a criterion's wording."""
-        known = [reading.goal, *([reading.other] if reading.other is not None else [])]
-        said = {describe(g) for g in known}
-        found: list[Alternative] = []
-        for goal, count in reading.sampled:
-            text = describe(goal)
-            # A reading that differs from one already offered only in a criterion's words is no
-            # other reading (the choice keeps the person's own words there, aided.choose step 1):
-            # on dev every such question was "made only of glass" against "made entirely of glass".
-            if (
-                count < MIN_VOTES
-                or text in said
-                or any(same_goal(structure(goal), structure(k)).ok for k in known)
-            ):
-                continue
-            said.add(text)
-            known.append(goal)
-
-            def read(goal: Goal = goal) -> TargetsRead:
-                again = self._targets(request, scene, goal, Usage(calls=0), time.perf_counter())
-                return replace(again, plain=reading.plain, reading="sampled", other=reading.goal.to_dict())
-
-            found.append(Alternative(text, count / reading.pool, read))
-        return found
+        return replace(read, plain=reading.plain, reading=source, other=other.to_dict(), doubt=doubt)
 
     def _targets(self, request: str, scene: Scene, goal: Goal, usage: Usage, started: float) -> TargetsRead:
         """A goal's targets, its dish as the graph's concept and open places chosen by scoring."""

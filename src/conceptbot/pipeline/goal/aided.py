@@ -17,7 +17,7 @@ from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline.goal.compare import same_goal, structure, words
 from conceptbot.pipeline.goal.reader import GoalReader
-from conceptbot.pipeline.goal.restate import TEMPERATURE, Restater
+from conceptbot.pipeline.goal.restate import Restater
 from conceptbot.pipeline.goal.types import Goal
 
 Policy = Literal["words", "plain", "grounded"]
@@ -42,11 +42,6 @@ class Reading:
         usage: The model's calls.
         step: Which of :func:`choose`'s steps decided (one of :data:`STEPS`; "" where only one
             reading was made or a fixed policy chose): how sure the choice is depends on it.
-        sampled: Readings of plain forms sampled from the model that are neither ``goal`` nor
-            :attr:`other`, each with how many of the pool read it (most first); empty unless
-            sampled.
-        pool: How many readings were counted: the words', the greedy plain form's and each
-            sample's (0 unless sampled).
     """
 
     goal: Goal
@@ -56,8 +51,6 @@ class Reading:
     source: Literal["words", "plain", "both"] = "words"
     usage: Usage = field(default_factory=lambda: Usage(calls=0))
     step: str = ""
-    sampled: tuple[tuple[Goal, int], ...] = ()
-    pool: int = 0
 
     @property
     def doubtful(self) -> bool:
@@ -200,20 +193,16 @@ class AidedReader:
         reader: The rules.
         restater: The model's plain form.
         policy: Which reading wins where they differ.
-        samples: Plain forms sampled besides the greedy one (0: none).
     """
 
-    def __init__(
-        self, reader: GoalReader, restater: Restater, policy: Policy = "grounded", samples: int = 0
-    ) -> None:
+    def __init__(self, reader: GoalReader, restater: Restater, policy: Policy = "grounded") -> None:
         self.reader = reader
         self.restater = restater
         self.policy = policy
-        self.samples = samples
 
     def read(self, request: str, scene: Scene) -> Reading:
-        """Both readings of ``request`` and the one chosen (and the sampled ones' votes)."""
-        return read_twice(self.reader.read, self.restater, request, scene, self.policy, self.samples)
+        """Both readings of ``request`` and the one chosen."""
+        return read_twice(self.reader.read, self.restater, request, scene, self.policy)
 
 
 def read_twice(
@@ -222,12 +211,8 @@ def read_twice(
     request: str,
     scene: Scene,
     policy: Policy,
-    samples: int = 0,
-    temperature: float = TEMPERATURE,
 ) -> Reading:
-    """``read`` on the request's words and on ``restater``'s plain form, and ``policy``'s choice;
-    with ``samples``, also on that many plain forms sampled at ``temperature``, whose other
-    readings are kept with their votes (:func:`votes`)."""
+    """``read`` on the request's words and on ``restater``'s plain form, and ``policy``'s choice."""
     own = read(request, scene)
     said = restater.restate(request)
     restated = read(said.text, scene) if said.text else None
@@ -236,26 +221,4 @@ def read_twice(
     if restated is not None:
         restated = restated.leaving_out(tuple(dict.fromkeys(n for t in own.targets for n in t.excluded)))
     chosen = choose(own, restated, policy, request, said.text, scene.names)
-    chosen = replace(chosen, plain=said.text, usage=said.usage)
-    if samples < 1:
-        return chosen
-    drawn = restater.variants(request, samples, temperature)
-    pool = [
-        own,
-        *([restated] if restated is not None else []),
-        *(read(d.text, scene) for d in drawn if d.text),
-    ]
-    usage = sum((d.usage for d in drawn), chosen.usage)
-    known = [chosen.goal, *([chosen.other] if chosen.other is not None else [])]
-    return replace(chosen, usage=usage, sampled=votes(pool, known), pool=len(pool))
-
-
-def votes(pool: list[Goal], known: list[Goal]) -> tuple[tuple[Goal, int], ...]:
-    """The distinct readings of ``pool`` that are none of ``known``, each with how many of the pool
-    are the same goal, most first (the first read on a tie)."""
-    counted: list[tuple[Goal, int]] = []
-    for goal in pool:
-        if any(same_goal(goal, k).ok for k in known) or any(same_goal(goal, g).ok for g, _ in counted):
-            continue
-        counted.append((goal, sum(same_goal(goal, other).ok for other in pool)))
-    return tuple(sorted(counted, key=lambda gv: -gv[1]))
+    return replace(chosen, plain=said.text, usage=said.usage)

@@ -29,10 +29,8 @@ logger = logging.getLogger(__name__)
 #: The longest request restated (characters); past it the rules read the words alone. The plain
 #: form of a long monologue is not worth the model's minute.
 MAX_REQUEST = 600
-#: The temperature plain forms are sampled at (``--reading sampled``, the goal-set measurements).
-TEMPERATURE = 0.8
 #: The prompt's placeholders ("Put the X in the Y.", "Make D."), as words: a sampled plain form
-#: sometimes copies one (20 of 2324 samples of the goal set's dev requests; never a greedy one).
+#: sometimes copied one (20 of 2324 samples of the goal set's dev requests; never a greedy one).
 PLACEHOLDER = re.compile(r"(?<![&\w'])[DWXYZ](?![&\w'])")
 
 
@@ -79,32 +77,8 @@ class Restater:
             return Restatement("", problem=str(exc))
         return _made(response.text, response.usage)
 
-    def variants(
-        self, request: str, n: int, temperature: float = TEMPERATURE, seed: int = 0
-    ) -> list[Restatement]:
-        """``n`` plain forms of ``request`` sampled at ``temperature`` (other readings the greedy one
-        may have missed); never raises for a model's failure (then none). The usage of the one call
-        is on the first.
-
-        Args:
-            request: What the person said.
-            n: How many to sample.
-            temperature: Sampling temperature (above 0).
-            seed: Base seed (completion ``i`` uses ``seed + i`` where a backend loops).
-        """
-        words = " ".join(request.split())
-        if not words or len(words) > MAX_REQUEST or n < 1:
-            return []
-        try:
-            response = self.llm.chat(self._chat(words, n=n, temperature=temperature, seed=seed))
-        except ConceptBotError as exc:
-            logger.warning("sampling plain forms of %r failed: %s", words[:80], exc)
-            return []
-        made = [_made(text, Usage(calls=0)) for text in response.choices]
-        return [Restatement(made[0].text, response.usage, made[0].problem), *made[1:]] if made else []
-
-    def _chat(self, words: str, **params: object) -> ChatRequest:
-        """The restating request for ``words`` (``params``: sampling, where sampled)."""
+    def _chat(self, words: str) -> ChatRequest:
+        """The restating request for ``words``."""
         # The scene is not in the prompt: given its objects, the small model picks them for the person
         # ("something to read" became "the paperback novel") or lists them all, which is the
         # planner's job; the rules match the person's words to the scene's names.
@@ -113,7 +87,6 @@ class Restater:
             system=prompts.render("restate_system"),
             max_tokens=self.max_tokens,
             stop=("\n",),
-            **params,
         )
 
 

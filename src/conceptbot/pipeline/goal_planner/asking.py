@@ -276,12 +276,10 @@ def clarify(
 
 
 def reading_options(doubt: ReadingDoubt) -> tuple[ReadingOption, ...]:
-    """Every reading of a request that reads two or more ways, with its probability: the one taken,
-    the one the choice dropped (where the words and the plain form differ), each sampled one."""
-    options = [ReadingOption(doubt.taken, doubt.p_taken, "taken")]
-    if doubt.other:
-        options.append(ReadingOption(doubt.other, doubt.p_other, "other"))
-    return (*options, *(ReadingOption(m.text, m.p, "sampled") for m in doubt.more))
+    """Both readings of a request that reads two ways, with their probabilities: the one taken and
+    the one the choice dropped (where it has words)."""
+    taken = ReadingOption(doubt.taken, doubt.p_taken, "taken")
+    return (taken, ReadingOption(doubt.other, doubt.p_other, "other")) if doubt.other else (taken,)
 
 
 def reading_set(options: Iterable[ReadingOption], qhat: float) -> list[ReadingOption]:

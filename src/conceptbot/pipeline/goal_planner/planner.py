@@ -460,8 +460,7 @@ class GoalPlanner:
             return read, answered, None
         if chosen[0] == question.objects[0]:
             return read, answered, 1.0
-        sampled = {m.text: m.read for m in doubt.more}
-        other = doubt.alternative() if chosen[0] == doubt.other else sampled[chosen[0]]()
+        other = doubt.alternative()
         return replace(other, usage=read.usage + other.usage), answered, 1.0
 
     def _decide(

@@ -206,35 +206,18 @@ class Target:
 
 
 @dataclass(frozen=True)
-class Alternative:
-    """A reading of a sampled plain form that neither the words nor the greedy plain form read.
-
-    Attributes:
-        text: The reading in words.
-        p: How likely it is the one meant: the share of the readings counted that read it.
-        read: Reads the request as this reading.
-    """
-
-    text: str
-    p: float
-    read: Callable[[], TargetsRead]
-
-
-@dataclass(frozen=True)
 class ReadingDoubt:
     """Where the request reads two ways: both readings in words, how likely each is the one meant,
     and the other reading's targets, made when asked for (scoring an open place is a model call).
 
     Attributes:
         taken: The reading the targets are, in words.
-        other: The reading not taken, in words ("" where the words and the plain form agree and
-            only sampled readings differ).
+        other: The reading not taken, in words.
         p_taken: P(the reading taken is the one meant), from the step of the choice that kept it
             (and the model's preference, where it was asked).
         p_other: P(the reading not taken is).
         step: The step of the choice (:data:`conceptbot.pipeline.goal.aided.STEPS`).
         alternative: Reads the request as the other reading.
-        more: Readings of sampled plain forms, likeliest first (empty unless sampled).
         preference: The model's log-odds for the reading taken over the other, which moved the
             step's odds (:mod:`conceptbot.pipeline.goal.judge`); None where it was not asked.
     """
@@ -245,7 +228,6 @@ class ReadingDoubt:
     p_other: float
     step: str
     alternative: Callable[[], TargetsRead]
-    more: tuple[Alternative, ...] = ()
     preference: float | None = None
 
 
