@@ -3,6 +3,7 @@ risk constraints, stacking."""
 
 from __future__ import annotations
 
+import copy
 import json
 
 import pytest
@@ -21,12 +22,8 @@ from conceptbot.pipeline.goal_planner.targets import (
     ALL,
     ReadingDoubt,
     Target,
-    TargetFinder,
     TargetsRead,
-    is_stacking,
-    mentions,
 )
-from conceptbot.pipeline.hazards import is_person
 from conceptbot.pipeline.ope import ObjectProperties, OPEResult
 from conceptbot.pipeline.retrieval import RelationRetriever
 from tests.pipeline.fakes import DictGraph, risk_reply
@@ -51,77 +48,6 @@ NAMES = [-1.0, -2.0, -4.0, -4.0]  # the name ranking of SCENE's objects, for the
 NEUTRAL = [-2.0, -2.0, -2.0, -2.0]  # and for the neutral request
 
 
-def _targets(request: str, scene=SCENE, scores=()) -> list:
-    finder = TargetFinder(FakeLLM(scores=list(scores)), is_person)
-    return finder.find(request, scene)[0]
-
-
-def test_mentions_take_longest_names_first_and_plural_heads() -> None:
-    found = mentions(
-        "the toxic plants to the non-toxic container, no: the toxic container", BINS.destinations
-    )
-    assert [n for _, n in found] == ["non-toxic container", "toxic container"]
-    assert {n for _, n in mentions("sort them into the bins", BINS.destinations)} == {
-        "glass bin",
-        "metal bin",
-    }
-
-
-def test_targets_counts_and_named_objects() -> None:
-    [user] = _targets("Hand me the glue and the chips")
-    assert (user.name, user.count, user.named, user.how) == ("user", 2, ["glue", "chips"], "named")
-    table, user = _targets("Put the glue on the table and give me something to eat")
-    assert (table.name, table.named, table.count) == ("table", ["glue"], 1)
-    assert (user.name, user.named, user.count) == ("user", [], 1)
-    [child] = _targets("Give my son something to cut paper")
-    assert child.name == "child" and child.count == 1
-    [speaker] = _targets("I'm hungry")
-    assert (speaker.name, speaker.how, speaker.count) == ("user", "speaker", 1)
-    assert _targets("Put all the food on the table")[0].count == ALL
-    assert _targets("Put the sweets on the table")[0].count == ALL
-
-
-def test_a_request_naming_no_destination_scores_them_against_a_content_free_request() -> None:
-    # child, table, user: the request's log-odds, then the content-free request's, per destination.
-    scores = [[-2.0, -0.2], [-1.0, -1.0], [-0.1, -3.0], [-1.0, -1.0], [-1.0, -1.0], [-1.0, -1.0]]
-    [target] = _targets("Tidy up", scores=scores)
-    assert (target.name, target.how) == ("table", "scored") and target.score == pytest.approx(2.9)
-
-
-def test_a_request_to_prepare_food_sends_the_ingredients_where_food_is_made() -> None:
-    # "cook" is about preparing food: the destinations are scored (child, table, user) and only the
-    # best takes the ingredients, all that fit, judged as ingredients.
-    scores = [[-2.0, -0.2], [-1.0, -1.0], [-0.1, -3.0], [-1.0, -1.0], [-0.5, -1.0], [-1.0, -1.0]]
-    [target] = _targets("I want to cook pancakes", scores=scores)
-    assert (target.name, target.how, target.count) == ("table", "scored", ALL)
-    assert target.criterion == "an ingredient of the food the person asked for"
-    # With the graph, a dish named without a cooking word counts too, and the dish is named.
-    finder = TargetFinder(FakeLLM(scores=scores), is_person, food=Food())
-    [target] = finder.find("I would like a hollandaise sauce", SCENE)[0]
-    assert (target.name, target.dish, target.criterion) == (
-        "table",
-        "hollandaise",
-        "an ingredient of hollandaise",
-    )
-    # Only cookware is scored where the scene has some: one destination, one pair of questions.
-    finder = TargetFinder(FakeLLM(scores=[[-0.5, -1.0], [-1.0, -1.0]]), is_person, food=Food(["child"]))
-    [target] = finder.find("I would like a hollandaise sauce", SCENE)[0]
-    assert target.name == "child"
-
-
-class Food:
-    """FoodKnowledge for the tests: every request is hollandaise; ``places`` are the cookware."""
-
-    def __init__(self, places: list[str] | None = None) -> None:
-        self.places = places or []
-
-    def dish(self, request: str, scene_names) -> str | None:
-        return "hollandaise"
-
-    def prep_places(self, destinations) -> list[str]:
-        return [d for d in destinations if d in self.places]
-
-
 def test_the_graph_names_a_dish_by_its_isa_chain_and_leads_with_its_definition() -> None:
     graph = DictGraph(
         {
@@ -135,15 +61,13 @@ def test_the_graph_names_a_dish_by_its_isa_chain_and_leads_with_its_definition()
         }
     )
     facts = FactFinder(RelationRetriever(graph, FakeEmbedder(), theta=-1.0))
-    assert facts.dish("I would like a hollandaise sauce", ["egg", "bowl"]) == "hollandaise"
-    assert facts.dish("I'd love an omelette", ["egg"]) == "omelette"  # two IsA steps
-    assert facts.dish("Give me a knife", ["knife"]) is None
-    assert facts.dish("Put the omelette on the plate", ["plate"]) is None  # not asked to be made
+    assert facts.is_dish("hollandaise") and facts.is_dish("omelette")  # two IsA steps
+    assert not facts.is_dish("knife")
     context = facts.context(
         "I would like a hollandaise sauce", "I would like a hollandaise sauce", "hollandaise"
     )
     assert context[0] == "hollandaise means eggs and butter with lemon juice"
-    assert FactFinder(None).dish("I would like a hollandaise sauce", []) is None
+    assert not FactFinder(None).is_dish("hollandaise")
     graph.data.update(
         {"pan": [("pan", "IsA", "cooking utensil")], "frying pan": [("frying pan", "IsA", "pan")]}
     )
@@ -151,11 +75,6 @@ def test_the_graph_names_a_dish_by_its_isa_chain_and_leads_with_its_definition()
         "frying pan",
         "ceramic bowl",
     ]
-
-
-def test_stacking_words() -> None:
-    assert is_stacking("Stack the boxes") and is_stacking("put them one on top of the other")
-    assert is_stacking("Put the stack of plates away") is not False  # "stack" as a noun still counts
 
 
 def test_facts_include_what_the_graph_says_about_parents() -> None:
@@ -183,9 +102,35 @@ def test_move_decisions_are_calibrated_against_a_content_free_object() -> None:
     assert "give the object to the user" in questions[0] and "give the chips to the user" in questions[1]
 
 
+#: The targets of the requests these tests plan, as the goal reader gives them (the planner's
+#: assembly is under test, not the reading).
+READ = {
+    "Give my son something to cut paper": [Target("child", 1, "named")],
+    "The toddler is bored; give her something to draw with": [Target("toddler", 1, "named")],
+    "Put the foil tray in the microwave": [Target("microwave", 1, "named", ["foil tray"])],
+    "Give the child the scissors": [Target("child", 1, "named", ["scissors"])],
+    "Give the child the glue": [Target("child", 1, "named", ["glue"])],
+    "Give me the glue": [Target("user", 1, "named", ["glue"])],
+    "Sort them: the poisonous ones on the toxic tray, the edible ones on the edible tray": [
+        Target("toxic tray", ALL, "named", criterion="poisonous"),
+        Target("edible tray", ALL, "named", criterion="edible"),
+    ],
+}
+STACKED = ("Stack them", "Pile these up")
+
+
+class Read:
+    """A target reader that returns the targets of :data:`READ` (a pile for :data:`STACKED`)."""
+
+    def read(self, request: str, scene: Scene) -> TargetsRead:
+        if request in STACKED:
+            return TargetsRead(True, [], Usage(calls=0))
+        return TargetsRead(False, copy.deepcopy(READ[request]), Usage(calls=0))
+
+
 def _planner(scores: list[list[float]]) -> GoalPlanner:
     llm = FakeLLM(scores=scores)
-    return GoalPlanner(TargetFinder(llm, is_person), Decider(llm, FactFinder(None)))
+    return GoalPlanner(Read(), Decider(llm, FactFinder(None)))
 
 
 #: The decisions of "Give my son something to cut paper" in SCENE, before any risk question: the
@@ -235,9 +180,7 @@ def test_the_planner_takes_the_which_one_threshold_of_its_calibration() -> None:
 
     def plan(calibration: Calibration) -> object:
         llm = FakeLLM(scores=list(scores))
-        planner = GoalPlanner(
-            TargetFinder(llm, is_person), Decider(llm, FactFinder(None)), calibration=calibration
-        )
+        planner = GoalPlanner(Read(), Decider(llm, FactFinder(None)), calibration=calibration)
         return planner.plan("Give my son something to cut paper", SCENE)
 
     first = plan(Calibration({0.9: 1.0}, "test"))  # keep every candidate: read the shares
@@ -282,7 +225,7 @@ def _toddler_plan(ratings: dict) -> tuple[object, RatingOPE]:
     ]
     llm = FakeLLM(scores=scores)
     ope = RatingOPE(ratings)
-    planner = GoalPlanner(TargetFinder(llm, is_person), Decider(llm, FactFinder(None)), ope)
+    planner = GoalPlanner(Read(), Decider(llm, FactFinder(None)), ope)
     return planner.plan("The toddler is bored; give her something to draw with", TOYS), ope
 
 
@@ -310,15 +253,13 @@ def test_a_place_move_is_dropped_for_ope_rating_it_with_the_destination() -> Non
     scores = [PRIOR, UNSAFE]  # the named move is asked about once: flagged
     llm = FakeLLM(scores=scores)
     ope = RatingOPE({"foil tray": (2, [("microwave", 5)])})
-    planner = GoalPlanner(TargetFinder(llm, is_person), Decider(llm, FactFinder(None)), ope)
+    planner = GoalPlanner(Read(), Decider(llm, FactFinder(None)), ope)
     result = planner.plan("Put the foil tray in the microwave", scene)
     [check] = result.trace.risk
     assert check.reason == "OPE rates the foil tray 5/5 dangerous with the microwave" and result.refused
     ope.ratings["foil tray"] = (2, [("microwave", 2)])
     llm = FakeLLM(scores=scores)
-    planner = GoalPlanner(
-        TargetFinder(llm, is_person), Decider(llm, FactFinder(None)), RatingOPE(ope.ratings)
-    )
+    planner = GoalPlanner(Read(), Decider(llm, FactFinder(None)), RatingOPE(ope.ratings))
     assert (
         format_actions(planner.plan("Put the foil tray in the microwave", scene).actions)[0]
         == "pick_and_place(foil tray, microwave)"
@@ -330,7 +271,7 @@ def test_with_risk_every_move_is_rated_and_one_rated_dangerous_is_dropped_unflag
     scene = scene_from_dict({"pickable_objects": ["foil tray"], "destinations": ["microwave"]})
     ope = RatingOPE({"foil tray": (2, [("microwave", 5)])})
     planner = GoalPlanner(
-        TargetFinder(FakeLLM(scores=[PRIOR, SAFE]), is_person),
+        Read(),
         Decider(FakeLLM(scores=[PRIOR, SAFE]), FactFinder(None)),
         ope,
     )
@@ -341,7 +282,7 @@ def test_with_risk_every_move_is_rated_and_one_rated_dangerous_is_dropped_unflag
     # without --risk the unflagged move is not rated, and stands
     ope = RatingOPE({"foil tray": (2, [("microwave", 5)])})
     llm = FakeLLM(scores=[PRIOR, SAFE])
-    planner = GoalPlanner(TargetFinder(llm, is_person), Decider(llm, FactFinder(None)), ope)
+    planner = GoalPlanner(Read(), Decider(llm, FactFinder(None)), ope)
     assert format_actions(planner.plan("Put the foil tray in the microwave", scene).actions) == [
         "pick_and_place(foil tray, microwave)",
         "done()",
@@ -359,7 +300,7 @@ def test_a_target_taking_one_object_is_one_ranking_of_every_candidate() -> None:
         SAFE,
     ]
     llm = FakeLLM(scores=scores)
-    planner = GoalPlanner(TargetFinder(llm, is_person), Decider(llm, FactFinder(None)))
+    planner = GoalPlanner(Read(), Decider(llm, FactFinder(None)))
     result = planner.plan("Give my son something to cut paper", SCENE)
     assert format_actions(result.actions) == ["pick_and_place(safety scissors, child)", "done()"]
     # Two prompts rank the four objects: no question per object (then the risk questions).
@@ -392,7 +333,7 @@ def test_a_hand_over_to_a_child_the_plain_question_calls_unsafe_is_dropped_and_s
 
 def test_a_hand_over_to_an_adult_is_not_asked_plainly() -> None:
     llm = FakeLLM(scores=[PRIOR, SAFE, PRIOR, UNSAFE])
-    planner = GoalPlanner(TargetFinder(llm, is_person), Decider(llm, FactFinder(None)))
+    planner = GoalPlanner(Read(), Decider(llm, FactFinder(None)))
     result = planner.plan("Give me the glue", SCENE)
     assert format_actions(result.actions) == ["pick_and_place(glue, user)", "done()"]
     assert len(llm.score_requests) == 2  # the question with the request only
@@ -423,7 +364,7 @@ class _FailingOnCall(FakeLLM):
 )
 def test_a_plain_question_that_cannot_be_answered_vetoes_the_hand_over(llm: FakeLLM) -> None:
     """Fails closed: NaN > limit is False, so without the check a NaN would keep the move."""
-    planner = GoalPlanner(TargetFinder(llm, is_person), Decider(llm, FactFinder(None)))
+    planner = GoalPlanner(Read(), Decider(llm, FactFinder(None)))
     result = planner.plan("Give the child the glue", SCENE)
     assert format_actions(result.actions) == ["done()"] and result.refused
     [check] = result.trace.risk
@@ -861,7 +802,7 @@ def test_a_which_one_question_never_offers_what_the_veto_refuses_the_recipient()
 
     def plan(hazards: HazardCheck) -> object:
         llm = FakeLLM(scores=list(scores))
-        finder, decider = TargetFinder(llm, hazards.is_person), Decider(llm, FactFinder(None))
+        finder, decider = Read(), Decider(llm, FactFinder(None))
         # A threshold that keeps both likeliest candidates: a question of which one, unless vetoed.
         planner = GoalPlanner(finder, decider, hazards=hazards, calibration=Calibration({0.9: 0.9}, "t"))
         return planner.plan("Give my son something to cut paper", SCENE, ask=lambda q: "")

@@ -27,8 +27,7 @@ a number, else "all" (plurals, "all", mass nouns, a remainder, ingredients, a ne
 no word lists tied to requests: ``words.json`` holds closed word classes of English and a few verb
 classes (making, wishing, sorting, staying).
 
-In the goal planner, in place of ``TargetFinder.find`` (the same ``Target`` list, scored where the
-words leave the place open)::
+In the goal planner (a ``Target`` list, scored where the words leave the place open)::
 
     goal = GoalReader(is_dish=...).read(request, scene)  # is_dish: optional graph check
     chooser = ScoredChooser(target_finder, request)

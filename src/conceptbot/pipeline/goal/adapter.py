@@ -2,8 +2,8 @@
 
 Where the goal names a destination the target is ``how="named"``. Where it leaves the destination
 open (``to`` None) a :data:`Chooser` settles it; :class:`ScoredChooser` asks the model the question
-``TargetFinder``'s scored path asks ("should the robot put things in the X?", against a content-free
-request). Without a chooser a need goes to the scene's user (the speaker), as ``TargetFinder`` does.
+``TargetFinder`` asks ("should the robot put things in the X?", against a content-free
+request). Without a chooser a need goes to the scene's user (the speaker).
 
 What each kind of target becomes (chosen to keep the planner's behaviour where today's reader was
 right):
@@ -11,11 +11,11 @@ right):
 * ``named``: the named objects, their count.
 * ``criterion`` taking all: ``criterion`` is the request's words; a place in a sort without words of
   its own gets "belongs in the <place>" (with the key: "belongs in the glass bin, by material").
-  Taking a number ("something to write with"): no criterion, as ``TargetFinder`` gives none: the
+  Taking a number ("something to write with"): no criterion, as the word rules before it gave none: the
   planner then asks the move question and ranks names, which it was tuned on.
 * ``remainder``: ``rest=True``, every object left.
 * ``ingredients``: ``ingredients=True``, ``dish`` and the criterion "an ingredient of <dish>".
-* ``need``: one object (``TargetFinder``'s rule for a need of the speaker's: right on 13 of the 14
+* ``need``: one object (the word rules' rule for a need of the speaker's: right on 13 of the 14
   dev needs; "brush my teeth" needs two), decided by the move question and the name ranking. Judged
   instead against "helps when <the need>" with the fitted combination (the judgement set's
   question: 88% per object), the dev needs fell from 10/21 to 8/21 (2026-12-02): a yes/no per
@@ -146,8 +146,7 @@ def _part(target: GoalTarget) -> str:
 
 
 class ScoredChooser:
-    """Chooses an open target's destinations with the model, as ``TargetFinder`` does for a request
-    that names none: each destination scored "should the robot put things in the X?" minus the same
+    """Chooses an open target's destinations with the model: each destination scored "should the robot put things in the X?" minus the same
     for a content-free request; the best, and (except for a dish, made in one place) those above the
     finder's threshold. A need goes to the user where the scene has one (the speaker); any other
     open target goes to a place, never to a person or an animal (the goal names those it hands to).
@@ -186,7 +185,7 @@ class ScoredChooser:
                 odds, used = self.finder.prep_log_odds(self.dish, dest)
                 prior, used_prior = self.finder.prep_log_odds(CONTENT_FREE_DISH, dest)
             else:
-                # TargetFinder's own scored question (one method, so that both readers ask the same).
+                # TargetFinder's scored question.
                 odds, used = self.finder.log_odds(self.request, dest)
                 prior, used_prior = self.finder.log_odds(CONTENT_FREE_REQUEST, dest)
             self.usage = self.usage + used + used_prior

@@ -157,37 +157,6 @@ class FactFinder:
         )
         return tuple(dict.fromkeys(edge_text(s.edge) for s in [*defining, *kept]))[: self.per_context]
 
-    def dish(self, request: str, pickable: Sequence[str]) -> str | None:
-        """The dish the request asks for, when the graph places a word of it under a prepared food
-        ("hollandaise" IsA sauce, "guacamole" IsA dip, "omelette" IsA dish; ``dish_classes`` in
-        ``request_words.json``), up to three IsA steps; None without a graph or a dish.
-
-        Candidates are the words of the phrase after "a", "some", "make", "cook", ...
-        (``dish_after``) or at the start of the request, up to a word such as "for" or "to" ("a
-        tomato and cucumber salad", "Pancakes would be ..."), two-word phrases first, without the
-        words of the objects the robot can pick ("a knife for my toast" asks for a knife, not for
-        toast; "a tomato and cucumber salad" is a salad).
-        """
-        if self.retriever is None:
-            return None
-        vocab = words()
-        classes = set(vocab["dish_classes"])
-        seq = tokens(request)
-        in_scene = {w for name in pickable for w in tokens(name)}
-        ignored = {"and", *vocab["not_criteria"], *vocab["speaker"]}  # "Hand me ...", "Give ..."
-        starts = [0] + [i + 1 for i, w in enumerate(seq) if w in vocab["dish_after"]]
-        candidates: list[str] = []
-        for start in starts:
-            phrase = list(
-                itertools.takewhile(lambda w: w.isalpha() and w not in _STOP - {"and"}, seq[start:])
-            )
-            kept = [w for w in phrase if w not in in_scene and w not in ignored and len(w) > 2]
-            candidates += [f"{a} {b}" for a, b in itertools.pairwise(kept)] + kept
-        for candidate in dict.fromkeys(candidates):
-            if candidate in classes or self._is_a(candidate, classes):
-                return candidate
-        return None
-
     def is_dish(self, phrase: str) -> bool:
         """Whether the graph places ``phrase`` (or its singular form) under a prepared food
         (``dish_classes``), up to three IsA steps; False without a graph."""

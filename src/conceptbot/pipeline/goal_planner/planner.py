@@ -90,7 +90,7 @@ HOT_PAD = "put a hot pot or dish on it to protect the table"
 
 
 class TargetReader(Protocol):
-    """Reads a request's goal for the planner (``GoalFinder``, or the word rules' ``TargetFinder``)."""
+    """Reads a request's goal for the planner (:class:`~conceptbot.pipeline.goal.GoalFinder`)."""
 
     def read(self, request: str, scene: Scene) -> TargetsRead:
         """Whether the request asks for a pile, its targets (none for a pile), and the model calls."""
@@ -232,9 +232,7 @@ class GoalPlanner:
 
     Args:
         targets: Reads whether the request asks for a pile, and its targets, counts and named
-            objects (:class:`~conceptbot.pipeline.goal.GoalFinder` by default;
-            :class:`~conceptbot.pipeline.goal_planner.targets.TargetFinder` is the word-rule reader
-            before it).
+            objects (:class:`~conceptbot.pipeline.goal.GoalFinder`).
         decider: Yes/no decisions.
         ope: OPE for the objects a plan moves (evidence for the risk decisions), or None.
         thresholds: Decision thresholds.

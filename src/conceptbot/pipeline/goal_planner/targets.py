@@ -1,40 +1,25 @@
-"""Where a request sends things and how many, read from the request by its words and by scored
-questions, never by free generation.
+"""The goal planner's targets (:class:`Target`, :class:`TargetsRead`) and the scored questions that
+choose a place the request leaves open (:class:`TargetFinder`).
 
-A 1.5B model asked to write the goal as JSON listed the scene's destinations and objects instead of
-the request's (docs/notes/2026-11-30-planner-redesign.md); asked "how many objects?" as a scored choice
-it answered "three" to nearly everything. So:
-
-* **Targets** are the destinations the request names (longest names first, each word used once;
-  "me" names the user, "my son" a child destination, from ``request_words.json``; a plural head
-  noun, "the recycling bins", names every destination with that head). When it names none, the
-  speaker's words ("I", "my") make the user the target, unless the request is about preparing
-  food (a dish the graph knows: "I would like a hollandaise sauce", "hollandaise" IsA "sauce"; or
-  "cook", "bake"): then, as with neither, the destinations are scored ("should the robot put
-  things in the X?" against a content-free request) and the best one (for food: the only one)
-  and those well above the content-free request are the targets.
-* **Named objects** go to the target named in their own clause (clauses split at "and", "then":
-  "hand me the tape and put the gloves on the shelf"), else to the nearest target ("put the hammer
-  and the screwdriver in the toolbox").
-* **Count** per target: every fitting object when the request says "all", "every", "sort", ...
-  or is about cooking ("I want to cook pancakes"); a need of the speaker's ("I'm cold") is one
-  thing; otherwise as many as its clauses have named objects or indefinite phrases ("a fruit",
-  "something to drink"), and with neither, all that fit ("put the clothes in the basket").
-* **Stacking** from the request's words ("stack", "pile", "on top of each other").
+The targets are read by :class:`~conceptbot.pipeline.goal.GoalFinder` from the request's parse.
+Where the request names no place, each destination is asked "should the robot put things in the
+X?" against a content-free request, never by free generation: a 1.5B model asked to write the goal
+as JSON listed the scene's destinations and objects instead of the request's
+(docs/notes/2026-11-30-planner-redesign.md). The word-rule reader that came before the parse
+(``TargetFinder.find``) was removed on 2026-12-06: it lost to the goal reader on every goal-set
+batch (docs/planning.md, "Reading the goal").
 """
 
 from __future__ import annotations
 
 import json
 import re
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cache
 from importlib import resources
 from typing import Protocol
 
-from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
 from conceptbot.models.llm import LLM, Message, ScoreRequest
 from conceptbot.pipeline import prompts
@@ -63,21 +48,14 @@ def _find(seq: list[str], key: list[str], used: list[bool]) -> int:
     return -1
 
 
-def mentions(
-    text: str,
-    names: Sequence[str],
-    people: dict[str, list[str]] | None = None,
-    taken: Sequence[int] = (),
-) -> list[tuple[int, str]]:
+def mentions(text: str, names: Sequence[str]) -> list[tuple[int, str]]:
     """``(token position, name)`` for each name the text mentions, in text order.
 
     Names match as whole words, longest first, each word used once ("non-toxic container" before
-    "toxic container"); a name's plural head noun counts ("bins" for "glass bin"); people match by
-    their words (``people``: name -> words). Token positions in ``taken`` are not used (the words of
-    a destination already found: "pencil cup" does not name a pencil).
+    "toxic container"); a name's plural head noun counts ("bins" for "glass bin").
     """
     seq = tokens(text)
-    used = [i in set(taken) for i in range(len(seq))]
+    used = [False] * len(seq)
     found: dict[str, int] = {}
     for name in sorted(names, key=lambda n: -len(tokens(n))):
         key = tokens(name)
@@ -98,45 +76,11 @@ def mentions(
         described = [n for n in group if set(tokens(n)[:-1]) <= set(seq)]
         for name in described or group:
             found[name] = seq.index(plural)
-    for name, person_words in (people or {}).items():
-        if name in names and name not in found:
-            hits = [i for i, w in enumerate(seq) if w in person_words and not used[i]]
-            if hits:
-                found[name] = hits[0]
     return sorted((at, name) for name, at in found.items())
-
-
-def _plural(part: Sequence[str]) -> bool:
-    """Whether the words speak of several things: a plural noun within two words after "the",
-    "these", "those" ("the clothes", "the poisonous ones")."""
-    for i, word in enumerate(part):
-        noun = len(word) > 3 and word.endswith("s") and not word.endswith(("ss", "'s", "us", "is"))
-        if noun and any(part[j] in ("the", "these", "those") for j in range(max(0, i - 2), i)):
-            return True
-    return False
-
-
-def _criterion(words_: Sequence[str], drop: Sequence[str]) -> str:
-    """The words of a clause that say which objects go ("the poisonous ones go on the toxic tray"
-    -> "poisonous"), without the verbs, articles and the destination."""
-    kept = [w for w in words_ if w not in drop]
-    while kept and kept[-1] in ("by", "at", "as", "for", "than", "like"):
-        kept.pop()
-    return " ".join(kept)
-
-
-def is_stacking(request: str) -> bool:
-    """Whether the request asks for a pile."""
-    text = " ".join(tokens(request))
-    return any(re.search(rf"\b{re.escape(w)}\b", text) for w in words()["stack"])
 
 
 class FoodKnowledge(Protocol):
     """What the planner asks the graph about food (implemented by ``FactFinder``)."""
-
-    def dish(self, request: str, pickable: Sequence[str]) -> str | None:
-        """The dish the request asks to be made, or None."""
-        ...
 
     def prep_places(self, destinations: Sequence[str]) -> list[str]:
         """The destinations food can be prepared in or on."""
@@ -256,16 +200,15 @@ class TargetsRead:
 
 
 class TargetFinder:
-    """Targets, counts and named objects for a request (see the module docstring).
+    """The scored questions that choose a destination the request leaves open (used by
+    :class:`~conceptbot.pipeline.goal.adapter.ScoredChooser`; see the module docstring).
 
     Args:
-        llm: An LLM that can score options (labelled ``goal``), for requests naming no destination.
+        llm: An LLM that can score options (labelled ``goal``).
         is_person: Whether a destination is a person.
         threshold: A scored destination other than the best is a target above this.
         food: What the graph knows about food (:class:`conceptbot.pipeline.goal_planner.decide.FactFinder`):
-            which dish a request asks to be made, and which destinations food is made in; None:
-            only the ``making`` words ("cook", "bake") say that a request is about preparing food,
-            and every destination is a candidate for it.
+            which destinations food is made in; None: every destination is a candidate for it.
     """
 
     def __init__(
@@ -297,176 +240,3 @@ class TargetFinder:
         scored = self.llm.score(ScoreRequest(options=("Yes", "No"), messages=messages))
         yes, no = scored.logprobs
         return yes - no, scored.usage
-
-    def read(self, request: str, scene: Scene) -> TargetsRead:
-        """Whether the request asks for a pile, and (unless it does) its targets (:meth:`find`)."""
-        if is_stacking(request):
-            return TargetsRead(True, [], Usage(calls=0))
-        targets, usage = self.find(request, scene)
-        return TargetsRead(False, targets, usage)
-
-    def find(self, request: str, scene: Scene) -> tuple[list[Target], Usage]:
-        """The targets, in the order the request names them (scored ones best first)."""
-        started = time.perf_counter()
-        usage = Usage(calls=0)
-        vocab = words()
-        people = {d: vocab["people"].get(d.lower(), []) for d in scene.destinations if self.is_person(d)}
-        found = mentions(request, scene.destinations, people)
-        seq = tokens(request)
-        # Whether the request is about preparing food matters only where it names no destination.
-        dish = (self.food.dish(request, scene.pickable) if self.food and not found else None) or ""
-        making = bool(dish) or any(w in vocab["making"] for w in seq)
-        how = "named"
-        if not found and not making:
-            speaker = [i for i, w in enumerate(seq) if w in vocab["speaker"]]
-            users = [d for d in scene.destinations if d.lower() == "user"]
-            if speaker and users:
-                found, how = [(speaker[0], users[0])], "speaker"
-        scores: dict[str, float] = {}
-        if not found:
-            how = "scored"
-            candidates = list(scene.destinations)
-            if making and self.food is not None:
-                # Food is made in cookware where the scene has some: asked "should the robot put
-                # things in the X?", the model preferred the fridge or the counter to the bowl.
-                candidates = self.food.prep_places(candidates) or candidates
-            for dest in candidates:
-                odds, used = self.log_odds(request, dest)
-                prior, used_prior = self.log_odds(CONTENT_FREE_REQUEST, dest)
-                usage = usage + used + used_prior
-                scores[dest] = odds - prior
-            ranked = sorted(scores, key=lambda d: -scores[d])
-            # Food is prepared in one place: the best-scored destination only.
-            found = [
-                (0, d) for i, d in enumerate(ranked) if i == 0 or (scores[d] > self.threshold and not making)
-            ]
-        targets = self._with_objects(request, scene, found, how, scores, making, dish)
-        return targets, usage.with_latency(time.perf_counter() - started)
-
-    def _with_objects(
-        self,
-        request: str,
-        scene: Scene,
-        found: list[tuple[int, str]],
-        how: str,
-        scores: dict[str, float],
-        making: bool,
-        dish: str,
-    ) -> list[Target]:
-        vocab = words()
-        seq = tokens(request)
-        taken = [i for at, name in found if how == "named" for i in range(at, at + len(tokens(name)))]
-        objects = mentions(
-            request, [o for o in scene.pickable if o not in {n for _, n in found}], taken=taken
-        )
-        clause = _clause_numbers(seq, vocab["clause_breaks"])
-        named = _owners(found, objects, clause, how)
-        says_all = any(w in vocab["all"] for w in seq)
-        named_at = {i for at, obj in objects for i in range(at, at + len(tokens(obj)))}
-        at_of = {name: at for at, name in found}
-        targets = []
-        for _, name in found:
-            mine = set(clause)  # the whole request, unless the request names this target
-            if how == "named":
-                mine = self._own_clauses(name, found, objects, named[name], clause, at_of[name])
-            part = [w for w, c in zip(seq, clause, strict=True) if c in mine]
-            indefinite = sum(w in vocab["indefinite"] for w in part)
-            free = [w for i, w in enumerate(seq) if clause[i] in mine and i not in named_at]
-            if says_all or (making and how != "named"):
-                count = ALL
-            elif how == "speaker" and not named[name]:
-                count = max(1, indefinite)  # "I'm cold": one thing for the speaker unless they say more
-            elif _plural(free):
-                count = ALL
-            elif named[name] or indefinite:
-                count = max(len(named[name]), indefinite)
-            else:
-                count = ALL
-            criterion = ""
-            if how == "named" and count == ALL and not named[name]:
-                criterion = _place_criterion(name, found, seq, clause, mine, at_of[name], vocab)
-            ingredients = making and how != "named" and not named[name]
-            if ingredients:
-                # Which objects go is a question about each one: "is the lime an ingredient of
-                # guacamole?" ranked the ingredients above the rest better than "should the robot
-                # put the lime in the mixing bowl?" on the dev split.
-                criterion = f"an ingredient of {dish or 'the food the person asked for'}"
-            targets.append(
-                Target(
-                    name,
-                    count,
-                    how,
-                    named[name],
-                    scores.get(name, 0.0),
-                    criterion,
-                    dish if ingredients else "",  # "a cake with flowers on the cake plate": no dish
-                    ingredients,
-                )
-            )
-        return targets
-
-    def _own_clauses(
-        self,
-        name: str,
-        found: list[tuple[int, str]],
-        objects: list[tuple[int, str]],
-        owned: list[str],
-        clause: list[int],
-        at: int,
-    ) -> set[int]:
-        """The clauses that speak about the target ``name`` named at token ``at``.
-
-        A person's clauses run on to the next target ("the toddler is bored; give her something to
-        play with"); a container's is the one that names it. Clauses of objects it owns count too.
-        """
-        start = clause[at]
-        later = [clause[t_at] for t_at, _ in found if clause[t_at] > start]
-        end = start + 1
-        if self.is_person(name):
-            end = min(later) if later else clause[-1] + 1
-        return set(range(start, end)) | {clause[o_at] for o_at, obj in objects if obj in owned}
-
-
-def _clause_numbers(seq: list[str], breaks: list[str]) -> list[int]:
-    """For each token, the number of its clause (clauses split at "and", "then", ...)."""
-    clause, number = [], 0
-    for word in seq:
-        number += word in breaks
-        clause.append(number)
-    return clause
-
-
-def _owners(
-    found: list[tuple[int, str]], objects: list[tuple[int, str]], clause: list[int], how: str
-) -> dict[str, list[str]]:
-    """The objects the request names, by the target they go to.
-
-    A named object goes to the target of its own clause ("hand me the tape and put the gloves on
-    the shelf"), else to the nearest target ("put the hammer and the screwdriver in the toolbox").
-    """
-    named: dict[str, list[str]] = {name: [] for _, name in found}
-    for at, obj in objects:
-        same = [name for t_at, name in found if clause[t_at] == clause[at]] if how == "named" else []
-        nearest = min(found, key=lambda f: abs(f[0] - at))[1] if found else None
-        owner = same[0] if same else nearest
-        if owner is not None:
-            named[owner].append(obj)
-    return named
-
-
-def _place_criterion(
-    name: str,
-    found: list[tuple[int, str]],
-    seq: list[str],
-    clause: list[int],
-    mine: set[int],
-    at: int,
-    vocab: dict[str, list[str]],
-) -> str:
-    """What fits a named place that takes every fitting object: its clause's own words."""
-    shared = sum(1 for t_at, _ in found if t_at == at) > 1
-    if shared:  # "the wood, metal and fabric bins": each bin by its own name
-        return f"belongs in the {name}"
-    places = {i for t_at, other in found for i in range(t_at, t_at + len(tokens(other)))}
-    kept = [w for i, w in enumerate(seq) if clause[i] in mine and i not in places]
-    return _criterion(kept, [*vocab["not_criteria"], *vocab["clause_breaks"]])
