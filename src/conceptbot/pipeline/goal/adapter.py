@@ -146,10 +146,11 @@ def _part(target: GoalTarget) -> str:
 
 
 class ScoredChooser:
-    """Chooses an open target's destinations with the model: each destination scored "should the
-    robot put things in the X?" minus the same for a content-free request; the best, and (except for a dish, made in one place) those above the
-    finder's threshold. A need goes to the user where the scene has one (the speaker); any other
-    open target goes to a place, never to a person or an animal (the goal names those it hands to).
+    """Chooses an open target's destinations with the model: each destination scored "should the robot put
+    things in the X?" minus the same for a content-free request; the best, and (except for a dish, made
+    in one place) those above the finder's threshold. A need goes to the user where the scene has one
+    (the speaker); any other open target goes to a place, never to a person or an animal (the goal names
+    those it hands to).
 
     Args:
         finder: Its LLM, ``is_person``, threshold and food knowledge are used.
