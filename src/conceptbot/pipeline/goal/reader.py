@@ -33,11 +33,12 @@ from __future__ import annotations
 import logging
 import re
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from conceptbot.core.scene import Scene
 from conceptbot.pipeline.goal.clauses import analyse
+from conceptbot.pipeline.goal.items import clause_items as _items
+from conceptbot.pipeline.goal.items import indefinite, item_targets, names_itself
 from conceptbot.pipeline.goal.mentions import Mention, scene_mentions
 from conceptbot.pipeline.goal.needs import need_parts
 from conceptbot.pipeline.goal.parse import Clause, chunks, vocabulary
@@ -46,10 +47,8 @@ from conceptbot.pipeline.goal.themes import (
     EXCEPTED,
     Reading,
     conjuncts,
-    criterion_text,
     excepted_mentions,
     exception,
-    head_of,
     objects_in,
     read_theme,
     read_themes,
@@ -62,20 +61,6 @@ if TYPE_CHECKING:  # spaCy is loaded with the model, on first use (pipeline/goal
     from spacy.tokens import Doc, Token
 
 logger = logging.getLogger(__name__)
-
-
-@dataclass
-class _Item:
-    """A theme sent to places (None: the planner chooses), before it becomes targets."""
-
-    clause: Clause
-    places: list[tuple[str, ...]]  # one entry per mention: a plural head gives several names
-    theme: tuple[int, ...]
-    key: str = ""
-    shared: bool = False  # the theme is shared with the item before ("and the plastic bin")
-    condition: bool = False  # an "if" clause's criterion, waiting for the clause that sends "it"
-    generic: bool = False  # sends whatever meets a condition: all of them
-    remainder: bool = False  # "otherwise it goes in A": what the conditions before leave
 
 
 class GoalReader:
@@ -175,7 +160,7 @@ class GoalReader:
         stack = is_stacking(doc)
         users = [d for d in scene.destinations if d.lower() == "user"]
         items = _items(doc, clauses, mentions, stack, users)
-        targets = _targets(doc, items, mentions)
+        targets = item_targets(doc, items, mentions)
         dish: str | None = None
         need: str | None = None
         if stack:
@@ -210,7 +195,7 @@ class GoalReader:
             elif clause.form == "fragment" and not clause.places and _polite(doc, clause) and clause.theme:
                 dish = dish_words(doc, clause.theme)
                 named = objects_in(clause.theme, mentions)
-                thing = _names_itself(doc, clause.theme, mentions) or _described(doc, clause.theme)
+                thing = names_itself(doc, clause.theme, mentions) or _described(doc, clause.theme)
                 thing = thing or doc[clause.theme[0]].text.lower() in vocab["one"]  # "something for ..."
                 if dish and not named and not thing and self.is_dish is not None and self.is_dish(dish):
                     return [GoalTarget(None, "ingredients", (), "", ALL)], dish  # "Pancakes, please!"
@@ -228,7 +213,7 @@ class GoalReader:
             reading = read_theme(doc, wished, mentions)
             parts = conjuncts(doc, wished)
             thing = any(
-                _names_itself(doc, p, mentions) or _indefinite(doc, p) or _described(doc, p) for p in parts
+                names_itself(doc, p, mentions) or indefinite(doc, p) or _described(doc, p) for p in parts
             )
             if not making and thing:
                 return _all_to(users, read_themes(doc, wished, mentions)), None
@@ -368,20 +353,6 @@ def _indefinite_before(doc: Doc, at: int) -> tuple[int, ...]:
     return ()
 
 
-def _names_itself(doc: Doc, run: Sequence[int], mentions: list[Mention]) -> bool:
-    """Whether a phrase is a scene object ("the watering can"), not a thing made of some ("a tomato
-    and cucumber salad")."""
-    head = head_of(doc, run)
-    return head is not None and any(m.kind in ("object", "both") and m.covers(head.i) for m in mentions)
-
-
-def _indefinite(doc: Doc, run: Sequence[int]) -> bool:
-    """Whether a wished-for phrase is "something ...", "anything ..." (not a dish)."""
-    skip = {"a", "an", "the", "some", "really", "just"}
-    first = next((i for i in run if doc[i].text.lower() not in skip), run[0])
-    return doc[first].text.lower() in ("something", "anything", "someone", "somebody")
-
-
 def _fronted_exception(doc: Doc, excepted: list[Mention]) -> int | None:
     """The comma that ends an exception opening the request ("Excluding the highlighter, put
     ...", "Apart from the thermos, ..."), or None: the exception's words start the request, and
@@ -495,285 +466,3 @@ def _stacked_things(doc: Doc, run: list[int], nouns: Sequence[str]) -> list[int]
         len(run),
     )
     return run[:cut]
-
-
-def _items(
-    doc: Doc, clauses: list[Clause], mentions: list[Mention], stack: bool, users: list[str]
-) -> list[_Item]:
-    """Each clause's theme and places, with colon pairs, pronoun themes and sort headers resolved."""
-    vocab = vocabulary()
-    items: list[_Item] = []
-    pending = ""  # a key said on its own ("By material, sort ...")
-    for n, clause in enumerate(clauses):
-        places = [p.mention.names for p in clause.places]
-        prev = clauses[n - 1] if n else None
-        stay = (clause.verb in vocab["stay"] and not places) or (
-            clause.negated and clause.verb in (*vocab["untouched"], *vocab["stay"])
-        )
-        waiting = items[-1] if items and items[-1].condition else None
-        sorting = items and len({n for p in items[-1].places for n in p}) > 1
-        if clause.key and not places and not clause.theme and sorting and not items[-1].key:
-            items[-1].key = clause.key  # "... go in the recycling bins, | sorted by material"
-            continue
-        if clause.form == "condition":
-            if clause.theme:
-                items.append(_Item(clause, [], clause.theme, condition=True))
-            continue
-        if (
-            waiting is not None
-            and (stay or clause.verb in vocab["stay"])
-            and _pronoun_only(doc, clause.theme)
-        ):
-            items.pop()  # "if something combines materials, leave it on the desk": it stays
-            continue
-        if (
-            waiting is not None
-            and _pronoun_only(doc, clause.theme)
-            and clause.form in ("imperative", "subject")
-        ):
-            # "if it's poisonous, lock it away", "if it's clothing, it belongs in the basket"
-            items[-1] = _Item(clause, places, waiting.theme, clause.key or pending, generic=True)
-            pending = ""
-            continue
-        alone = prev is not None and all(  # "otherwise, | it goes ..."
-            doc[i].text.lower() in vocab["otherwise"] or doc[i].is_punct
-            for i in range(prev.chunk.start, prev.chunk.end)
-        )
-        if (clause.otherwise or alone) and places and _pronoun_only(doc, clause.theme):
-            items.append(_Item(clause, places, clause.theme, clause.key or pending, remainder=True))
-            pending = ""
-            continue
-        if clause.form == "desire" and clause.theme and clause.verb in ("want", "need"):
-            # a need is for a thing ("I need a tool that drives in nails"), a wish maybe for a dish
-            parts = conjuncts(doc, clause.theme)  # "a bag of crackers and something to drink"
-            thing = clause.verb == "need" or any(_indefinite(doc, p) for p in parts)
-            if thing or any(_names_itself(doc, p, mentions) for p in parts):
-                items.append(_Item(clause, [tuple(users)] if users else [], clause.theme))
-            continue
-        if stay or clause.form in ("statement", "desire"):
-            continue
-        if (
-            clause.form == "imperative"
-            and clause.verb in vocab["making"]
-            and not _names_itself(doc, clause.theme, mentions)
-        ):
-            continue  # "make me a PB&J": a dish, not a thing to hand over
-        if clause.form == "imperative" and not places and _says_pronoun(doc, clause):
-            # "hand it over", "put those in", "put it somewhere safe": what "it" is, the clause
-            # before says; handing it is to the speaker
-            handed = clause.verb in vocab["handing"] and users
-            if items and items[-1].places and not handed:
-                continue  # said twice: "the paper bin is for X; put those in"
-            said = tuple(i for r in clause.runs for i in r)
-            theme = items[-1].theme if items else ()
-            if not theme and n:
-                theme = antecedent(doc, clauses[n - 1], mentions, _plural(doc, said))
-                if not handed and not objects_in(theme, mentions):
-                    continue  # "we'll want a green salad; can you set that up?": a dish, not a thing
-            if items and not items[-1].places:
-                items.pop()
-            if theme:
-                items.append(_Item(clause, [tuple(users)] if handed else [], theme, clause.key))
-            else:
-                pending = pending or clause.key  # "sort these by what they're made of, each one ..."
-            continue
-        if clause.form == "fragment" and not places and items and items[-1].places and _also(doc, clause):
-            # "fetch me the ruler. Oh, and the eraser as well."; "...; the hammer too."
-            items.append(_Item(clause, items[-1].places, clause.theme, items[-1].key))
-            continue
-        if clause.form == "imperative" and not places:
-            if clause.verb in (*vocab["making"], *vocab["desire"], *vocab["helping"]):
-                continue
-            if clause.theme and doc[clause.theme[0]].tag_ == "IN":
-                continue  # "look at my fingers": the verb's object is a place it looks, not a thing sent
-            if clause.verb in vocab["stack"]["verbs"] or stack:
-                continue
-            if clause.theme:
-                # "could you bring the ruler over?": handed with no one named, to the speaker
-                handed = clause.verb in vocab["handing"] and users
-                items.append(_Item(clause, [tuple(users)] if handed else [], clause.theme, clause.key))
-            continue
-        if clause.form == "fragment" and places and not clause.theme:
-            if (
-                prev is not None
-                and clause.chunk.after == "colon"
-                and prev.form == "fragment"
-                and not prev.places
-            ):
-                if items and items[-1].clause is prev:
-                    items.pop()
-                items.append(_Item(clause, places, prev.theme, clause.key))
-                continue
-            if clause.chunk.after == "soft" and items and items[-1].places:
-                items.append(_Item(clause, places, items[-1].theme, items[-1].key, shared=True))
-                continue
-            nxt = clauses[n + 1] if n + 1 < len(clauses) else None
-            if nxt is not None and nxt.chunk.after == "colon" and nxt.form == "fragment" and not nxt.places:
-                items.append(_Item(clause, places, nxt.theme, clause.key))
-                continue
-            continue
-        if clause.form == "fragment" and not places and clause.key and not clause.theme:
-            pending = clause.key
-            continue
-        if clause.form == "fragment" and not places:
-            paired = prev is not None and clause.chunk.after == "colon" and prev.form == "fragment"
-            if clause.theme and paired and prev.places and not prev.theme:
-                continue  # paired with the place before (handled there)
-            if clause.theme:
-                items.append(_Item(clause, [], clause.theme, clause.key))
-            continue
-        theme = clause.theme
-        if places and _pronoun_only(doc, theme) and not items and n:
-            # "I'm looking for X; pass it to me"
-            said = theme or tuple(i for r in clause.runs for i in r)
-            theme = antecedent(doc, clauses[n - 1], mentions, _plural(doc, said)) or theme
-        if places and _pronoun_only(doc, theme) and items:
-            before = items[-1]
-            if before.places == places:
-                continue  # "the dog would like a treat; give him one": said twice
-            theme = before.theme
-            fetched = before.clause.verb in vocab["fetching"] and all(
-                p.mention.kind == "person" for p in before.clause.places
-            )
-            if not before.places or fetched:
-                items.pop()  # "fetch one game ... and set it on the coffee table", "grab us a game and ..."
-        items.append(_Item(clause, places, theme, clause.key or pending))
-        pending = ""
-    return _without_headers(items, vocab)
-
-
-def _says_pronoun(doc: Doc, clause: Clause) -> bool:
-    """Whether a clause sends only a pronoun ("hand it over", "put those in")."""
-    said = [i for r in clause.runs for i in r]
-    return (bool(said) and not clause.theme) or (bool(clause.theme) and _pronoun_only(doc, clause.theme))
-
-
-def _also(doc: Doc, clause: Clause) -> bool:
-    """Whether a place-less fragment adds objects to the clause before: it names objects and says
-    "too", "also" or "as well", or opens with "and"."""
-    words = [doc[i].text.lower() for i in range(clause.chunk.start, clause.chunk.end)]
-    text = " " + " ".join(words) + " "
-    added = any(f" {w} " in text for w in vocabulary()["also"]) or "and" in words[:3]
-    return added and bool(clause.theme) and any(doc[i].tag_.startswith("NN") for i in clause.theme)
-
-
-def _plural(doc: Doc, run: Sequence[int]) -> bool | None:
-    """Whether a pronoun theme is plural ("them", "they", "these"), singular ("it"), or says not."""
-    words = {doc[i].text.lower() for i in run}
-    if words & {"them", "they", "these", "those"}:
-        return True
-    return False if words & {"it", "this", "that"} else None
-
-
-def antecedent(
-    doc: Doc, clause: Clause, mentions: Sequence[Mention] = (), plural: bool | None = None
-) -> tuple[int, ...]:
-    """What "it" or "them" refers back to in the clause before: the objects it names (all of them
-    for "them", the last for "it"), else its last noun phrase that is not a person and agrees in
-    number ("I'm looking for something to write with"), as the phrase's tokens."""
-    found: tuple[int, ...] = ()
-    chunk = clause.chunk
-    asked = _asked_which(doc, chunk.start, chunk.end)
-    if asked:
-        return asked  # "Which things are paper through and through? Those go in the paper bin."
-    named = [m for m in mentions if m.kind in ("object", "both") and chunk.start <= m.start < chunk.end]
-    if named and plural:
-        return tuple(range(named[0].start, named[-1].end))  # "the socks and the towel ...; load them"
-    if named and plural is False:
-        return tuple(range(named[-1].start, named[-1].end))
-    for token in doc[chunk.start : chunk.end]:
-        if token.i in found:
-            continue  # inside the phrase found: "something with caffeine", not "caffeine"
-        role = token.dep_ in ("dobj", "pobj", "nsubj", "attr") and token.tag_.startswith("NN")
-        agrees = plural is None or (token.tag_ in ("NNS", "NNPS")) == plural
-        if role and agrees and token.text.lower() not in vocabulary()["personal"]:
-            found = tuple(t.i for t in token.subtree if chunk.start <= t.i < chunk.end and not t.is_punct)
-    return found
-
-
-def _asked_which(doc: Doc, start: int, end: int) -> tuple[int, ...]:
-    """What a "which/what ... is/are X?" question asks about: X ("which things are paper through and
-    through?"); () for any other chunk."""
-    if start >= end or doc[start].text.lower() not in ("which", "what", "whichever", "whatever"):
-        return ()
-    be = next((t for t in doc[start:end] if t.lemma_ == "be"), None)
-    if be is None:
-        return ()
-    return tuple(i for i in range(be.i + 1, end) if not doc[i].is_punct)
-
-
-def _pronoun_only(doc: Doc, run: Sequence[int]) -> bool:
-    """Whether a theme is only a pronoun ("it", "them both", "all of them"), or empty."""
-    pronouns = ("it", "them", "they", "one", "these", "those")
-    words = [doc[i].text.lower() for i in run]
-    return not run or (
-        all(w in (*pronouns, "both", "all", "of") for w in words) and any(w in pronouns for w in words)
-    )
-
-
-def _without_headers(items: list[_Item], vocab: dict) -> list[_Item]:
-    """Drops what says only which objects are sorted ("Sort the potted plants:"), and place-less
-    fragments that no place was paired with ("Dinner's ready")."""
-    placed = any(i.places for i in items)
-    kept = []
-    for item in items:
-        if not item.places and placed:
-            clause = item.clause
-            if clause.form == "fragment" or clause.verb in vocab["sort"]:
-                continue
-        if (not item.places and item.clause.form == "fragment") or item.condition:
-            continue  # a condition no clause sent anything by
-        kept.append(item)
-    return kept
-
-
-def _targets(doc: Doc, items: list[_Item], mentions: list[Mention]) -> list[GoalTarget]:
-    """The items as targets: sorts split into one target per place (see the module docstring)."""
-    groups: list[list[_Item]] = []
-    for item in items:
-        if item.shared and groups:
-            groups[-1].append(item)
-        else:
-            groups.append([item])
-    targets: list[GoalTarget] = []
-    for group in groups:
-        names = list(dict.fromkeys(n for item in group for p in item.places for n in p))
-        theme = group[0].theme
-        if len(names) > 1:
-            # A sort: each place takes what belongs in it, except a place with a clause of its own.
-            own = {
-                p[0] for other in groups if other is not group for i in other for p in i.places if len(p) == 1
-            }
-            key = next((i.key for i in group if i.key), "")
-            targets += [GoalTarget(n, "criterion", (), key, ALL) for n in names if n not in own]
-            continue
-        to = names[0] if names else None
-        if theme and not group[0].remainder and not group[0].generic:
-            # "the pear, the stapler and something to write with": each phrase of a list goes there
-            readings = read_themes(doc, theme, mentions)
-            if len(readings) > 1:
-                targets += [GoalTarget(to, r.takes, r.named, r.criterion, r.count) for r in readings]
-                continue
-        reading = read_theme(doc, theme, mentions) if theme else Reading("all")
-        if group[0].remainder:
-            reading = Reading("remainder")
-        elif group[0].generic and reading.takes == "criterion":
-            reading = Reading("criterion", (), reading.criterion, ALL)  # whatever meets the condition
-        criterion = reading.criterion or (criterion_text(doc, theme) if reading.takes == "criterion" else "")
-        targets.append(GoalTarget(to, reading.takes, reading.named, criterion, reading.count))
-    return _merged_named(targets)
-
-
-def _merged_named(targets: list[GoalTarget]) -> list[GoalTarget]:
-    """Targets naming objects for the same place, as one ("hand me the tape; hand me the glue")."""
-    out: list[GoalTarget] = []
-    for target in targets:
-        same = next(
-            (t for t in out if t.to == target.to and t.to and t.takes == target.takes == "named"), None
-        )
-        if same is None:
-            out.append(target)
-            continue
-        named = tuple(dict.fromkeys((*same.named, *target.named)))
-        out[out.index(same)] = GoalTarget(same.to, "named", named, "", len(named))
-    return out
