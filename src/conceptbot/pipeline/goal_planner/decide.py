@@ -14,9 +14,7 @@ likely than for an unknown object". The goal planner's thresholds apply to this 
 
 from __future__ import annotations
 
-import itertools
 import math
-import re
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
@@ -24,32 +22,17 @@ from typing import Any
 
 from conceptbot.core.scene import Scene
 from conceptbot.core.usage import Usage
-from conceptbot.knowledge.normalize import singular
 from conceptbot.models.llm import LLM, ChatRequest, Message, ScoreRequest
 from conceptbot.pipeline import prompts
 from conceptbot.pipeline.goal_planner.combine import Combination, sigmoid
 from conceptbot.pipeline.goal_planner.evidence import Evidence, GraphEvidence, criterion_terms
-from conceptbot.pipeline.goal_planner.targets import tokens, words
-from conceptbot.pipeline.retrieval import RelationRetriever, edge_text
+from conceptbot.pipeline.goal_planner.facts import FactFinder
 
 ANSWERS = ("Yes", "No")
-DEFINING = ("DefinedAs", "MadeOf")  # a word's own definition and ingredients
-USES = ("UsedFor", "CapableOf", "DefinedAs")  # what an object is for, as the graph states it
 CONTENT_FREE = "object"
 #: The criteria (by their ``evidence_terms.json`` group) asked without the object's graph facts.
 BARE_GROUPS = ("safe",)
-#: Graph classes of places heat can mark (:meth:`FactFinder.is_surface`), and of places it cannot
-#: or that hold things inside (appliances, fixtures, containers; also seats, which are furniture).
-SURFACES = frozenset({"furniture", "table", "flat surface", "horizontal surface", "surface", "countertop"})
-NOT_SURFACES = frozenset(
-    {"appliance", "kitchen appliance", "white goods", "plumbing fixture", "container", "receptacle"}
-)
 DESCRIPTION_TOKENS = 48  # one sentence; the model's descriptions of the judgement set end well before
-_STOP = {
-    "a", "an", "the", "of", "to", "for", "and", "or", "with", "that", "is", "are", "be", "made", "only",
-    "something", "thing", "things", "one", "some", "all", "any", "every", "my", "me", "you", "it", "in",
-    "on", "into", "can", "could", "would", "i", "we", "please", "entirely", "more", "than", "from",
-}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -106,216 +89,6 @@ def _log_odds(logprobs: Sequence[float]) -> tuple[float, float]:
     top = max(yes, no)
     p_yes = math.exp(yes - top) / (math.exp(yes - top) + math.exp(no - top))
     return p_yes, yes - no
-
-
-def content_words(text: str) -> list[str]:
-    """The words and two-word phrases of ``text`` worth looking up in the graph, longest first."""
-    words = [w for w in re.findall(r"[a-z][a-z'-]+", text.lower()) if w not in _STOP and len(w) > 2]
-    pairs = [f"{a} {b}" for a, b in itertools.pairwise(words)]
-    return list(dict.fromkeys(pairs + words))
-
-
-@dataclass
-class FactFinder:
-    """Graph facts about objects and descriptions, filtered against what is being decided.
-
-    Args:
-        retriever: Relation retrieval with the cosine filter (None: no facts, the no-graph ablation).
-        per_object: Facts about the object itself shown per question.
-        inherited: Facts about the object's ``IsA`` parents shown per question.
-        per_context: Facts about the description's own words (shared by every object's question).
-    """
-
-    retriever: RelationRetriever | None
-    per_object: int = 4
-    inherited: int = 2
-    per_context: int = 3
-
-    def context(self, what: str, request: str, dish: str | None = None) -> tuple[str, ...]:
-        """Facts about the description's words ("hollandaise means eggs and butter with lemon juice").
-
-        The definition of the ``dish`` to prepare and what it is made of come first: they name the
-        ingredients (WordNet glosses), but the cosine filter ranks "hollandaise means eggs and butter
-        with lemon juice" below "hollandaise is a sauce"; then the kept facts, most similar first.
-        """
-        if self.retriever is None:
-            return ()
-        found_words = list(dict.fromkeys([*([dish] if dish else []), *content_words(what)]))
-        if not found_words:
-            return ()
-        found = self.retriever.retrieve_many(found_words, [what, request])
-        defining = [
-            s
-            for word, r in found.items()
-            if r.match == "exact" and word == dish
-            for s in r.edges
-            if s.edge.relation in DEFINING and s.edge.head.lower() == word
-        ]
-        kept = sorted(
-            (s for r in found.values() if r.matched for s in r.kept if s.edge.relation != "RelatedTo"),
-            key=lambda s: -s.similarity,
-        )
-        return tuple(dict.fromkeys(edge_text(s.edge) for s in [*defining, *kept]))[: self.per_context]
-
-    def is_dish(self, phrase: str) -> bool:
-        """Whether the graph places ``phrase`` (or its singular form) under a prepared food
-        (``dish_classes``), up to three IsA steps; False without a graph."""
-        if self.retriever is None:
-            return False
-        classes = set(words()["dish_classes"])
-        name = " ".join(tokens(phrase))
-        forms = dict.fromkeys(
-            [name, " ".join([*name.split()[:-1], singular(name.split()[-1])]) if name else ""]
-        )
-        return any(f and (f in classes or self._is_a(f, classes)) for f in forms)
-
-    def dish_concept(self, phrase: str, pickable: Sequence[str] = ()) -> str | None:
-        """The graph's concept for a dish the request names in its own words ("a hollandaise sauce"
-        -> "hollandaise", "Pancakes" -> "pancake"), or None if the graph places none of it under a
-        prepared food.
-
-        Tried in order: the phrase's singular form, the phrase, its word pairs, then its single words, a
-        word of the scene's objects never ("a tomato and cucumber salad" with a tomato in the scene
-        is a salad: "tomato IsA salad" is in the offline graph) and a bare class word ("sauce")
-        after the others, being the least specific."""
-        seq = [w for w in tokens(phrase) if w.isalpha() and w not in _STOP]
-        if not seq:
-            return None
-        classes = set(words()["dish_classes"])
-        in_scene = {w for name in pickable for w in tokens(name)}
-        # The singular first: the graph's concept is singular, and a dish's definition is found by
-        # an exact match (``context``).
-        candidates = [" ".join([*seq[:-1], singular(seq[-1])]), " ".join(seq)]
-        candidates += [f"{a} {b}" for a, b in itertools.pairwise(seq)]
-        single = [w for w in seq if w not in in_scene and singular(w) not in in_scene]
-        candidates += sorted(single, key=lambda w: singular(w) in classes or w in classes)
-        return next((c for c in dict.fromkeys(candidates) if self.is_dish(c)), None)
-
-    def may_be_dish(self, phrase: str) -> bool:
-        """Whether a wished-for thing may be a dish to make: the graph places it under a prepared
-        food, or knows none of its words (a "PB&J" is not in the offline graph: the parse decides);
-        a thing the graph knows as something else ("a drink") is not."""
-        if self.dish_concept(phrase) is not None:
-            return True
-        assert self.retriever is not None
-        seq = [w for w in tokens(phrase) if w.isalpha() and w not in _STOP]
-        known = (self.retriever.graph.edges(w, ["IsA"], 1).match in ("exact", "lemma") for w in seq)
-        return not any(known)
-
-    def prep_places(self, destinations: Sequence[str]) -> list[str]:
-        """The destinations food can be prepared in or on: those the graph places under cookware
-        (``cookware_classes``: "frying pan" IsA pan, "mixing bowl" IsA bowl), by their name or its
-        last word ("ceramic bowl" -> bowl), within two IsA steps. Empty without a graph."""
-        if self.retriever is None:
-            return []
-        classes = set(words()["cookware_classes"])
-        found = []
-        for name in destinations:
-            words_ = tokens(name)
-            heads = dict.fromkeys([name.lower(), words_[-1] if words_ else name.lower()])
-            if any(h in classes or self._is_a(h, classes, depth=2) for h in heads):
-                found.append(name)
-        return found
-
-    def _parents(self, concept: str) -> list[str]:
-        """The graph's IsA parents of ``concept``, strongest first ([] where it knows no such word)."""
-        assert self.retriever is not None
-        found = self.retriever.graph.edges(concept, ["IsA"], 40)
-        if found.match not in ("exact", "lemma"):
-            return []
-        head = (found.matched or concept).lower()
-        return list(dict.fromkeys(e.tail.lower() for e in found.edges if e.head.lower() in (concept, head)))
-
-    def same_kind(self, word: str, other: str) -> bool:
-        """Whether the graph makes ``word`` and ``other`` the same kind of thing: one is an IsA
-        parent of the other, or both have a parent in common ("basket" and "bin": both IsA
-        container; "shelf" and "bin": no). For a place the person calls by another word than the
-        scene does ("the right baskets" where the scene has bins)."""
-        if self.retriever is None:
-            return False
-        word, other = word.lower(), other.lower()
-        if word == other:
-            return True
-        mine, theirs = self._parents(word), self._parents(other)
-        return other in mine or word in theirs or bool(set(mine) & set(theirs))
-
-    def is_surface(self, place: str) -> bool:
-        """Whether the graph makes ``place`` a surface that heat can mark: a table, a counter, a
-        shelf, a piece of furniture (an IsA chain of at most 3 steps to :data:`SURFACES`), and no
-        appliance, fixture or container (:data:`NOT_SURFACES`: an oven, a sink, a bowl, a sofa).
-        A name the graph does not know is asked by its last word ("bedside table": "table").
-        False without a graph: the planner then puts no mat under anything."""
-        if self.retriever is None:
-            return False
-        for name in dict.fromkeys((place.lower(), place.lower().split()[-1])):
-            if not self._parents(name) and " " in name:
-                continue  # unknown as a whole: its head noun is asked next
-            return self._is_a(name, SURFACES) and not self._is_a(name, NOT_SURFACES)
-        return False
-
-    def _is_a(self, concept: str, classes: set[str] | frozenset[str], depth: int = 3) -> bool:
-        """Whether an IsA chain of at most ``depth`` steps leads from ``concept`` to one of ``classes``."""
-        assert self.retriever is not None
-        level = [concept]
-        seen = set(level)
-        for _ in range(depth):
-            # Ordered, strongest edges first: the 12 parents followed are the same on every run (a
-            # set's order depends on the hash seed, and so did which parents were kept).
-            parents: dict[str, None] = {}
-            for node in level:
-                parents.update(dict.fromkeys(self._parents(node)))
-            if classes.intersection(parents):
-                return True
-            level = [p for p in parents if p not in seen][:12]
-            seen.update(level)
-            if not level:
-                return False
-        return False
-
-    def uses(self, objects: Sequence[str], need: str) -> dict[str, tuple[float, str]]:
-        """Per object, the highest cosine between ``need`` ("I can't make out this tiny print") and
-        what the graph states the object is for, with that statement: its own ``UsedFor`` and
-        ``CapableOf`` edges and its definition ("blanket UsedFor keep warm", "earplug: a plug ...
-        for protection against ... loud noise"), or its head noun's for a name the graph knows by
-        its head ("wool blanket"). NaN and "" where the graph states none (or without a graph)."""
-        if self.retriever is None:
-            return {o: (math.nan, "") for o in objects}
-        found = self.retriever.retrieve_many(objects, [need])
-        out = {}
-        for name, got in found.items():
-            heads = {name.lower(), (got.matched or name).split(" + ")[0].lower()}
-            stated = [
-                s
-                for s in got.edges
-                if s.edge.relation in USES and s.edge.head.lower() in heads and s.edge.weight > 0
-            ]
-            best = max(stated, key=lambda s: s.similarity, default=None)
-            out[name] = (best.similarity, edge_text(best.edge)) if best is not None else (math.nan, "")
-        return out
-
-    def about(self, objects: Sequence[str], targets: Sequence[str]) -> dict[str, tuple[str, ...]]:
-        """Per object: its kept facts, then kept facts of its IsA parents, most similar first."""
-        if self.retriever is None:
-            return {o: () for o in objects}
-        own = self.retriever.retrieve_many(objects, targets)
-        parents: dict[str, list[str]] = {}
-        for name, found in own.items():
-            heads = {name.lower(), (found.matched or "").lower()}
-            parents[name] = [
-                s.edge.tail for s in found.edges if s.edge.relation == "IsA" and s.edge.head.lower() in heads
-            ][:3]
-        wanted = list(dict.fromkeys(p for ps in parents.values() for p in ps))
-        inherited = self.retriever.retrieve_many(wanted, targets) if wanted else {}
-        out: dict[str, tuple[str, ...]] = {}
-        for name, found in own.items():
-            facts = [edge_text(s.edge) for s in found.kept[: self.per_object]]
-            above = sorted(
-                (s for p in parents[name] for s in inherited[p].kept if s.edge.relation != "RelatedTo"),
-                key=lambda s: -s.similarity,
-            )
-            facts += [edge_text(s.edge) for s in above[: self.inherited]]
-            out[name] = tuple(dict.fromkeys(facts))
-        return out
 
 
 class Decider:
