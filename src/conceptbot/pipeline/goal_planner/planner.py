@@ -30,19 +30,12 @@ The paper's step-by-step planner stays available (:mod:`conceptbot.pipeline.step
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass, field, replace
 from typing import Protocol
 
-from conceptbot.core.errors import (
-    BackendRequestError,
-    BackendUnavailableError,
-    ModelOutputError,
-    NotSupportedError,
-)
 from conceptbot.core.observe import SILENT, Observer
-from conceptbot.core.plan import Action, CandidateScore, Done, PickAndPlace, Step, format_action
+from conceptbot.core.plan import Action, CandidateScore, Done, PickAndPlace, Step
 from conceptbot.core.scene import Scene
 from conceptbot.core.system import Ask
 from conceptbot.core.trace import (
@@ -56,10 +49,8 @@ from conceptbot.core.trace import (
     RiskEvent,
     StackTrace,
     UnderlayCheck,
-    Veto,
 )
 from conceptbot.core.usage import Usage
-from conceptbot.pipeline import modes
 from conceptbot.pipeline.affordance import Gripper, affordance
 from conceptbot.pipeline.goal_planner.asking import (
     clarify,
@@ -72,21 +63,18 @@ from conceptbot.pipeline.goal_planner.choice import ObjectChooser
 from conceptbot.pipeline.goal_planner.choice import shipped_weights as shipped_choice
 from conceptbot.pipeline.goal_planner.companions import (
     CompanionWeights,
-    candidates,
-    graph_link,
     shipped_weights,
 )
 from conceptbot.pipeline.goal_planner.conformal import Calibration, shipped
 from conceptbot.pipeline.goal_planner.decide import Decider, Judgement
-from conceptbot.pipeline.goal_planner.targets import ALL, Target, TargetsRead, mentions
+from conceptbot.pipeline.goal_planner.placing import Placing
+from conceptbot.pipeline.goal_planner.risk import RiskChecks
+from conceptbot.pipeline.goal_planner.targets import ALL, Target, TargetsRead
 from conceptbot.pipeline.hazards import HazardCheck
 from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
-from conceptbot.pipeline.ope_answers import RiskIndex
 from conceptbot.pipeline.tracing import judgement_trace, target_trace
 
 METHOD = "decide"
-#: What a pad under a hot object is for, in the graph's words of use (the pads are ranked by it).
-HOT_PAD = "put a hot pot or dish on it to protect the table"
 
 
 class TargetReader(Protocol):
@@ -99,10 +87,6 @@ class TargetReader(Protocol):
 
 TOP_K = 6
 NAMED = 10.0  # the score of an object the request names: above any decided one
-BASE = "a sturdy object with a flat top that other things can safely be stacked on"
-#: What goes on top of a pile, whatever its size: the graph states it of many things ("egg
-#: HasProperty fragile", "glass HasProperty breakable"), so the combination weighs that evidence.
-FRAGILE = "fragile"
 
 
 @dataclass(frozen=True)
@@ -204,30 +188,7 @@ def _why(check: RiskCheck) -> str:
     return f"{check.move}: {check.why}" + (f", {check.reason}" if check.reason else "")
 
 
-def _failed(obj: str, target: str, message: str) -> Veto:
-    """The veto of a move whose risk decision could not be made."""
-    statement = f"the risk decision could not be made: {message}"
-    return Veto(format_action(PickAndPlace(obj, target)), obj, target, "error", statement)
-
-
-def _vetoed(veto: Veto, move: str, ope: str | None, s_aff: float) -> RiskCheck:
-    """The risk check of a vetoed move (no score: none was needed, or none could be had)."""
-    return RiskCheck(veto.object, veto.to, move, None, None, (), ope, round(s_aff, 4), True, "vetoed", veto)
-
-
-def _plainly(judgement: Judgement, limit: float) -> str:
-    """Why the plain safety question drops a move, for the trace."""
-    return f"asked plainly, {judgement.subject!r} scores {judgement.score:+.2f} unsafe (over {limit:+.2f})"
-
-
-def _evidence(props: ObjectProperties, target: str) -> str:
-    """OPE's finding about an object, as evidence for one move: in the Risk Index mode its danger
-    and its interaction score with the move's destination only (the other partners are noise for
-    this question)."""
-    return props.answer.move_summary(props.name, target)
-
-
-class GoalPlanner:
+class GoalPlanner(RiskChecks, Placing):
     """Targets -> decisions -> plan (see the module docstring).
 
     Args:
@@ -586,271 +547,6 @@ class GoalPlanner:
         order = {t.name: i for i, t in enumerate(targets)}
         moves = sorted(wanted.items(), key=lambda item: (order[item[1][0]], -item[1][1]))
         return [(obj, target) for obj, (target, _) in moves]
-
-    def _companions(
-        self,
-        request: str,
-        targets: list[Target],
-        ranked: dict[int, list[Judgement]],
-        decided: dict[int, list[Judgement]],
-        observer: Observer,
-    ) -> tuple[dict[int, tuple[str, list[str]]], list[CompanionCheck], Usage]:
-        """Per need target taking one object: its likeliest object (``ranked``, after any answer),
-        and the next candidates that help by the decisions before any answer (``decided``;
-        :func:`companions.candidates`) which the person would use together with it, by the model's
-        answer and the graph's link combined (:mod:`companions`). A which-one answer names the one
-        object; what is used with it is another question, so it is still asked. A question that
-        cannot be answered (an error, NaN) adds nothing: a companion is a convenience, not a
-        safety."""
-        spent = Usage(calls=0)
-        together: dict[int, tuple[str, list[str]]] = {}
-        checks: list[CompanionCheck] = []
-        weights = self.companions
-        graph = self.decider.facts.retriever.graph if self.decider.facts.retriever is not None else None
-        for number, target in enumerate(targets):
-            now = [j for j in ranked.get(number, []) if j.scoring]
-            if not target.helps or target.count != 1 or not now or weights.considered < 1:
-                continue
-            anchor = now[0].subject
-            if not math.isfinite(now[0].score) or now[0].score <= self.thresholds.one_floor:
-                continue  # the target takes nothing (or the person said none): nothing to go with
-            before = [(j.subject, j.score) for j in decided.get(number, []) if j.scoring]
-            others = candidates(before, anchor, weights.considered)
-            if not others:
-                continue
-            need = target.need or request
-            observer.progress(f"Together: would they need {', '.join(others)} with the {anchor}?")
-            try:
-                answers, used = self.decider.together(need, anchor, others)
-                spent = spent + used
-            except (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError):
-                answers = [Judgement(o, f"with the {anchor}", math.nan, math.nan) for o in others]
-            taken = []
-            for answer in answers:
-                linked, statement = graph_link(graph, anchor, answer.subject)
-                p = weights.p(answer.score, linked)
-                check = CompanionCheck(
-                    target.name, anchor, answer.subject, answer.p_yes, answer.score, statement, p, False
-                )
-                checks.append(check)
-                if math.isfinite(p) and p > 0.5:
-                    taken.append(answer.subject)
-            if taken:
-                together[number] = (anchor, taken)
-        return together, checks, spent
-
-    def _underlay(
-        self, request: str, scene: Scene, moves: list[tuple[str, str]], observer: Observer
-    ) -> tuple[list[tuple[str, str]], tuple[UnderlayCheck, ...] | None, Usage]:
-        """Put a mat or stand under a moved object too hot for its place.
-
-        The pads are the scene's objects that are both pickable and a place (a cork mat, a trivet)
-        and that no move touches. Each move onto a surface heat can mark (the graph's word:
-        :meth:`FactFinder.is_surface`; a table or a counter, not an oven, a sink or a bowl) is asked
-        "is the X too hot to put straight on the Y?" (:meth:`Decider.underneath`, with the object's
-        state and the request): the model judges heat well and places badly (on the labelled set,
-        "hot pan into the sink" scored as hot as on a table). Above ``Thresholds.underlay`` (P(Yes))
-        the move becomes two, in
-        order: a pad onto the place, then the object onto the pad. The pad is the one whose
-        graph statements of use are nearest to holding hot pots (:meth:`FactFinder.uses`), else
-        the first in the scene; each pad serves one object. A question that cannot be answered (a
-        backend error, NaN) adds no pad: the move stays as asked, since a mat protects a thing,
-        not a person. Without pads, or without a graph (the no-graph ablation), nothing is asked."""
-        spent = Usage(calls=0)
-        touched = {o for o, _ in moves} | {t for _, t in moves}
-        pads = [o.name for o in scene.objects if o.pickable and o.destination and o.name not in touched]
-        if not pads:
-            return moves, None, spent
-        use = self.decider.facts.uses(pads, HOT_PAD)
-        pads.sort(key=lambda p: -use[p][0] if math.isfinite(use[p][0]) else math.inf)
-        out: list[tuple[str, str]] = []
-        checks: list[UnderlayCheck] = []
-        surfaces: dict[str, bool] = {}
-        for obj, place in moves:
-            free = [p for p in pads if p not in touched and p != place]
-            surface = surfaces.setdefault(place, self.decider.facts.is_surface(place))
-            if not free or not surface or self.hazards.is_person(place):
-                out.append((obj, place))
-                continue
-            observer.progress(f"Underlay: is the {obj} too hot for the {place}?")
-            found = scene.get(obj)
-            state = found.state if found is not None and found.state else ""
-            try:
-                judgement, used = self.decider.underneath(request, obj, state, place)
-                spent = spent + used
-                p_yes, score = judgement.p_yes, judgement.score
-            except (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError):
-                p_yes = score = math.nan  # shown as null in the trace; no pad is added
-            hot = math.isfinite(p_yes) and math.isfinite(score) and p_yes > self.thresholds.underlay
-            checks.append(UnderlayCheck(obj, place, free[0], p_yes, score, hot))
-            if not hot:
-                out.append((obj, place))
-                continue
-            touched.add(free[0])
-            out += [(free[0], place), (obj, free[0])]
-        return out, tuple(checks) or None, spent
-
-    def _properties(
-        self,
-        request: str,
-        scene: Scene,
-        objects: list[str],
-        properties: dict[str, ObjectProperties],
-        usage: dict[str, Usage],
-        observer: Observer,
-    ) -> None:
-        wanted = [o for o in dict.fromkeys(objects) if o not in properties]
-        if self.ope is None or not wanted:
-            return
-        observer.progress(f"OPE: properties of {', '.join(wanted)}")
-        found = self.ope.run(wanted, modes.RISK, request, scene_objects=scene.names)
-        properties.update(found.properties)
-        usage["ope"] = usage["ope"] + found.usage
-
-    def _check(
-        self,
-        request: str,
-        scene: Scene,
-        obj: str,
-        target: str,
-        properties: dict[str, ObjectProperties],
-        usage: dict[str, Usage],
-        observer: Observer,
-        asked: list[str],
-        rate: bool = False,
-    ) -> RiskCheck:
-        """The risk decision and the affordance of one move (``rate``: OPE's Risk Index is asked for
-        it whatever the risk question says).
-
-        A veto (:mod:`conceptbot.pipeline.hazards`) drops the move before the model is asked; a
-        decision the backend cannot make (an error, a non-finite score) drops it too, and so does a
-        score that compares with nothing (NaN): the move is kept only when its score is known and at
-        or below the threshold."""
-        move = move_words(target, obj)
-        s_aff, factors = affordance(PickAndPlace(obj, target), scene, properties, [], self.gripper)
-        ope = _evidence(properties[obj], target) if obj in properties else None
-        veto = self.hazards.veto(obj, target, properties)
-        if veto is not None:
-            observer.progress(f"Risk: {move}: vetoed ({veto.statement})")
-            return _vetoed(veto, move, ope, s_aff)
-        observer.progress(f"Risk: is it safe to {move}?")
-        try:
-            judgement, used = self.decider.dangerous(request, move, obj, scene, ())
-        except (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError) as exc:
-            return _vetoed(_failed(obj, target, exc.message), move, ope, s_aff)
-        usage["risk"] = usage["risk"] + used
-        asked.append(judgement.scoring)
-        if not (math.isfinite(judgement.score) and math.isfinite(judgement.p_yes)):
-            return _vetoed(_failed(obj, target, "the backend gave a non-finite score"), move, ope, s_aff)
-        limit = self.thresholds.risk if self.hazards.is_person(target) else self.thresholds.risk_place
-        flagged = judgement.score > limit
-        reason = None
-        if flagged or rate or self.hazards.is_vulnerable(target):
-            # A flag from the question alone is no reason to drop a move ("give the crayons to the
-            # toddler" was flagged on dev): OPE's Risk Index of the object is asked, and the move is
-            # dropped for what it names, which the trace shows.
-            self._properties(request, scene, [obj], properties, usage, observer)
-            reason = self._reason(obj, target, properties, flagged)
-        if reason is None and self.hazards.is_vulnerable(target):
-            # Asked without the request, which sways the small model towards what was asked.
-            try:
-                plain, used = self.decider.unsafe(target, obj)
-            except (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError) as exc:
-                return _vetoed(_failed(obj, target, exc.message), move, ope, s_aff)
-            usage["risk"] = usage["risk"] + used
-            asked.append(plain.scoring)
-            if not (math.isfinite(plain.score) and math.isfinite(plain.p_yes)):
-                return _vetoed(_failed(obj, target, "the backend gave a non-finite score"), move, ope, s_aff)
-            if plain.score > self.thresholds.unsafe_vulnerable:
-                reason = _plainly(plain, self.thresholds.unsafe_vulnerable)
-        dangerous = reason is not None
-        infeasible = factors.get("pick", 1.0) <= 0.0 or factors.get("place", 1.0) <= 0.0
-        return RiskCheck(
-            object=obj,
-            to=target,
-            move=move,
-            p_unsafe=round(judgement.p_yes, 4),
-            score=round(judgement.score, 3),
-            evidence=tuple(judgement.facts),
-            ope=ope,
-            affordance=round(s_aff, 4),
-            dropped=dangerous or infeasible,
-            why="judged dangerous" if dangerous else "not feasible" if infeasible else "",
-            reason=reason or "",
-        )
-
-    def _unvetoed(
-        self, targets: list[Target], ranked: dict[int, list[Judgement]]
-    ) -> dict[int, list[Judgement]]:
-        """Each target's ranking less the candidates of a which-one decision that the veto drops
-        for that recipient (by the graph's statements: OPE has rated nothing yet); named objects
-        stay, so that their veto is traced where the move is checked."""
-        out = dict(ranked)
-        for number, judgements in ranked.items():
-            to = targets[number].name
-            if targets[number].count == 1 and self.hazards.is_vulnerable(to):
-                out[number] = [
-                    j for j in judgements if j.p_one is None or self.hazards.veto(j.subject, to, {}) is None
-                ]
-        return out
-
-    def _reason(
-        self, obj: str, target: str, properties: dict[str, ObjectProperties], flagged: bool
-    ) -> str | None:
-        """Why a move is dangerous, in OPE's words, or None when nothing names a danger.
-
-        OPE's rating of the object with the destination at ``rated_danger`` or above names a danger
-        for any move; the object's own danger rating does for a hand-over to a child or an animal.
-        Without OPE (an ablation) a flag from the risk question is the reason: the move cannot be
-        cleared, so it is dropped."""
-        found = properties.get(obj)
-        if found is None:
-            return "the risk question flagged it (no OPE rating to check it)" if flagged else None
-        answer = found.answer
-        limit = self.thresholds.rated_danger
-        with_target = answer.score_with(target) if isinstance(answer, RiskIndex) else None
-        if with_target is not None and with_target >= limit:
-            return f"OPE rates the {obj} {with_target}/5 dangerous with the {target}"
-        rated = answer.rated_danger()
-        if self.hazards.is_vulnerable(target) and rated >= limit:
-            return f"OPE rates the {obj} {rated}/5 dangerous for the {target}"
-        return None
-
-    def _stack(
-        self,
-        request: str,
-        scene: Scene,
-        usage: dict[str, Usage],
-        asked: list[str],
-    ) -> tuple[list[tuple[str, str]], StackTrace | None]:
-        """Bottom-up moves for a pile of the objects that can both be moved and carry another, and
-        the pile's order for the trace (None when there is nothing to pile).
-
-        Fragile things go on top (the model's answer combined with what the graph states); below
-        them the larger footprint lower down where the scene gives sizes, then the better base by
-        the model's judgement."""
-        named = [o for _, o in mentions(request, scene.pickable)]
-        stackable = [o for o in scene.pickable if scene.get(o).destination]  # type: ignore[union-attr]
-        items = [o for o in named if o in stackable]
-        items = items if len(items) >= 2 else stackable
-        if len(items) < 2:
-            return [], None
-        judgements, _, used = self.decider.fits(request, BASE, items, scene, combine=False)
-        fragile, _, used_fragile = self.decider.fits(request, FRAGILE, items, scene)
-        usage["decide"] = usage["decide"] + used + used_fragile
-        asked.extend(j.scoring for j in (*judgements, *fragile))
-        breaks = {j.subject for j in fragile if j.score > self.thresholds.combined}
-
-        def footprint(name: str) -> float:
-            size = scene.get(name).size_m  # type: ignore[union-attr]
-            return size[0] * size[1] if size else 0.0
-
-        order = sorted(
-            judgements, key=lambda j: (j.subject in breaks, -footprint(j.subject), -round(j.score, 1))
-        )
-        bottom_up = [j.subject for j in order]
-        moves = [(upper, lower) for lower, upper in itertools.pairwise(bottom_up)]
-        return moves, StackTrace(BASE, tuple(judgement_trace(j) for j in order))
 
     def _steps(
         self,

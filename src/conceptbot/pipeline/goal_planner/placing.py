@@ -1,0 +1,190 @@
+"""What the goal planner adds to the moves it decided (a mixin of
+:class:`~conceptbot.pipeline.goal_planner.planner.GoalPlanner`): things used together with what is
+handed over (:mod:`.companions`), a mat or stand under a hot object, and the order of a pile.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from typing import TYPE_CHECKING
+
+from conceptbot.core.errors import (
+    BackendRequestError,
+    BackendUnavailableError,
+    ModelOutputError,
+    NotSupportedError,
+)
+from conceptbot.core.observe import Observer
+from conceptbot.core.scene import Scene
+from conceptbot.core.trace import (
+    CompanionCheck,
+    StackTrace,
+    UnderlayCheck,
+)
+from conceptbot.core.usage import Usage
+from conceptbot.pipeline.goal_planner.companions import (
+    CompanionWeights,
+    candidates,
+    graph_link,
+)
+from conceptbot.pipeline.goal_planner.decide import Decider, Judgement
+from conceptbot.pipeline.goal_planner.targets import Target, mentions
+from conceptbot.pipeline.tracing import judgement_trace
+
+if TYPE_CHECKING:
+    from conceptbot.pipeline.goal_planner.planner import Thresholds
+
+#: What a pad under a hot object is for, in the graph's words of use (the pads are ranked by it).
+HOT_PAD = "put a hot pot or dish on it to protect the table"
+BASE = "a sturdy object with a flat top that other things can safely be stacked on"
+#: What goes on top of a pile, whatever its size: the graph states it of many things ("egg
+#: HasProperty fragile", "glass HasProperty breakable"), so the combination weighs that evidence.
+FRAGILE = "fragile"
+
+
+class Placing:
+    """Companions, underlays and piles; the planner supplies the attributes below."""
+
+    decider: Decider
+    thresholds: Thresholds
+    companions: CompanionWeights
+
+    def _companions(
+        self,
+        request: str,
+        targets: list[Target],
+        ranked: dict[int, list[Judgement]],
+        decided: dict[int, list[Judgement]],
+        observer: Observer,
+    ) -> tuple[dict[int, tuple[str, list[str]]], list[CompanionCheck], Usage]:
+        """Per need target taking one object: its likeliest object (``ranked``, after any answer),
+        and the next candidates that help by the decisions before any answer (``decided``;
+        :func:`companions.candidates`) which the person would use together with it, by the model's
+        answer and the graph's link combined (:mod:`companions`). A which-one answer names the one
+        object; what is used with it is another question, so it is still asked. A question that
+        cannot be answered (an error, NaN) adds nothing: a companion is a convenience, not a
+        safety."""
+        spent = Usage(calls=0)
+        together: dict[int, tuple[str, list[str]]] = {}
+        checks: list[CompanionCheck] = []
+        weights = self.companions
+        graph = self.decider.facts.retriever.graph if self.decider.facts.retriever is not None else None
+        for number, target in enumerate(targets):
+            now = [j for j in ranked.get(number, []) if j.scoring]
+            if not target.helps or target.count != 1 or not now or weights.considered < 1:
+                continue
+            anchor = now[0].subject
+            if not math.isfinite(now[0].score) or now[0].score <= self.thresholds.one_floor:
+                continue  # the target takes nothing (or the person said none): nothing to go with
+            before = [(j.subject, j.score) for j in decided.get(number, []) if j.scoring]
+            others = candidates(before, anchor, weights.considered)
+            if not others:
+                continue
+            need = target.need or request
+            observer.progress(f"Together: would they need {', '.join(others)} with the {anchor}?")
+            try:
+                answers, used = self.decider.together(need, anchor, others)
+                spent = spent + used
+            except (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError):
+                answers = [Judgement(o, f"with the {anchor}", math.nan, math.nan) for o in others]
+            taken = []
+            for answer in answers:
+                linked, statement = graph_link(graph, anchor, answer.subject)
+                p = weights.p(answer.score, linked)
+                check = CompanionCheck(
+                    target.name, anchor, answer.subject, answer.p_yes, answer.score, statement, p, False
+                )
+                checks.append(check)
+                if math.isfinite(p) and p > 0.5:
+                    taken.append(answer.subject)
+            if taken:
+                together[number] = (anchor, taken)
+        return together, checks, spent
+
+    def _underlay(
+        self, request: str, scene: Scene, moves: list[tuple[str, str]], observer: Observer
+    ) -> tuple[list[tuple[str, str]], tuple[UnderlayCheck, ...] | None, Usage]:
+        """Put a mat or stand under a moved object too hot for its place.
+
+        The pads are the scene's objects that are both pickable and a place (a cork mat, a trivet)
+        and that no move touches. Each move onto a surface heat can mark (the graph's word:
+        :meth:`FactFinder.is_surface`; a table or a counter, not an oven, a sink or a bowl) is asked
+        "is the X too hot to put straight on the Y?" (:meth:`Decider.underneath`, with the object's
+        state and the request): the model judges heat well and places badly (on the labelled set,
+        "hot pan into the sink" scored as hot as on a table). Above ``Thresholds.underlay`` (P(Yes))
+        the move becomes two, in
+        order: a pad onto the place, then the object onto the pad. The pad is the one whose
+        graph statements of use are nearest to holding hot pots (:meth:`FactFinder.uses`), else
+        the first in the scene; each pad serves one object. A question that cannot be answered (a
+        backend error, NaN) adds no pad: the move stays as asked, since a mat protects a thing,
+        not a person. Without pads, or without a graph (the no-graph ablation), nothing is asked."""
+        spent = Usage(calls=0)
+        touched = {o for o, _ in moves} | {t for _, t in moves}
+        pads = [o.name for o in scene.objects if o.pickable and o.destination and o.name not in touched]
+        if not pads:
+            return moves, None, spent
+        use = self.decider.facts.uses(pads, HOT_PAD)
+        pads.sort(key=lambda p: -use[p][0] if math.isfinite(use[p][0]) else math.inf)
+        out: list[tuple[str, str]] = []
+        checks: list[UnderlayCheck] = []
+        surfaces: dict[str, bool] = {}
+        for obj, place in moves:
+            free = [p for p in pads if p not in touched and p != place]
+            surface = surfaces.setdefault(place, self.decider.facts.is_surface(place))
+            if not free or not surface or self.hazards.is_person(place):
+                out.append((obj, place))
+                continue
+            observer.progress(f"Underlay: is the {obj} too hot for the {place}?")
+            found = scene.get(obj)
+            state = found.state if found is not None and found.state else ""
+            try:
+                judgement, used = self.decider.underneath(request, obj, state, place)
+                spent = spent + used
+                p_yes, score = judgement.p_yes, judgement.score
+            except (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError):
+                p_yes = score = math.nan  # shown as null in the trace; no pad is added
+            hot = math.isfinite(p_yes) and math.isfinite(score) and p_yes > self.thresholds.underlay
+            checks.append(UnderlayCheck(obj, place, free[0], p_yes, score, hot))
+            if not hot:
+                out.append((obj, place))
+                continue
+            touched.add(free[0])
+            out += [(free[0], place), (obj, free[0])]
+        return out, tuple(checks) or None, spent
+
+    def _stack(
+        self,
+        request: str,
+        scene: Scene,
+        usage: dict[str, Usage],
+        asked: list[str],
+    ) -> tuple[list[tuple[str, str]], StackTrace | None]:
+        """Bottom-up moves for a pile of the objects that can both be moved and carry another, and
+        the pile's order for the trace (None when there is nothing to pile).
+
+        Fragile things go on top (the model's answer combined with what the graph states); below
+        them the larger footprint lower down where the scene gives sizes, then the better base by
+        the model's judgement."""
+        named = [o for _, o in mentions(request, scene.pickable)]
+        stackable = [o for o in scene.pickable if scene.get(o).destination]  # type: ignore[union-attr]
+        items = [o for o in named if o in stackable]
+        items = items if len(items) >= 2 else stackable
+        if len(items) < 2:
+            return [], None
+        judgements, _, used = self.decider.fits(request, BASE, items, scene, combine=False)
+        fragile, _, used_fragile = self.decider.fits(request, FRAGILE, items, scene)
+        usage["decide"] = usage["decide"] + used + used_fragile
+        asked.extend(j.scoring for j in (*judgements, *fragile))
+        breaks = {j.subject for j in fragile if j.score > self.thresholds.combined}
+
+        def footprint(name: str) -> float:
+            size = scene.get(name).size_m  # type: ignore[union-attr]
+            return size[0] * size[1] if size else 0.0
+
+        order = sorted(
+            judgements, key=lambda j: (j.subject in breaks, -footprint(j.subject), -round(j.score, 1))
+        )
+        bottom_up = [j.subject for j in order]
+        moves = [(upper, lower) for lower, upper in itertools.pairwise(bottom_up)]
+        return moves, StackTrace(BASE, tuple(judgement_trace(j) for j in order))
