@@ -49,7 +49,6 @@ if TYPE_CHECKING:  # spaCy is loaded with the model, on first use (pipeline/goal
 HARD = {".", "!", "?", ";", ":"}
 SOFT = {",", "and", "but", "then", "so", "because", "since", "while", "whereas"}
 CLAUSE_DEPS = {"ROOT", "conj", "ccomp", "parataxis", "advcl", "dep", "xcomp"}
-NOMINAL_TAGS = {"NN", "NNS", "NNP", "NNPS", "CD"}
 
 
 @cache
