@@ -2,7 +2,8 @@
 
 :class:`GoalReader` (:mod:`.reader`) parses the request with spaCy (:mod:`.mentions`: the scene's
 names as noun phrases; :mod:`.parse`: chunks; :mod:`.clauses` and :mod:`.wishes`: each clause's
-form, destinations and theme; :mod:`.themes`: what a theme sends) and returns a typed
+form, destinations and theme; :mod:`.themes`: what a theme sends; :mod:`.items`: clauses as
+targets) and returns a typed
 :class:`Goal` (:mod:`.types`). Where the words leave a choice open - the request names no
 destination, states a need, or asks for a dish - the goal says so (``to`` None, ``takes`` "need" or
 "ingredients") and the planner settles it with the model; :func:`to_targets` (:mod:`.adapter`) turns

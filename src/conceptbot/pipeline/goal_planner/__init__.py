@@ -7,8 +7,10 @@ answer), check each move's risk, and plan the moves.
 * :mod:`.decide` — the per-object questions and their calibrated scores;
 * :mod:`.evidence` and :mod:`.combine` — what the graph states about an object, as evidence, and
   the fitted combination of it with the model's answer;
+* :mod:`.facts` — what the graph states about objects, dishes and places, for the questions;
 * :mod:`.planner` — :class:`~conceptbot.pipeline.goal_planner.planner.GoalPlanner`: the stages in
-  order, the risk checks and vetoes, the plan and its trace.
+  order, the plan and its trace; :mod:`.risk` its risk checks and vetoes, :mod:`.placing` the
+  things used together, mats under hot things and piles.
 
 How it was designed and measured: ``docs/planning.md``.
 """
