@@ -13,7 +13,12 @@ It prints how many objects go to an accepted place, and how many tasks have ever
 offset on "leave it" (the one free parameter: how readily an object is left), chosen by
 leave-one-task-out. Readings are appended to the output as they come (resumable).
 
-    .venv/bin/python benchmarks/bench_sort.py [--tasks DIR ...] [--out results/parts/sort-MODEL.jsonl]
+With ``--plans`` it also plans each task with the default planner and keeps, per object, where
+the plan put it and each target's decided score (the trace), so the same counts are printed for
+the planner as it is and for its scores with a fitted "leave it" score in place of its
+thresholds (an object goes to its best target or stays, whichever scores higher).
+
+    .venv/bin/python benchmarks/bench_sort.py [--tasks DIR ...] [--plans] [--out results/parts/sort-MODEL.jsonl]
 """
 
 from __future__ import annotations
@@ -26,6 +31,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from conceptbot.bench.grading import load_split_scene
 from conceptbot.core.config import load_settings
 from conceptbot.models.llm import LLM, Message, ScoreRequest
 from conceptbot.pipeline.hazards import is_person
@@ -40,6 +46,8 @@ SYSTEM = (
     "in, or of leaving it where it is if it belongs in none of them."
 )
 OFFSETS = [i / 2 for i in range(-8, 9)]
+LEAVES = [i / 2 for i in range(-12, 13)]
+NAMED = 10.0
 
 
 def items(folders: Sequence[Path]) -> list[dict]:
@@ -63,7 +71,14 @@ def items(folders: Sequence[Path]) -> list[dict]:
                         ok.append(LEAVE)
                     allowed[obj] = ok
                 out.append(
-                    {"task": task["id"], "request": task["request"], "places": places, "allowed": allowed}
+                    {
+                        "task": task["id"],
+                        "request": task["request"],
+                        "scene": task["scene"],
+                        "folder": str(folder),
+                        "places": places,
+                        "allowed": allowed,
+                    }
                 )
     return out
 
@@ -101,14 +116,65 @@ def score(records: Sequence[dict], offset: float) -> tuple[int, int, int]:
     return right, total, tasks
 
 
+def planned(system: object, item: dict, folder: str) -> dict:
+    """The default planner's plan of ``item``: where each object went, and each target's scores."""
+    scene = load_split_scene(folder, item["scene"])
+    plan = system.plan(item["request"], scene)  # type: ignore[attr-defined]
+    placed = {a.obj: a.destination for a in plan.actions if hasattr(a, "destination")}
+    scores: dict[str, dict[str, float]] = {o: {} for o in item["allowed"]}
+    for decision in plan.trace.decisions:
+        for judged in decision.objects:
+            if judged.object in scores:
+                scores[judged.object][decision.target.to] = judged.score
+        for obj in decision.target.named:
+            if obj in scores:
+                scores[obj][decision.target.to] = NAMED
+    return {"placed": {o: placed.get(o, LEAVE) for o in item["allowed"]}, "scores": scores}
+
+
+def leave_score(records: Sequence[dict], leave: float) -> tuple[int, int, int]:
+    """Objects right, objects in all, tasks all right: each object to its best-scored target, or
+    left where no target scores above ``leave``."""
+    right = total = tasks = 0
+    for record in records:
+        marks = []
+        for obj, ok in record["allowed"].items():
+            options = {**record["planned"]["scores"][obj], LEAVE: leave}
+            marks.append(max(options, key=lambda p: options[p]) in ok)
+        right, total, tasks = right + sum(marks), total + len(marks), tasks + all(marks)
+    return right, total, tasks
+
+
+def report_plans(records: Sequence[dict]) -> None:
+    """The planner as it is, and its scores with a leave-one-task-out "leave it" score."""
+    marks = [
+        [r["planned"]["placed"][o] in ok for o, ok in r["allowed"].items()] for r in records if "planned" in r
+    ]
+    with_plans = [r for r in records if "planned" in r]
+    print(
+        f"planner as it is: objects {sum(map(sum, marks))}/{sum(map(len, marks))}, "
+        f"tasks all right {sum(map(all, marks))}/{len(marks)}"
+    )
+    held = 0
+    for n, record in enumerate(with_plans):
+        others = with_plans[:n] + with_plans[n + 1 :]
+        chosen = max(LEAVES, key=lambda b: (leave_score(others, b)[0], -abs(b)))
+        held += leave_score([record], chosen)[2]
+    chosen = max(LEAVES, key=lambda b: (leave_score(with_plans, b)[0], -abs(b)))
+    right, total, tasks = leave_score(with_plans, chosen)
+    print(f"planner scores, leave at {chosen}: objects {right}/{total}, tasks {tasks}; leave-one-task-out tasks {held}")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--tasks", type=Path, action="append", default=[], help="a folder of tasks/, scenes/")
     parser.add_argument("--out", type=Path, default=None)
+    parser.add_argument("--plans", action="store_true", help="also plan each task with the default planner")
     args = parser.parse_args(argv)
     settings = load_settings()
     out: Path = args.out or Path(f"results/parts/sort-{settings.llm.split(':', 1)[-1]}.jsonl")
-    llm = build_system(settings, "conceptbot").goal_planner.decider.llm  # type: ignore[attr-defined]
+    system = build_system(settings, "conceptbot")
+    llm = system.goal_planner.decider.llm  # type: ignore[attr-defined]
     done = {}
     if out.exists():
         done = {r["task"]: r for r in map(json.loads, out.read_text(encoding="utf-8").splitlines()) if r}
@@ -117,10 +183,16 @@ def main(argv: list[str] | None = None) -> int:
     out.parent.mkdir(parents=True, exist_ok=True)
     with out.open("a", encoding="utf-8") as sink:
         for number, item in enumerate(todo, 1):
-            if item["task"] in done:
+            record = done.get(item["task"])
+            if record is not None and ("planned" in record or not args.plans):
                 continue
-            readings = {o: ask(llm, item["request"], item["places"], o) for o in item["allowed"]}
-            done[item["task"]] = record = {**item, "readings": readings}
+            if record is None:
+                readings = {o: ask(llm, item["request"], item["places"], o) for o in item["allowed"]}
+                record = {**item, "readings": readings}
+            if args.plans:
+                folder = "dev" if item["folder"] == str(DEV) else item["folder"]
+                record["planned"] = planned(system, item, folder)
+            done[item["task"]] = record
             sink.write(json.dumps(record) + "\n")
             sink.flush()
             print(f"{number}/{len(todo)} {time.perf_counter() - started:.0f} s", file=sys.stderr)
@@ -138,6 +210,8 @@ def main(argv: list[str] | None = None) -> int:
     print(
         f"'leave it' offset {chosen}: objects {right}/{total}, tasks {tasks}; leave-one-task-out tasks {held}"
     )
+    if any("planned" in r for r in records):
+        report_plans(records)
     return 0
 
 

@@ -90,3 +90,10 @@ def test_user_messages_per_mode() -> None:
     assert modes.get(modes.RISK).context(["b", "a"], "r") == '[["a", "b"], "r"]'
     partners = modes.get(modes.RISK).reply_schema("knife", ["knife", "user"])["properties"]["dangerous_with"]
     assert partners["maxItems"] == 1 and partners["items"]["properties"]["object"]["enum"] == ["user"]
+
+
+def test_the_risk_reply_has_room_for_a_rating_of_every_partner() -> None:
+    # With a fixed 200 tokens a 20-object room's reply was cut off mid-list: no JSON, no plan.
+    partners = [f"object {i}" for i in range(20)]
+    assert modes.get(modes.RISK).reply_tokens(partners) >= 200 + 12 * len(partners)
+    assert modes.get(modes.PROPERTIES).reply_tokens(partners) == 200

@@ -82,6 +82,10 @@ class OPEMode:
         """The reply schema for the object ``name`` (a copy: callers may change it)."""
         return json.loads(json.dumps(self.schema))
 
+    def reply_tokens(self, scene_objects: list[str]) -> int:
+        """The reply's token budget: enough for every field of the answer."""
+        return 200
+
     def user_message(self, name: str, relations: list[str], scene_objects: list[str], request: str) -> str:
         """The user message for one object and its kept relations."""
         return prompts.fill(self.user_prompt, name=name, relations=_bullets(relations))
@@ -113,6 +117,11 @@ class RiskMode(OPEMode):
         if others:
             items["items"]["properties"]["object"] = {"type": "string", "enum": others}
         return schema
+
+    def reply_tokens(self, scene_objects: list[str]) -> int:
+        """Room for a rating of every other object (about 14 tokens each): with 200 in all, a
+        20-object room's reply was cut off mid-list and the plan failed."""
+        return 200 + 14 * len(scene_objects)
 
     def user_message(self, name: str, relations: list[str], scene_objects: list[str], request: str) -> str:
         """The object, its relations, the other objects and the request."""

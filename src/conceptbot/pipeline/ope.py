@@ -157,7 +157,9 @@ class ObjectPropertiesExtractor:
                 results[name] = ObjectProperties(name, kind.name, cached, kept, cached=True)
                 continue
             user = kind.user_message(name, kept, scene_objects, request)
-            request_obj = ChatRequest.of(user, system=kind.system_prompt(), max_tokens=200)
+            request_obj = ChatRequest.of(
+                user, system=kind.system_prompt(), max_tokens=kind.reply_tokens(scene_objects)
+            )
             value, response = chat_json(self.llm, request_obj, kind.reply_schema(name, scene_objects))
             value = kind.clean(value, name, scene_objects)
             usage = usage + response.usage

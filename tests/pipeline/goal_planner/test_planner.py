@@ -8,7 +8,7 @@ import json
 
 import pytest
 
-from conceptbot.core.errors import BackendRequestError
+from conceptbot.core.errors import BackendRequestError, ModelOutputError
 from conceptbot.core.plan import format_actions
 from conceptbot.core.scene import Scene, scene_from_dict
 from conceptbot.core.usage import Usage
@@ -204,6 +204,9 @@ class RatingOPE:
 
     def run(self, objects, mode, request, scene_objects=None) -> OPEResult:
         self.rated += list(objects)
+        self.partners = list(scene_objects or [])
+        if any(self.ratings.get(o) == "fails" for o in objects):
+            raise ModelOutputError("no JSON object in the reply")
         found = {
             o: ObjectProperties(o, "risk", json.loads(risk_reply(*self.ratings.get(o, (1, [])))))
             for o in objects
@@ -214,7 +217,7 @@ class RatingOPE:
 TOYS = scene_from_dict({"pickable_objects": ["crayons", "box cutter"], "destinations": ["toddler", "shelf"]})
 
 
-def _toddler_plan(ratings: dict) -> tuple[object, RatingOPE]:
+def _toddler_plan(ratings: dict, more: list | None = None) -> tuple[object, RatingOPE]:
     scores = [
         [-1.0, -3.0],  # name ranking: the request
         [-2.0, -2.0],  # and neutral
@@ -223,7 +226,7 @@ def _toddler_plan(ratings: dict) -> tuple[object, RatingOPE]:
         PRIOR,  # kept: asked plainly, the content-free object for the toddler
         SAFE,  # and the crayons
     ]
-    llm = FakeLLM(scores=scores)
+    llm = FakeLLM(scores=scores if more is None else scores[:4] + more)
     ope = RatingOPE(ratings)
     planner = GoalPlanner(Read(), Decider(llm, FactFinder(None)), ope)
     return planner.plan("The toddler is bored; give her something to draw with", TOYS), ope
@@ -264,6 +267,18 @@ def test_a_place_move_is_dropped_for_ope_rating_it_with_the_destination() -> Non
         format_actions(planner.plan("Put the foil tray in the microwave", scene).actions)[0]
         == "pick_and_place(foil tray, microwave)"
     )
+
+
+def test_an_object_ope_cannot_rate_has_its_move_vetoed_and_the_plan_goes_on() -> None:
+    # Safety fails closed per move: a reply that is not JSON drops that move, not the whole plan.
+    result, ope = _toddler_plan({"crayons": "fails", "box cutter": "fails"}, more=[PRIOR, UNSAFE])
+    crayons, cutter = result.trace.risk
+    assert crayons.why == "vetoed" and crayons.veto.statement.endswith(
+        "could not be made: OPE could not rate it"
+    )
+    assert cutter.dropped and result.refused
+    # Rated with the scene's places and people only, not with every object of the room.
+    assert ope.partners == ["box cutter", "toddler", "shelf"]
 
 
 def test_with_risk_every_move_is_rated_and_one_rated_dangerous_is_dropped_unflagged() -> None:

@@ -331,7 +331,7 @@ class GoalPlanner(RiskChecks, Placing):
             # others only when the risk question flags their move (see _check): each rating is a
             # JSON generation of several seconds.
             handed = [o for o, t in fresh if risk or self.hazards.is_vulnerable(t)]
-            self._properties(request, scene, handed, properties, usage, observer)
+            self._properties(request, scene, handed, properties, usage, observer, tuple(t for _, t in fresh))
             for obj, target in fresh:
                 checks[(obj, target)] = self._check(
                     request, scene, obj, target, properties, usage, observer, asked, rate=risk

@@ -79,14 +79,24 @@ class RiskChecks:
         properties: dict[str, ObjectProperties],
         usage: dict[str, Usage],
         observer: Observer,
+        extra: tuple[str, ...] = (),
     ) -> None:
+        """OPE's Risk Index of each of ``objects`` not rated yet, rated with the scene's places and
+        people and ``extra`` (the only partners a veto reads: with every object of a 20-object
+        room, each rating was a generation of 300 tokens). An object whose rating fails stays
+        unrated, and its move is vetoed where it is checked (:meth:`_check`)."""
         wanted = [o for o in dict.fromkeys(objects) if o not in properties]
         if self.ope is None or not wanted:
             return
         observer.progress(f"OPE: properties of {', '.join(wanted)}")
-        found = self.ope.run(wanted, modes.RISK, request, scene_objects=scene.names)
-        properties.update(found.properties)
-        usage["ope"] = usage["ope"] + found.usage
+        partners = list(dict.fromkeys([*scene.destinations, *extra]))
+        for obj in wanted:
+            try:
+                found = self.ope.run([obj], modes.RISK, request, scene_objects=[obj, *partners])
+            except (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError):
+                continue
+            properties.update(found.properties)
+            usage["ope"] = usage["ope"] + found.usage
 
     def _check(
         self,
@@ -130,7 +140,9 @@ class RiskChecks:
             # A flag from the question alone is no reason to drop a move ("give the crayons to the
             # toddler" was flagged on dev): OPE's Risk Index of the object is asked, and the move is
             # dropped for what it names, which the trace shows.
-            self._properties(request, scene, [obj], properties, usage, observer)
+            self._properties(request, scene, [obj], properties, usage, observer, (target,))
+            if self.ope is not None and obj not in properties:
+                return _vetoed(_failed(obj, target, "OPE could not rate it"), move, ope, s_aff)
             reason = self._reason(obj, target, properties, flagged)
         if reason is None and self.hazards.is_vulnerable(target):
             # Asked without the request, which sways the small model towards what was asked.
