@@ -135,3 +135,15 @@ def test_a_file_that_is_not_a_model_is_reported_corrupt(tmp_path: Path) -> None:
 def test_json_in_request_round_trips() -> None:
     request = ChatRequest.of("q", json_schema={"type": "object"})
     assert json.loads(request.json_schema or "") == {"type": "object"}
+
+
+def test_scoring_computes_no_logits_rows_for_the_prompt_before_its_last_token(smollm2_path: Path) -> None:
+    # Only the last prompt token's row and the options' are read; a row per prompt token is a
+    # vocabulary-wide product and a copy each (0.2 MB per token here).
+    fresh = LlamaCppLLM(smollm2_path, model="smollm2-135m", n_ctx=1024)
+    fresh.score(ScoreRequest(options=(" a", " b"), prompt="Hi."))  # load, allocate the buffers
+    before = _resident_anonymous_mb()
+    scored = fresh.score(ScoreRequest(options=(" yes", " no"), prompt="Describe a kitchen. " * 70))
+    assert _resident_anonymous_mb() - before < 30
+    reference = [_reference_logprob(fresh, "Describe a kitchen. " * 70, o) for o in (" yes", " no")]
+    assert scored.logprobs == pytest.approx(reference, abs=2e-3)

@@ -303,7 +303,11 @@ class LlamaCppLLM:
             common = _evaluated_prefix(llama, prompt)
             llama.n_tokens = min(common, len(prompt) - 1)
             evaluated += len(prompt) - llama.n_tokens
-            llama.eval(prompt[llama.n_tokens :])
+            # Only the last prompt token's logits are read: the tokens before it are evaluated
+            # without the vocabulary-wide rows (a matrix product and a 600 KB copy per token).
+            with _logits_for_every_token(llama, False):
+                llama.eval(prompt[llama.n_tokens : -1])
+            llama.eval(prompt[-1:])
             base = len(prompt)
             results: dict[int, float] = {}
             previous: list[int] = []
