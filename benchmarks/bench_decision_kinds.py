@@ -7,9 +7,9 @@ Each split's tasks are planned once without asking (through the answer cache). P
    ``f`` and ``1 - f``, for several floors: whatever the threshold, those tasks get a "choose"
    question. This is the share of tasks asked that no which-one threshold can take away.
 2. **A which-bin decision for sorts** (simulated, not shipped). In a sort each object goes to the
-   bin it scores best in (``Thresholds.partition``: it stays only below -5), so the decision the
+   bin it scores best in (``Thresholds.combined``: it stays only below 0), so the decision the
    plan acts on is which bin, not a yes/no per bin. Here each sorted object's bins (and "stays",
-   scored at the partition threshold) get a softmax over their scores; the split-conformal
+   scored at that threshold) get a softmax over their scores; the split-conformal
    threshold over the objects' ``1 - p(gold's bin)`` is fitted on the split itself at 0.8 and 0.9,
    and the script counts the objects whose set holds one bin and the sort tasks with none unsure.
 
@@ -40,9 +40,9 @@ class Sorted(NamedTuple):
     gold: tuple[str, ...]
 
     def shares(self) -> dict[str, float]:
-        """A softmax over the bins' scores and "stays" at the partition threshold."""
+        """A softmax over the bins' scores and "stays" at the combined threshold."""
         names = [*self.scores, STAYS]
-        raw = [*self.scores.values(), Thresholds().partition]
+        raw = [*self.scores.values(), Thresholds().combined]
         top = max(raw)
         weights = [math.exp(s - top) for s in raw]
         total = sum(weights)

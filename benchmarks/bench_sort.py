@@ -13,12 +13,14 @@ It prints how many objects go to an accepted place, and how many tasks have ever
 offset on "leave it" (the one free parameter: how readily an object is left), chosen by
 leave-one-task-out. Readings are appended to the output as they come (resumable).
 
-With ``--plans`` it also plans each task with the default planner and keeps, per object, where
-the plan put it and each target's decided score (the trace), so the same counts are printed for
-the planner as it is and for its scores with a fitted "leave it" score in place of its
-thresholds (an object goes to its best target or stays, whichever scores higher).
+With ``--plans`` it also runs the default planner's reading and decisions on each task and keeps,
+per object, where its choice of moves puts it (before the risk checks, which only drop moves) and
+each target's decided score, so the same counts are printed for the planner as it is and for its
+scores with a fitted "leave it" score in place of its thresholds (an object goes to its best
+target or stays, whichever scores higher).
 
-    .venv/bin/python benchmarks/bench_sort.py [--tasks DIR ...] [--plans] [--out results/parts/sort-MODEL.jsonl]
+    .venv/bin/python benchmarks/bench_sort.py [--tasks DIR ...] [--plans]
+        [--out results/parts/sort-MODEL.jsonl]
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ from pathlib import Path
 
 from conceptbot.bench.grading import load_split_scene
 from conceptbot.core.config import load_settings
+from conceptbot.core.observe import SILENT
 from conceptbot.models.llm import LLM, Message, ScoreRequest
 from conceptbot.pipeline.hazards import is_person
 from conceptbot.systems import build_system
@@ -117,12 +120,16 @@ def score(records: Sequence[dict], offset: float) -> tuple[int, int, int]:
 
 
 def planned(system: object, item: dict, folder: str) -> dict:
-    """The default planner's plan of ``item``: where each object went, and each target's scores."""
+    """The default planner's decisions on ``item``: each target's scores per object, and where its
+    choice of moves puts each object before the risk checks (which only ever drop a move)."""
     scene = load_split_scene(folder, item["scene"])
-    plan = system.plan(item["request"], scene)  # type: ignore[attr-defined]
-    placed = {a.obj: a.destination for a in plan.actions if hasattr(a, "destination")}
+    planner = system.goal_planner  # type: ignore[attr-defined]
+    read = planner.targets.read(item["request"], scene)
+    ranked, decisions, _ = planner._decide(item["request"], scene, read.targets, read.stack, SILENT)
+    moves = planner._choose(read.targets, ranked, set(), scene.pickable) if not read.stack else []
+    placed = dict(moves)
     scores: dict[str, dict[str, float]] = {o: {} for o in item["allowed"]}
-    for decision in plan.trace.decisions:
+    for decision in decisions:
         for judged in decision.objects:
             if judged.object in scores:
                 scores[judged.object][decision.target.to] = judged.score
@@ -146,30 +153,34 @@ def leave_score(records: Sequence[dict], leave: float) -> tuple[int, int, int]:
 
 
 def report_plans(records: Sequence[dict]) -> None:
-    """The planner as it is, and its scores with a leave-one-task-out "leave it" score."""
-    marks = [
-        [r["planned"]["placed"][o] in ok for o, ok in r["allowed"].items()] for r in records if "planned" in r
-    ]
+    """The planner as it is, and its scores with a "leave it" score chosen leave-one-task-out (on
+    every other task of all the folders), over all the tasks and per folder."""
     with_plans = [r for r in records if "planned" in r]
-    print(
-        f"planner as it is: objects {sum(map(sum, marks))}/{sum(map(len, marks))}, "
-        f"tasks all right {sum(map(all, marks))}/{len(marks)}"
-    )
-    held = 0
+    held: dict[str, bool] = {}
     for n, record in enumerate(with_plans):
         others = with_plans[:n] + with_plans[n + 1 :]
         chosen = max(LEAVES, key=lambda b: (leave_score(others, b)[0], -abs(b)))
-        held += leave_score([record], chosen)[2]
+        held[record["task"]] = leave_score([record], chosen)[2] == 1
     chosen = max(LEAVES, key=lambda b: (leave_score(with_plans, b)[0], -abs(b)))
-    right, total, tasks = leave_score(with_plans, chosen)
-    print(f"planner scores, leave at {chosen}: objects {right}/{total}, tasks {tasks}; leave-one-task-out tasks {held}")
+    for folder in [None, *dict.fromkeys(r["folder"] for r in with_plans)]:
+        group = [r for r in with_plans if folder is None or r["folder"] == folder]
+        marks = [[r["planned"]["placed"][o] in ok for o, ok in r["allowed"].items()] for r in group]
+        right, total, tasks = leave_score(group, chosen)
+        print(
+            f"{folder or 'all'}: {len(group)} tasks; planner as it is: objects {sum(map(sum, marks))}/"
+            f"{sum(map(len, marks))}, tasks {sum(map(all, marks))}; leave at {chosen}: objects "
+            f"{right}/{total}, tasks {tasks}; leave-one-task-out tasks {sum(held[r['task']] for r in group)}"
+        )
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--tasks", type=Path, action="append", default=[], help="a folder of tasks/, scenes/")
     parser.add_argument("--out", type=Path, default=None)
-    parser.add_argument("--plans", action="store_true", help="also plan each task with the default planner")
+    parser.add_argument("--plans", action="store_true", help="also run the default planner's decisions")
+    parser.add_argument(
+        "--no-letters", action="store_true", help="only the planner's decisions (with --plans)"
+    )
     args = parser.parse_args(argv)
     settings = load_settings()
     out: Path = args.out or Path(f"results/parts/sort-{settings.llm.split(':', 1)[-1]}.jsonl")
@@ -178,7 +189,7 @@ def main(argv: list[str] | None = None) -> int:
     done = {}
     if out.exists():
         done = {r["task"]: r for r in map(json.loads, out.read_text(encoding="utf-8").splitlines()) if r}
-    todo = items([DEV, *args.tasks])
+    todo = items([*args.tasks, DEV])  # the given folders first: dev last
     started = time.perf_counter()
     out.parent.mkdir(parents=True, exist_ok=True)
     with out.open("a", encoding="utf-8") as sink:
@@ -187,7 +198,11 @@ def main(argv: list[str] | None = None) -> int:
             if record is not None and ("planned" in record or not args.plans):
                 continue
             if record is None:
-                readings = {o: ask(llm, item["request"], item["places"], o) for o in item["allowed"]}
+                readings = (
+                    {}
+                    if args.no_letters
+                    else {o: ask(llm, item["request"], item["places"], o) for o in item["allowed"]}
+                )
                 record = {**item, "readings": readings}
             if args.plans:
                 folder = "dev" if item["folder"] == str(DEV) else item["folder"]
@@ -196,7 +211,15 @@ def main(argv: list[str] | None = None) -> int:
             sink.write(json.dumps(record) + "\n")
             sink.flush()
             print(f"{number}/{len(todo)} {time.perf_counter() - started:.0f} s", file=sys.stderr)
-    records = [done[i["task"]] for i in todo]
+    records = [done[i["task"]] for i in todo if i["task"] in done]
+    report_letters([r for r in records if r["readings"]])
+    if any("planned" in r for r in records):
+        report_plans(records)
+    return 0
+
+
+def report_letters(records: Sequence[dict]) -> None:
+    """The lettered choice: the best letter, and with a leave-one-task-out offset on "leave it"."""
     right, total, tasks = score(records, 0.0)
     print(f"{len(records)} sort tasks, {total} objects")
     print(f"best letter: objects {right}/{total}, tasks all right {tasks}/{len(records)}")
@@ -210,9 +233,6 @@ def main(argv: list[str] | None = None) -> int:
     print(
         f"'leave it' offset {chosen}: objects {right}/{total}, tasks {tasks}; leave-one-task-out tasks {held}"
     )
-    if any("planned" in r for r in records):
-        report_plans(records)
-    return 0
 
 
 if __name__ == "__main__":

@@ -150,7 +150,10 @@ def test_readable_output_of_the_goal_planner_shows_targets_decisions_and_risk() 
     scene = scene_from_dict(SCENE)
     prior, yes = [-1.0, -1.0], [-0.1, -3.0]
     names, neutral = [-1.0, -3.0], [-2.0, -2.0]  # the name ranking (apple, sponge), then neutral
-    llm = FakeLLM(scores=[names, neutral, prior, yes])  # the ranking of every object, one risk check
+    adult = [-3.0, -0.1]  # "is it handed to a child or an animal?": no
+    llm = FakeLLM(
+        scores=[names, neutral, prior, adult, prior, yes]
+    )  # the ranking, who holds it, one risk check
     plan = ConceptBot(llm, None, "urp", planner="goal").plan("Bring me something to eat", scene)
     console = Console(record=True, width=160)
     show(plan, console)
@@ -176,7 +179,7 @@ def test_a_plan_says_whose_conformal_thresholds_it_asked_by(model: str, noted: b
     jsonschema = pytest.importorskip("jsonschema")
     prior, yes = [-1.0, -1.0], [-0.1, -3.0]
     names, neutral = [-1.0, -3.0], [-2.0, -2.0]
-    llm = FakeLLM(scores=[names, neutral, prior, yes], model=model)
+    llm = FakeLLM(scores=[names, neutral, prior, [-3.0, -0.1], prior, yes], model=model)
     bot = ConceptBot(llm, None, "urp", planner="goal")
     plan = bot.plan("Bring me something to eat", scene_from_dict(SCENE))
     assert plan.trace.calibration is not None

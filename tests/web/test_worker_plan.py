@@ -18,7 +18,7 @@ def test_the_plan_event_says_whose_conformal_thresholds_it_asked_by(tmp_path: Pa
     events: list[tuple[str, dict[str, Any]]] = []
     prior, yes, no = [-1.0, -1.0], [-0.1, -3.0], [-3.0, -0.1]
     names, neutral = [-1.0, -3.0], [-2.0, -2.0]  # the name ranking (apple, sponge), then neutral
-    llm = FakeLLM(scores=[prior, yes, no, names, neutral, prior, yes], model="my-model")
+    llm = FakeLLM(scores=[prior, yes, no, names, neutral, prior, no, prior, yes], model="my-model")
 
     def systems(config: str, backend: str) -> Any:
         return ConceptBot(llm, None, "urp", planner="goal")

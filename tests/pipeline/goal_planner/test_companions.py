@@ -37,6 +37,7 @@ SAFE = [-0.05, -3.0]
 UNSAFE = [-3.0, -0.05]
 YES = [-0.1, -3.0]
 NO = [-3.0, -0.1]
+HOLDER = [PRIOR, NO]  # "is it handed to a child or an animal?": no, to the adult asking
 HELPS = [
     [-0.5, -1.0, -4.0],  # the name ranking: toothbrush best, toothpaste next, hairbrush far below
     [-2.0, -2.0, -2.0],  # and for the neutral request (the hairbrush, below the average, is not
@@ -72,7 +73,7 @@ def _plan(scores: list[list[float]], graph: DictGraph | None = GRAPH):
 
 
 def test_a_need_takes_what_its_object_is_used_together_with() -> None:
-    plan, result, llm = _plan([*HELPS, YES, PRIOR, SAFE, PRIOR, SAFE])
+    plan, result, llm = _plan([*HELPS, *HOLDER, YES, PRIOR, SAFE, PRIOR, SAFE])
     assert plan == ["pick_and_place(toothbrush, user)", "pick_and_place(toothpaste, user)", "done()"]
     (pair,) = result.trace.companions
     assert (pair.anchor, pair.object, pair.used) == ("toothbrush", "toothpaste", True)
@@ -88,7 +89,7 @@ def test_a_need_takes_what_its_object_is_used_together_with() -> None:
 
 
 def test_a_substitute_is_not_taken() -> None:
-    plan, result, _ = _plan([*HELPS, NO, PRIOR, SAFE])
+    plan, result, _ = _plan([*HELPS, *HOLDER, NO, PRIOR, SAFE])
     assert plan == ["pick_and_place(toothbrush, user)", "done()"]
     (pair,) = result.trace.companions
     assert not pair.used and pair.p < 0.5
@@ -96,7 +97,7 @@ def test_a_substitute_is_not_taken() -> None:
 
 @pytest.mark.parametrize("bad", [math.nan, math.inf])
 def test_an_answer_that_cannot_be_read_adds_nothing(bad: float) -> None:
-    plan, result, _ = _plan([*HELPS, [bad, -1.0], PRIOR, SAFE])
+    plan, result, _ = _plan([*HELPS, *HOLDER, [bad, -1.0], PRIOR, SAFE])
     assert plan == ["pick_and_place(toothbrush, user)", "done()"]
     (pair,) = result.trace.companions
     assert not pair.used and math.isnan(pair.p)
@@ -104,7 +105,7 @@ def test_an_answer_that_cannot_be_read_adds_nothing(bad: float) -> None:
 
 
 def test_a_companion_the_risk_check_drops_is_not_moved() -> None:
-    plan, result, _ = _plan([*HELPS, YES, PRIOR, SAFE, PRIOR, UNSAFE])
+    plan, result, _ = _plan([*HELPS, *HOLDER, YES, PRIOR, SAFE, PRIOR, UNSAFE])
     assert plan == ["pick_and_place(toothbrush, user)", "done()"]
     (pair,) = result.trace.companions
     assert not pair.used
@@ -137,7 +138,7 @@ def test_the_weights_combine_the_answer_and_the_link() -> None:
 
 
 def test_after_a_which_one_answer_what_goes_with_the_chosen_object_is_still_asked() -> None:
-    llm = FakeLLM(scores=[*HELPS, YES, PRIOR, SAFE, PRIOR, SAFE])
+    llm = FakeLLM(scores=[*HELPS, *HOLDER, YES, PRIOR, SAFE, PRIOR, SAFE])
     finder = FactFinder(RelationRetriever(GRAPH, FakeEmbedder(), theta=0.1))
     decider, chooser = _decider(llm, finder)
     planner = GoalPlanner(_Need(), decider, coverage=1.0, chooser=chooser)  # every decision asked

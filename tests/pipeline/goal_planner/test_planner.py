@@ -44,6 +44,7 @@ BINS = scene_from_dict(
 PRIOR = [-1.0, -1.0]  # the content-free object: no lean either way
 SAFE = [-0.05, -3.0]  # "is it safe to ...?" Yes
 UNSAFE = [-3.0, -0.05]  # No
+HOLDER = [PRIOR, [-3.0, -0.05]]  # "is it handed to a child or an animal?": No, to the adult asking
 NAMES = [-1.0, -2.0, -4.0, -4.0]  # the name ranking of SCENE's objects, for the request
 NEUTRAL = [-2.0, -2.0, -2.0, -2.0]  # and for the neutral request
 
@@ -347,11 +348,11 @@ def test_a_hand_over_to_a_child_the_plain_question_calls_unsafe_is_dropped_and_s
 
 
 def test_a_hand_over_to_an_adult_is_not_asked_plainly() -> None:
-    llm = FakeLLM(scores=[PRIOR, SAFE, PRIOR, UNSAFE])
+    llm = FakeLLM(scores=[*HOLDER, PRIOR, SAFE, PRIOR, UNSAFE])
     planner = GoalPlanner(Read(), Decider(llm, FactFinder(None)))
     result = planner.plan("Give me the glue", SCENE)
     assert format_actions(result.actions) == ["pick_and_place(glue, user)", "done()"]
-    assert len(llm.score_requests) == 2  # the question with the request only
+    assert len(llm.score_requests) == 4  # who holds it, and the question with the request only
 
 
 class _FailingOnCall(FakeLLM):
@@ -544,6 +545,7 @@ def test_two_targets_for_one_place_each_take_their_own_objects() -> None:
     scores = [
         [-1.0, -2.0, -4.0],  # the name ranking of the three, for the request
         [-2.0, -2.0, -2.0],  # and for the neutral request
+        *HOLDER,
         PRIOR,
         SAFE,  # chips to the user
         PRIOR,
@@ -571,6 +573,7 @@ def test_several_kinds_of_thing_are_each_asked_about_with_their_own_words() -> N
         NEUTRAL,
         [-4.0, -4.0, -3.0, -1.0],  # "... as something to eat"
         NEUTRAL,
+        *HOLDER,
         PRIOR,
         SAFE,  # scissors to the user
         PRIOR,
@@ -600,6 +603,7 @@ def test_each_of_two_needs_is_decided_on_its_own_words() -> None:
         NEUTRAL,
         [-4.0, -4.0, -4.0, -1.0],  # "I'm hungry": the chips
         NEUTRAL,
+        *HOLDER,
         *(PRIOR, SAFE) * 2,  # the glue, then the chips, to the user
     ]
     llm = FakeLLM(scores=scores)
@@ -621,6 +625,7 @@ def _need_plan(graph: DictGraph | None, use: float = 0.0) -> tuple[list[str], Fa
     scores = [
         [-4.0, -4.0, -1.0, -1.0],  # the name ranking: the glue and the chips alike
         NEUTRAL,
+        *HOLDER,
         [-3.0, -0.1],  # "would they also need the chips, used together with the glue?": no
         PRIOR,
         SAFE,  # the one given, to the user
@@ -704,7 +709,7 @@ class _TwoReadings:
 
 def test_where_the_request_reads_two_ways_the_person_is_asked_which_and_the_answer_is_planned() -> None:
     reader = _TwoReadings(0.6, 0.4)
-    llm = FakeLLM(scores=[PRIOR, SAFE, PRIOR, SAFE])  # the risk question of each move
+    llm = FakeLLM(scores=[*HOLDER, PRIOR, SAFE, PRIOR, SAFE])  # who holds it, the risk question of each move
     asked: list = []
 
     def person(question) -> str:
@@ -729,7 +734,7 @@ def test_where_the_request_reads_two_ways_the_person_is_asked_which_and_the_answ
 
 def test_a_reading_question_unanswered_acts_on_the_reading_taken_with_its_odds() -> None:
     reader = _TwoReadings(0.6, 0.4)
-    llm = FakeLLM(scores=[PRIOR, SAFE])
+    llm = FakeLLM(scores=[*HOLDER, PRIOR, SAFE])
     result = GoalPlanner(reader, Decider(llm, FactFinder(None))).plan("chips", SCENE)
     assert format_actions(result.actions) == ["pick_and_place(chips, user)", "done()"]
     assert [(q.kind, q.answer, q.p_yes) for q in result.questions] == [("reading", None, (0.6, 0.4))]
@@ -757,14 +762,14 @@ def test_a_reading_whose_other_is_unlikely_is_not_asked_about() -> None:
     # every decision (0.78) keeps it.
     calibration = shipped()
     assert 1 - calibration.threshold_reading(0.8) > 0.3 >= 1 - calibration.threshold(0.8)
-    llm = FakeLLM(scores=[PRIOR, SAFE])
+    llm = FakeLLM(scores=[*HOLDER, PRIOR, SAFE])
     asked: list = []
     planner = GoalPlanner(_TwoReadings(0.67, 0.3), Decider(llm, FactFinder(None)), coverage=0.8)
     result = planner.plan("chips", SCENE, ask=lambda q: asked.append(q) or "none")
     assert not asked and not result.questions
     assert format_actions(result.actions) == ["pick_and_place(chips, user)", "done()"]
     # Asking about every decision (coverage 1), it is asked.
-    llm = FakeLLM(scores=[PRIOR, SAFE])
+    llm = FakeLLM(scores=[*HOLDER, PRIOR, SAFE])
     planner = GoalPlanner(_TwoReadings(0.67, 0.3), Decider(llm, FactFinder(None)), coverage=1.0)
     assert [q.kind for q in planner.plan("chips", SCENE).questions] == ["reading"]
 
@@ -777,12 +782,12 @@ def test_an_object_the_request_leaves_out_is_never_a_candidate() -> None:
     targets = [Target("user", 1, "named", criterion="drink", excluded=["juice box"])]
     # "is it a drink?" for the content-free object, the bottle of water and the sandwich; then the
     # name ranking is not asked for a criterion; the risk question of the move
-    llm = FakeLLM(scores=[PRIOR, [-0.1, -3.0], [-3.0, -0.1], PRIOR, SAFE])
+    llm = FakeLLM(scores=[PRIOR, [-0.1, -3.0], [-3.0, -0.1], *HOLDER, PRIOR, SAFE])
     result = GoalPlanner(FixedTargets(targets), Decider(llm, FactFinder(None))).plan("a drink", scene)
     assert format_actions(result.actions) == ["pick_and_place(bottle of water, user)", "done()"]
     [decision] = result.trace.decisions
     assert [j.object for j in decision.objects] == ["bottle of water", "sandwich"]
-    assert len(llm.score_requests) == 5  # nothing was asked about the juice box
+    assert len(llm.score_requests) == 7  # nothing was asked about the juice box (two ask who holds it)
 
 
 def test_which_one_shares_are_sharpened_and_the_ranking_kept() -> None:
@@ -791,7 +796,13 @@ def test_which_one_shares_are_sharpened_and_the_ranking_kept() -> None:
     scene = scene_from_dict({"pickable_objects": ["pencil", "pen", "glue"], "destinations": ["user"]})
 
     def shares(sharpness: float) -> dict[str, float]:
-        scores = [[-1.0, -1.5, -4.0], [-2.0, -2.0, -2.0], PRIOR, SAFE]  # names, neutral, risk
+        scores = [
+            [-1.0, -1.5, -4.0],
+            [-2.0, -2.0, -2.0],
+            *HOLDER,
+            PRIOR,
+            SAFE,
+        ]  # names, neutral, holder, risk
         llm = FakeLLM(scores=scores)
         decider = Decider(llm, FactFinder(None))
         planner = GoalPlanner(
@@ -827,3 +838,43 @@ def test_a_which_one_question_never_offers_what_the_veto_refuses_the_recipient()
     vetoed = plan(HazardCheck(graph))
     assert all("scissors" not in q.objects for q in vetoed.questions)
     assert format_actions(vetoed.actions) == ["pick_and_place(safety scissors, child)", "done()"]
+
+
+def test_a_hand_over_the_request_gives_to_a_child_is_checked_as_one_to_a_child() -> None:
+    # The scene's only person is the user; the request says who holds it.
+    request = "My four-year-old wants to help with the cutting: hand him the scissors"
+    targets = [Target("user", 1, "named", ["scissors"])]
+    child = [PRIOR, [-0.1, -3.0]]  # "is it handed to a child or an animal?": yes
+
+    def plan(holder: list[list[float]]) -> object:
+        # holder, the risk question (swayed by the request: safe), then asked plainly: unsafe
+        llm = FakeLLM(scores=[*holder, PRIOR, SAFE, PRIOR, UNSAFE])
+        return GoalPlanner(_FixedTargets(targets), Decider(llm, FactFinder(None))).plan(request, SCENE)
+
+    result = plan(child)
+    [check] = result.trace.risk
+    assert result.refused and check.dropped and check.to == "user"
+    assert check.move == "give the scissors to the child" and "asked plainly" in check.reason
+    # Handed to the adult asking, the plain question is not asked and the move stands.
+    result = plan(HOLDER)
+    assert format_actions(result.actions) == ["pick_and_place(scissors, user)", "done()"]
+
+
+def test_in_a_sort_an_object_goes_to_the_place_it_fits_best_or_stays() -> None:
+    # "Wooden toys in the toy box, plastic toys on the shelf": each object's combined fit
+    # (a fitted log-odds) to each place; below one half for both, it stays where it is.
+    from conceptbot.pipeline.goal_planner.decide import Judgement
+
+    def fits(**scores: float) -> list[Judgement]:
+        return [Judgement(o, o, 0.5, v, model=v) for o, v in sorted(scores.items(), key=lambda kv: -kv[1])]
+
+    targets = [
+        Target("toy box", ALL, "named", criterion="wooden"),
+        Target("shelf", ALL, "named", criterion="plastic"),
+    ]
+    ranked = {
+        0: fits(blocks=3.5, dinosaur=-3.1, socks=-5.0, car=0.2),
+        1: fits(blocks=-3.9, dinosaur=3.8, socks=-2.5, car=3.2),
+    }
+    moves = _planner([])._choose(targets, ranked, set(), ["blocks", "dinosaur", "socks", "car"])
+    assert sorted(moves) == [("blocks", "toy box"), ("car", "shelf"), ("dinosaur", "shelf")]

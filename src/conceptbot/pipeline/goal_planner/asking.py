@@ -109,12 +109,6 @@ class Clarified:
         return found
 
 
-def is_sort(targets: list[Target]) -> bool:
-    """Two or more targets each taking all that fit: each object goes where it fits best."""
-    judged = [t for t in targets if not t.rest]
-    return len(judged) >= 2 and all(t.count == ALL for t in judged)
-
-
 def move_words(to: str, obj: str = "", part: str = "") -> str:
     """The move in words, for the questions: "give the X to the user" / "put the X in or on the
     bowl" (without an object: "give to ..."), with what it is for where the request asks for

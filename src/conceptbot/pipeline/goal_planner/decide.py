@@ -389,6 +389,21 @@ class Decider:
         judgement = Judgement(move, "unsafe", 1.0 - p_safe, prior - log_odds, (), method)
         return judgement, (usage + used).with_latency(time.perf_counter() - started)
 
+    def holder(self, request: str) -> tuple[Judgement, Usage]:
+        """Whether what the request hands over goes to a child or an animal rather than to the adult
+        speaking ("My four-year-old wants to help: hand him the craft knife", where the scene's
+        only person is the user): the log-odds of Yes, relative to a request that hands something to
+        the speaker (:data:`CONTENT_FREE_HANDOVER`)."""
+        started = time.perf_counter()
+        _, prior, usage, _ = self._ask(prompts.render("holder_user", request=CONTENT_FREE_HANDOVER))
+        p_yes, log_odds, used, method = self._ask(prompts.render("holder_user", request=request))
+        judgement = Judgement(request, "holder", p_yes, log_odds - prior, (), method)
+        return judgement, (usage + used).with_latency(time.perf_counter() - started)
+
+
+#: The calibration request of :meth:`Decider.holder`: a hand-over to the adult speaking.
+CONTENT_FREE_HANDOVER = "Please hand it to me."
+
 
 def handover_words(to: str, obj: str) -> str:
     """A hand-over in the plain safety question's words, the recipient first: "give the dog the

@@ -54,7 +54,6 @@ from conceptbot.core.usage import Usage
 from conceptbot.pipeline.affordance import Gripper, affordance
 from conceptbot.pipeline.goal_planner.asking import (
     clarify,
-    is_sort,
     move_words,
     reading_options,
     reading_question,
@@ -104,9 +103,6 @@ class Thresholds:
         rated_danger: OPE's Risk Index rating (1-5) that names a danger: of the object with the
             destination, for any move; of the object itself, for a child or an animal.
         replacements: How many objects a target may take in place of ones judged unsafe.
-        partition: When the request sorts objects into two or more targets ("poisonous ones on the
-            toxic tray, edible ones on the edible tray"), an object goes to its best target above
-            this, instead of above ``fit``.
         ingredients: A dish's ingredients are the objects within this of the best-scored one
             ("is the kiwi an ingredient of fruit salad?": every answer leans towards No, so a
             fixed threshold fails, but the ranking is good; 0.6-0.7 on the dev split).
@@ -116,15 +112,18 @@ class Thresholds:
             -0.345 at 1, -0.335 at 1.5 (the best), -0.372 at 2, -0.616 at 4
             (``benchmarks/bench_one_sharpness.py``); sharper would claim more than the rankings
             know.
-        combined: A target that takes every object fitting a criterion, or a dish's ingredients,
-            takes an object whose combined score (:mod:`conceptbot.pipeline.goal_planner.combine`: a fitted
-            log-odds, so 0 is P = 0.5) is above this; ``fit`` and ``ingredients`` apply where the
-            score is the model's alone.
+        combined: A target that takes every object fitting a criterion, or a dish's ingredients
+            (in a sort, the target an object fits best), takes an object whose combined score
+            (:mod:`conceptbot.pipeline.goal_planner.combine`: a fitted log-odds, so 0 is P = 0.5)
+            is above this; ``fit`` and ``ingredients`` apply where the score is the model's alone.
         unsafe_vulnerable: A hand-over to a child or an animal is dropped when the plain safety
             question (:meth:`Decider.unsafe`, "is it safe to give the dog the chocolate bar?")
             scores it above this, whatever OPE rates (on the labelled risk set,
             ``benchmarks/data/risk_set.jsonl``, 35 of 40 dangerous hand-overs to children and
             animals are above it and 2 of 40 safe ones; ``docs/asking.md``).
+        holder: A hand-over to the user is checked as one to a child when "is the robot asked to
+            hand something to a child or an animal?" scores the request above this (log-odds
+            against a hand-over to the speaker; ``benchmarks/bench_holder.py``).
         underlay: A mat or stand of the scene goes under a moved object when "is it too hot to put
             straight on the place?" has P(Yes) above this: on the 24 dev-written moves of
             ``benchmarks/data/underlay_set.jsonl`` those that need a mat have 0.47-0.75 and the
@@ -137,12 +136,12 @@ class Thresholds:
     risk_place: float = 1.0
     rated_danger: int = 4
     replacements: int = 2
-    partition: float = -5.0
     ingredients: float = 0.7
     one_sharpness: float = 1.5
     combined: float = 0.0
     unsafe_vulnerable: float = 0.3
     underlay: float = 0.4
+    holder: float = 0.0
 
 
 @dataclass
@@ -290,7 +289,8 @@ class GoalPlanner(RiskChecks, Placing):
         # Where a calibrated decision is unsure, a question (asked if someone answers): asking.py.
         decided = ranked  # before any answer: the companions' candidates keep their own scores
         # A which-one question never offers what the veto would not let the recipient have.
-        ranked = self._unvetoed(targets, ranked)
+        holders, held = self._holders(request, targets)
+        ranked = self._unvetoed(targets, ranked, holders)
         clarified = clarify(
             targets,
             ranked,
@@ -318,7 +318,7 @@ class GoalPlanner(RiskChecks, Placing):
         checks: dict[tuple[str, str], RiskCheck] = {}
         properties: dict[str, ObjectProperties] = {}
         usage["ope"] = Usage(calls=0)
-        usage["risk"] = Usage(calls=0)
+        usage["risk"] = held
         # Choose, check the new moves, choose again where a check removed one; each round blocks at
         # least one more move, so this ends.
         while True:
@@ -330,11 +330,11 @@ class GoalPlanner(RiskChecks, Placing):
             # Objects handed to a child or an animal are rated first (the veto reads the ratings);
             # others only when the risk question flags their move (see _check): each rating is a
             # JSON generation of several seconds.
-            handed = [o for o, t in fresh if risk or self.hazards.is_vulnerable(t)]
+            handed = [o for o, t in fresh if risk or self.hazards.is_vulnerable(holders.get(t, t))]
             self._properties(request, scene, handed, properties, usage, observer, tuple(t for _, t in fresh))
             for obj, target in fresh:
                 checks[(obj, target)] = self._check(
-                    request, scene, obj, target, properties, usage, observer, asked, rate=risk
+                    request, scene, obj, target, properties, usage, observer, asked, risk, holders.get(target)
                 )
             dropped = {m for m in fresh if checks[m].dropped}
             if not dropped:
@@ -496,10 +496,10 @@ class GoalPlanner(RiskChecks, Placing):
         target, the object asked about and its companions), where it took that object; then a
         target that takes the rest takes every pickable object left."""
         wanted: dict[str, tuple[str, float]] = {}  # object -> (target, score)
-        # A sort: two or more targets each taking all that fit (not counting a remainder, which takes
-        # what they leave): each object goes to the target it fits best.
-        sorting = is_sort(targets)
-        fit = self.thresholds.partition if sorting else self.thresholds.fit
+        # A sort (two or more targets each taking all that fit): an object goes to the target it fits
+        # best, where that fit is above the same threshold as for one target; at -5 as before, a
+        # sort's every object went somewhere (blind set 1: 27 of 61 objects right in its
+        # two-place sorts, 52 of 61 at 0; docs/notes/2026-12-06-sorts-and-hand-overs.md).
         for number, target in enumerate(targets):
             if target.rest:
                 continue
@@ -512,8 +512,8 @@ class GoalPlanner(RiskChecks, Placing):
                     if skipped > self.thresholds.replacements:
                         break  # the request keeps asking for unsafe things: stop, do not hunt on
                     continue
-                limit = fit if target.count == ALL else self.thresholds.one_floor
-                if judgement.model is not None and target.count == ALL and not sorting:
+                limit = self.thresholds.fit if target.count == ALL else self.thresholds.one_floor
+                if judgement.model is not None and target.count == ALL:
                     limit = self.thresholds.combined  # a fitted probability: above one half
                 elif target.ingredients and target.count == ALL:
                     best = ranked[number][0].score if ranked[number] else 0.0

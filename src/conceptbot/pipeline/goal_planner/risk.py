@@ -8,6 +8,7 @@ made (see the planner's module docstring, point 4).
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from conceptbot.core.errors import (
@@ -37,6 +38,9 @@ from conceptbot.pipeline.ope_answers import RiskIndex
 
 if TYPE_CHECKING:
     from conceptbot.pipeline.goal_planner.planner import Thresholds
+
+#: Who holds a hand-over to the user where the request gives it to a child (:meth:`RiskChecks._holders`).
+CHILD = "child"
 
 
 def _failed(obj: str, target: str, message: str) -> Veto:
@@ -70,6 +74,22 @@ class RiskChecks:
     thresholds: Thresholds
     gripper: Gripper
     hazards: HazardCheck
+
+    def _holders(self, request: str, targets: list[Target]) -> tuple[dict[str, str], Usage]:
+        """Who holds what goes to a person that is not a child by name (the user): a child, where
+        the request says so ("My four-year-old wants to help: hand him the craft knife"), so that
+        the hand-over is checked as one to a child. One question per plan, only where such a
+        person is a target; a question that cannot be answered counts as a child (fails closed)."""
+        hazards = self.hazards
+        people = [t.name for t in targets if hazards.is_person(t.name) and not hazards.is_vulnerable(t.name)]
+        if not people:
+            return {}, Usage(calls=0)
+        try:
+            judgement, used = self.decider.holder(request)
+        except (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError):
+            return dict.fromkeys(people, CHILD), Usage(calls=0)
+        child = not judgement.score <= self.thresholds.holder  # NaN: a child
+        return (dict.fromkeys(people, CHILD) if child else {}), used
 
     def _properties(
         self,
@@ -109,18 +129,23 @@ class RiskChecks:
         observer: Observer,
         asked: list[str],
         rate: bool = False,
+        who: str | None = None,
     ) -> RiskCheck:
         """The risk decision and the affordance of one move (``rate``: OPE's Risk Index is asked for
-        it whatever the risk question says).
+        it whatever the risk question says; ``who``: who holds it, where not ``target`` itself
+        (:meth:`_holders`), for every check).
 
         A veto (:mod:`conceptbot.pipeline.hazards`) drops the move before the model is asked; a
         decision the backend cannot make (an error, a non-finite score) drops it too, and so does a
         score that compares with nothing (NaN): the move is kept only when its score is known and at
         or below the threshold."""
-        move = move_words(target, obj)
+        who = who or target
+        move = move_words(who, obj)
         s_aff, factors = affordance(PickAndPlace(obj, target), scene, properties, [], self.gripper)
         ope = _evidence(properties[obj], target) if obj in properties else None
-        veto = self.hazards.veto(obj, target, properties)
+        veto = self.hazards.veto(obj, who, properties)
+        if veto is not None and who != target:  # the move as planned, the hazard as judged
+            veto = replace(veto, move=format_action(PickAndPlace(obj, target)), to=target)
         if veto is not None:
             observer.progress(f"Risk: {move}: vetoed ({veto.statement})")
             return _vetoed(veto, move, ope, s_aff)
@@ -133,21 +158,21 @@ class RiskChecks:
         asked.append(judgement.scoring)
         if not (math.isfinite(judgement.score) and math.isfinite(judgement.p_yes)):
             return _vetoed(_failed(obj, target, "the backend gave a non-finite score"), move, ope, s_aff)
-        limit = self.thresholds.risk if self.hazards.is_person(target) else self.thresholds.risk_place
+        limit = self.thresholds.risk if self.hazards.is_person(who) else self.thresholds.risk_place
         flagged = judgement.score > limit
         reason = None
-        if flagged or rate or self.hazards.is_vulnerable(target):
+        if flagged or rate or self.hazards.is_vulnerable(who):
             # A flag from the question alone is no reason to drop a move ("give the crayons to the
             # toddler" was flagged on dev): OPE's Risk Index of the object is asked, and the move is
             # dropped for what it names, which the trace shows.
             self._properties(request, scene, [obj], properties, usage, observer, (target,))
             if self.ope is not None and obj not in properties:
                 return _vetoed(_failed(obj, target, "OPE could not rate it"), move, ope, s_aff)
-            reason = self._reason(obj, target, properties, flagged)
-        if reason is None and self.hazards.is_vulnerable(target):
+            reason = self._reason(obj, target, properties, flagged, who)
+        if reason is None and self.hazards.is_vulnerable(who):
             # Asked without the request, which sways the small model towards what was asked.
             try:
-                plain, used = self.decider.unsafe(target, obj)
+                plain, used = self.decider.unsafe(who, obj)
             except (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError) as exc:
                 return _vetoed(_failed(obj, target, exc.message), move, ope, s_aff)
             usage["risk"] = usage["risk"] + used
@@ -173,14 +198,14 @@ class RiskChecks:
         )
 
     def _unvetoed(
-        self, targets: list[Target], ranked: dict[int, list[Judgement]]
+        self, targets: list[Target], ranked: dict[int, list[Judgement]], holders: dict[str, str]
     ) -> dict[int, list[Judgement]]:
         """Each target's ranking less the candidates of a which-one decision that the veto drops
         for that recipient (by the graph's statements: OPE has rated nothing yet); named objects
         stay, so that their veto is traced where the move is checked."""
         out = dict(ranked)
         for number, judgements in ranked.items():
-            to = targets[number].name
+            to = holders.get(targets[number].name, targets[number].name)
             if targets[number].count == 1 and self.hazards.is_vulnerable(to):
                 out[number] = [
                     j for j in judgements if j.p_one is None or self.hazards.veto(j.subject, to, {}) is None
@@ -188,7 +213,7 @@ class RiskChecks:
         return out
 
     def _reason(
-        self, obj: str, target: str, properties: dict[str, ObjectProperties], flagged: bool
+        self, obj: str, target: str, properties: dict[str, ObjectProperties], flagged: bool, who: str = ""
     ) -> str | None:
         """Why a move is dangerous, in OPE's words, or None when nothing names a danger.
 
@@ -205,6 +230,6 @@ class RiskChecks:
         if with_target is not None and with_target >= limit:
             return f"OPE rates the {obj} {with_target}/5 dangerous with the {target}"
         rated = answer.rated_danger()
-        if self.hazards.is_vulnerable(target) and rated >= limit:
-            return f"OPE rates the {obj} {rated}/5 dangerous for the {target}"
+        if self.hazards.is_vulnerable(who or target) and rated >= limit:
+            return f"OPE rates the {obj} {rated}/5 dangerous for the {who or target}"
         return None
