@@ -123,7 +123,9 @@ class Thresholds:
             animals are above it and 2 of 40 safe ones; ``docs/asking.md``).
         holder: A hand-over to the user is checked as one to a child when "is the robot asked to
             hand something to a child or an animal?" scores the request above this (log-odds
-            against a hand-over to the speaker; ``benchmarks/bench_holder.py``).
+            against a hand-over to the speaker): on the 96 labelled requests of
+            ``benchmarks/bench_holder.py`` (AUC 0.97) 93 are right at 0.2, 92 at thresholds chosen
+            leave-one-out.
         underlay: A mat or stand of the scene goes under a moved object when "is it too hot to put
             straight on the place?" has P(Yes) above this: on the 24 dev-written moves of
             ``benchmarks/data/underlay_set.jsonl`` those that need a mat have 0.47-0.75 and the
@@ -141,7 +143,7 @@ class Thresholds:
     combined: float = 0.0
     unsafe_vulnerable: float = 0.3
     underlay: float = 0.4
-    holder: float = 0.0
+    holder: float = 0.2
 
 
 @dataclass
