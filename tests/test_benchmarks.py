@@ -247,3 +247,33 @@ def test_the_paraphrase_asking_benchmark_counts_reading_questions(monkeypatch: p
     assert row["reading_questions"] == 1 and row["tasks"] == 3
     assert (row["success_without_questions"], row["success"]) == (33.3, 66.7)
     assert paraphrases.STEPS_READING[0.9] == 0.8788  # the eighteenth session's fit, for the comparison
+
+
+def test_the_holder_benchmark_ranks_and_counts_over_a_threshold() -> None:
+    holder = _script("bench_holder")
+    rows = [
+        {"score": 0.9, "vulnerable": True},
+        {"score": 0.3, "vulnerable": False},
+        {"score": 0.1, "vulnerable": True},
+        {"score": -1.0, "vulnerable": False},
+    ]
+    assert holder.auc(rows) == 0.75  # of four pairs, the child at 0.1 is below the adult at 0.3
+    assert holder.right(rows, 0.2) == 2 and holder.right(rows, 0.0) == 3
+
+
+def test_the_sort_benchmark_leaves_an_object_that_fits_no_place_well_enough() -> None:
+    sort = _script("bench_sort")
+    record = {
+        "allowed": {"blocks": ["toy box"], "socks": [sort.LEAVE], "car": ["shelf", sort.LEAVE]},
+        "planned": {
+            "scores": {
+                "blocks": {"toy box": 3.0, "shelf": -3.0},
+                "socks": {"toy box": -2.0, "shelf": -1.0},
+                "car": {"toy box": 0.2, "shelf": -0.5},
+            }
+        },
+    }
+    assert sort.leave_score([record], 0.0) == (2, 3, 0)  # the car goes to the toy box
+    assert sort.leave_score([record], 1.0) == (3, 3, 1)
+    assert sort.leave_score([record], -5.0) == (1, 3, 0)  # at -5 everything moves
+    assert sort.best({"toy box": -1.0, sort.LEAVE: -1.5}, 1.0) == sort.LEAVE
