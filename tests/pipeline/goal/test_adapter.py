@@ -10,7 +10,7 @@ from conceptbot.pipeline.goal.doubt import odds
 from conceptbot.pipeline.goal.restate import Restater
 from conceptbot.pipeline.goal_planner.targets import ALL, TargetFinder
 from conceptbot.pipeline.hazards import is_person
-from tests.pipeline.goal.scenes import PANTRY, SHELLS, WORKSHOP
+from tests.pipeline.goal.scenes import NURSERY, PANTRY, SHELLS, WORKSHOP
 
 
 def test_named_places_become_named_targets() -> None:
@@ -210,3 +210,11 @@ def test_without_a_restater_the_goal_finder_reads_the_words_alone() -> None:
     )
     assert (read.reading, read.plain, read.other) == ("", "", None)
     assert [(t.name, t.named) for t in read.targets] == [("shoe box", ["conch shell"])]
+
+
+def test_a_place_the_scene_does_not_have_is_left_to_the_chooser() -> None:
+    # A plain form may name an object as the place ("put the rattle in the safety pins"): the
+    # plan must never move anything to what is not one of the scene's destinations.
+    goal = Goal(targets=(GoalTarget("safety pins", "named", ("rattle",), "", 1),))
+    (target,) = to_targets(goal, NURSERY, choose=lambda target, scene: [("top shelf", 0.4)])
+    assert (target.name, target.how, target.named) == ("top shelf", "scored", ["rattle"])

@@ -82,8 +82,9 @@ def to_targets(goal: Goal, scene: Scene, choose: Chooser | None = None, dish_sai
     Args:
         goal: The goal read from the request.
         scene: Its scene.
-        choose: Chooses destinations for targets the goal leaves open; None: a need goes to the
-            scene's user, and any other open target is an error.
+        choose: Chooses destinations for targets the goal leaves open, or whose place is not one
+            of the scene's destinations (a plain form may name an object as the place); None: a
+            need goes to the scene's user, and any other open target is an error.
         dish_said: The dish as the request says it, where ``goal.dish`` is the graph's concept
             for it (``Target.dish_said``).
 
@@ -99,7 +100,7 @@ def to_targets(goal: Goal, scene: Scene, choose: Chooser | None = None, dish_sai
     targets = []
     several = sum(_counted(t) for t in goal.targets) >= 2
     for target in goal.targets:
-        if target.to is not None:
+        if target.to is not None and target.to in scene.destinations:
             places, how = [(target.to, 0.0)], "named"
         elif choose is not None:
             places, how = choose(target, scene), "scored"
