@@ -147,3 +147,24 @@ def test_scoring_computes_no_logits_rows_for_the_prompt_before_its_last_token(sm
     assert _resident_anonymous_mb() - before < 30
     reference = [_reference_logprob(fresh, "Describe a kitchen. " * 70, o) for o in (" yes", " no")]
     assert scored.logprobs == pytest.approx(reference, abs=2e-3)
+
+
+def test_a_chat_after_other_questions_evaluates_only_what_its_kept_prefix_lacks(smollm2_path: Path) -> None:
+    # The restating prompt's long instructions come back after the planner's other questions
+    # replaced them in the context: the kept state is put back, the reply is the same.
+    system = "You restate what a person asks a household robot, plainly. " * 20
+    first = ChatRequest(
+        messages=(Message("system", system), Message("user", "Hand me the cup.")), max_tokens=8
+    )
+    second = ChatRequest(messages=(Message("system", system), Message("user", "I'm cold.")), max_tokens=8)
+    fresh = LlamaCppLLM(smollm2_path, model="smollm2-135m", n_ctx=1024).chat(second).text
+    llm = LlamaCppLLM(smollm2_path, model="smollm2-135m", n_ctx=1024)
+    llm.chat(first)
+    llm.score(ScoreRequest(options=(" yes", " no"), prompt="Is the sky blue? Answer:"))
+    llama = llm._load()
+    evaluated: list[int] = []
+    real = llama.eval
+    llama.eval = lambda tokens: (evaluated.append(len(tokens)), real(tokens))[1]
+    reply = llm.chat(second)
+    assert reply.text == fresh
+    assert reply.usage.prompt_tokens > 200 and sum(evaluated) < 40
