@@ -39,6 +39,9 @@ from conceptbot.pipeline.ope_answers import RiskIndex
 if TYPE_CHECKING:
     from conceptbot.pipeline.goal_planner.planner import Thresholds
 
+#: A question the backend could not answer: the risk decision it was for fails closed.
+UNANSWERED = (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError)
+
 #: Who holds a hand-over to the user where the request gives it to a child (:meth:`RiskChecks._holders`).
 CHILD = "child"
 
@@ -86,7 +89,7 @@ class RiskChecks:
             return {}, Usage(calls=0)
         try:
             judgement, used = self.decider.holder(request)
-        except (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError):
+        except UNANSWERED:
             return dict.fromkeys(people, CHILD), Usage(calls=0)
         child = not judgement.score <= self.thresholds.holder  # NaN: a child
         return (dict.fromkeys(people, CHILD) if child else {}), used
@@ -113,7 +116,7 @@ class RiskChecks:
         for obj in wanted:
             try:
                 found = self.ope.run([obj], modes.RISK, request, scene_objects=[obj, *partners])
-            except (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError):
+            except UNANSWERED:
                 continue
             properties.update(found.properties)
             usage["ope"] = usage["ope"] + found.usage
@@ -152,7 +155,7 @@ class RiskChecks:
         observer.progress(f"Risk: is it safe to {move}?")
         try:
             judgement, used = self.decider.dangerous(request, move, obj, scene, ())
-        except (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError) as exc:
+        except UNANSWERED as exc:
             return _vetoed(_failed(obj, target, exc.message), move, ope, s_aff)
         usage["risk"] = usage["risk"] + used
         asked.append(judgement.scoring)
@@ -173,7 +176,7 @@ class RiskChecks:
             # Asked without the request, which sways the small model towards what was asked.
             try:
                 plain, used = self.decider.unsafe(who, obj)
-            except (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError) as exc:
+            except UNANSWERED as exc:
                 return _vetoed(_failed(obj, target, exc.message), move, ope, s_aff)
             usage["risk"] = usage["risk"] + used
             asked.append(plain.scoring)
