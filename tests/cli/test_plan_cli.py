@@ -227,40 +227,6 @@ def test_readable_output_says_what_each_of_several_things_is_for() -> None:
     assert "pick_and_place(apple, user)" in text and "pick_and_place(sponge, user)" in text
 
 
-def test_readable_output_says_which_mat_went_under_what_was_too_hot() -> None:
-    from rich.console import Console
-
-    import conceptbot.cli.main  # noqa: F401  (the command modules are imported through it)
-    from conceptbot.cli.plan_cmd import show
-    from conceptbot.core.scene import scene_from_dict
-    from conceptbot.models.fake import FakeEmbedder, FakeLLM
-    from conceptbot.pipeline.conceptbot import ConceptBot
-    from conceptbot.pipeline.retrieval import RelationRetriever
-    from tests.pipeline.fakes import DictGraph
-
-    scene = scene_from_dict(
-        {
-            "pickable_objects": ["casserole dish", "cork mat"],
-            "destinations": ["dining table", "cork mat"],
-            "entity_states": {"casserole dish": "very hot"},
-        }
-    )
-    prior, yes = [-1.0, -1.0], [-0.1, -3.0]
-    llm = FakeLLM(scores=[prior, yes, prior, yes])  # the risk check, then "too hot for the table?"
-    graph = DictGraph({"dining table": [("dining table", "IsA", "table")]})  # a surface heat can mark
-    retriever = RelationRetriever(graph, FakeEmbedder(), 0.2)
-    plan = ConceptBot(llm, retriever, "urp", planner="goal").plan(
-        "Put the casserole dish on the dining table", scene
-    )
-    console = Console(record=True, width=160)
-    show(plan, console)
-    text = console.export_text()
-    assert (
-        "too hot for the dining table? the casserole dish: P(yes) 0.95 -> the cork mat goes under it" in text
-    )
-    assert "pick_and_place(cork mat, dining table)" in text
-
-
 def test_readable_output_gives_each_reading_its_odds_and_the_model_s_preference() -> None:
     from rich.console import Console
 

@@ -1,6 +1,5 @@
 """What the graph says of places: whether two nouns are the same kind of thing, for places a person
-calls by another word than the scene's ("the right baskets" where the scene has bins), and whether a
-place is a surface heat can mark (a mat then goes under a hot dish)."""
+calls by another word than the scene's ("the right baskets" where the scene has bins)."""
 
 from __future__ import annotations
 
@@ -36,10 +35,3 @@ def test_other_kinds_unknown_words_and_no_graph_are_not() -> None:
     assert not FACTS.same_kind("shelf", "bin")
     assert not FACTS.same_kind("gizmo", "bin")  # the graph does not know it
     assert not FactFinder(None).same_kind("basket", "bin")
-
-
-def test_a_surface_heat_can_mark_is_furniture_or_a_table_and_no_appliance_or_receptacle() -> None:
-    assert FACTS.is_surface("desk") and FACTS.is_surface("table")
-    assert FACTS.is_surface("bedside table")  # unknown as a whole: by its last word
-    assert not FACTS.is_surface("oven") and not FACTS.is_surface("sofa")
-    assert not FACTS.is_surface("gizmo") and not FactFinder(None).is_surface("table")

@@ -343,10 +343,6 @@ def _goal(console: Console, trace: PlanTrace) -> None:
         decided = check.p_unsafe is not None and check.score is not None
         numbers = f"P(unsafe) {check.p_unsafe:.2f}, score {check.score:+.2f}" if decided else "not decided"
         console.print(line(f"  risk: {check.move}: {numbers} -> ", verdict))
-    for mat in trace.underlay or ():
-        said = f"P(yes) {mat.p_yes:.2f}" if math.isfinite(mat.p_yes) else "no answer"
-        verdict = f"the {mat.pad} goes under it" if mat.used else "no mat"
-        console.print(line(f"  too hot for the {mat.place}? the {mat.object}: {said} -> {verdict}"))
 
 
 def _relations(

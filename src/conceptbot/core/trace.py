@@ -560,39 +560,6 @@ class CompanionCheck:
 
 
 @dataclass(frozen=True)
-class UnderlayCheck:
-    """Whether a mat or stand of the scene went under a moved object to protect its place ("the cork
-    mat under the casserole dish on the dining table").
-
-    Attributes:
-        object: The object moved.
-        place: Where it was going.
-        pad: The scene object asked about (pickable, and a place itself).
-        p_yes: The model's P(Yes) to "should the pad go under it?" (4 decimals; NaN: not read).
-        score: Its log-odds against a content-free object's (3 decimals).
-        used: Whether the plan puts the pad on the place and the object on the pad.
-    """
-
-    object: str
-    place: str
-    pad: str
-    p_yes: float
-    score: float
-    used: bool
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON form (NaN as null)."""
-        return {
-            "object": self.object,
-            "place": self.place,
-            "pad": self.pad,
-            "p_yes": round(self.p_yes, 4) if math.isfinite(self.p_yes) else None,
-            "score": round(self.score, 3) if math.isfinite(self.score) else None,
-            "used": self.used,
-        }
-
-
-@dataclass(frozen=True)
 class Veto:
     """A move dropped because its own evidence names a hazard for its recipient
     (:mod:`conceptbot.pipeline.hazards`), or because its risk decision could not be made.
@@ -948,7 +915,7 @@ _STEP_PARTS = ("ope", "urp", "goal", "decisions", "stack", "risk", "vetoes", "pl
 # The goal planner's OPE runs on the moves it checks, after the rest; its trace has always listed
 # OPE last, and the JSON keeps that order.
 _GOAL_PARTS = (
-    "urp", "goal", "decisions", "stack", "companions", "risk", "underlay", "vetoes", "planner",
+    "urp", "goal", "decisions", "stack", "companions", "risk", "vetoes", "planner",
     "calibration", "ope",
 )  # fmt: skip
 
@@ -968,8 +935,6 @@ class PlanTrace:
         decisions: The goal planner's per-target decisions.
         stack: The goal planner's pile order.
         risk: The goal planner's risk checks, one per move considered.
-        underlay: The goal planner's mat checks: whether a mat or stand of the scene went under a
-            moved object first (None: the scene has none to ask about).
         companions: The goal planner's things-used-together checks: whether what a need's target
             took goes with something else ("the toothpaste with the toothbrush"; None: no need
             target had a candidate to ask about).
@@ -995,7 +960,6 @@ class PlanTrace:
     decisions: tuple[DecisionTrace, ...] | None = None
     stack: StackTrace | None = None
     risk: tuple[RiskCheck, ...] | None = None
-    underlay: tuple[UnderlayCheck, ...] | None = None
     companions: tuple[CompanionCheck, ...] | None = None
     vetoes: tuple[Veto, ...] | None = None
     planner: PlannerSummary | None = None

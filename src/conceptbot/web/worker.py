@@ -165,8 +165,6 @@ def make_worker(systems: SystemFactory, can_simulate: bool) -> Worker:
                     "calibration": (
                         plan.trace.calibration.to_dict() if plan.trace.calibration is not None else None
                     ),
-                    # The mat checks: whether a mat went under something too hot for its place.
-                    "underlay": [c.to_dict() for c in plan.trace.underlay or ()],
                     # Things used together: whether what a need's target took went with another.
                     "companions": [c.to_dict() for c in plan.trace.companions or ()],
                 },

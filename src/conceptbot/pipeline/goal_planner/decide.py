@@ -327,31 +327,6 @@ class Decider:
         judgement = Judgement(move, "dangerous", 1.0 - p_safe, prior - log_odds, tuple(lines), method)
         return judgement, (usage + used).with_latency(time.perf_counter() - started)
 
-    def underneath(
-        self, request: str, obj: str, state: str, place: str, pad: str = "", template: str = "underlay_user"
-    ) -> tuple[Judgement, Usage]:
-        """Whether ``obj`` is too hot to put straight on ``place`` ("the casserole dish, just out of
-        the oven" on "the dining table"), asked with the object's state and the request, so that a
-        mat goes under it. The score is the log-odds of Yes against the same question about a
-        content-free object with no state.
-
-        On the labelled set (``benchmarks/data/underlay_set.jsonl``, 24 dev-written moves) this
-        wording separated the moves that need a mat with AUC 0.99; asking instead "should the robot
-        put the cork mat on the table first ...?" (``template="underlay_pad_user"``, with ``pad``)
-        was near chance (0.59): the small model answers about heat, not about mats."""
-        started = time.perf_counter()
-
-        def question(what: str, said: str) -> str:
-            told = f" ({said})" if said else ""
-            return prompts.render(template, request=request, object=what, state=told, place=place, pad=pad)
-
-        _, prior, usage, _ = self._ask(question(CONTENT_FREE, ""))
-        p_yes, log_odds, used, method = self._ask(question(obj, state))
-        judgement = Judgement(
-            obj, f"too hot for the {place}", p_yes, log_odds - prior, (state,) if state else (), method
-        )
-        return judgement, (usage + used).with_latency(time.perf_counter() - started)
-
     def together(self, need: str, first: str, others: Sequence[str]) -> tuple[list[Judgement], Usage]:
         """Whether the person would also need each of ``others`` together with ``first`` to do what
         they said ("I want to brush my teeth": the toothpaste with the toothbrush, yes; "I'm

@@ -23,16 +23,6 @@ DEFINING = ("DefinedAs", "MadeOf")  # a word's own definition and ingredients
 USES = ("UsedFor", "CapableOf", "DefinedAs")  # what an object is for, as the graph states it
 
 
-#: Graph classes of places heat can mark (:meth:`FactFinder.is_surface`), and of places it cannot
-#: or that hold things inside (appliances, fixtures, containers; also seats, which are furniture).
-SURFACES = frozenset({"furniture", "table", "flat surface", "horizontal surface", "surface", "countertop"})
-
-
-NOT_SURFACES = frozenset(
-    {"appliance", "kitchen appliance", "white goods", "plumbing fixture", "container", "receptacle"}
-)
-
-
 _STOP = {
     "a", "an", "the", "of", "to", "for", "and", "or", "with", "that", "is", "are", "be", "made", "only",
     "something", "thing", "things", "one", "some", "all", "any", "every", "my", "me", "you", "it", "in",
@@ -170,20 +160,6 @@ class FactFinder:
             return True
         mine, theirs = self._parents(word), self._parents(other)
         return other in mine or word in theirs or bool(set(mine) & set(theirs))
-
-    def is_surface(self, place: str) -> bool:
-        """Whether the graph makes ``place`` a surface that heat can mark: a table, a counter, a
-        shelf, a piece of furniture (an IsA chain of at most 3 steps to :data:`SURFACES`), and no
-        appliance, fixture or container (:data:`NOT_SURFACES`: an oven, a sink, a bowl, a sofa).
-        A name the graph does not know is asked by its last word ("bedside table": "table").
-        False without a graph: the planner then puts no mat under anything."""
-        if self.retriever is None:
-            return False
-        for name in dict.fromkeys((place.lower(), place.lower().split()[-1])):
-            if not self._parents(name) and " " in name:
-                continue  # unknown as a whole: its head noun is asked next
-            return self._is_a(name, SURFACES) and not self._is_a(name, NOT_SURFACES)
-        return False
 
     def _is_a(self, concept: str, classes: set[str] | frozenset[str], depth: int = 3) -> bool:
         """Whether an IsA chain of at most ``depth`` steps leads from ``concept`` to one of ``classes``."""

@@ -1,6 +1,6 @@
 """What the goal planner adds to the moves it decided (a mixin of
 :class:`~conceptbot.pipeline.goal_planner.planner.GoalPlanner`): things used together with what is
-handed over (:mod:`.companions`), a mat or stand under a hot object, and the order of a pile.
+handed over (:mod:`.companions`) and the order of a pile.
 """
 
 from __future__ import annotations
@@ -20,7 +20,6 @@ from conceptbot.core.scene import Scene
 from conceptbot.core.trace import (
     CompanionCheck,
     StackTrace,
-    UnderlayCheck,
 )
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline.goal_planner.companions import (
@@ -35,8 +34,6 @@ from conceptbot.pipeline.tracing import judgement_trace
 if TYPE_CHECKING:
     from conceptbot.pipeline.goal_planner.planner import Thresholds
 
-#: What a pad under a hot object is for, in the graph's words of use (the pads are ranked by it).
-HOT_PAD = "put a hot pot or dish on it to protect the table"
 BASE = "a sturdy object with a flat top that other things can safely be stacked on"
 #: What goes on top of a pile, whatever its size: the graph states it of many things ("egg
 #: HasProperty fragile", "glass HasProperty breakable"), so the combination weighs that evidence.
@@ -44,7 +41,7 @@ FRAGILE = "fragile"
 
 
 class Placing:
-    """Companions, underlays and piles; the planner supplies the attributes below."""
+    """Companions and piles; the planner supplies the attributes below."""
 
     decider: Decider
     thresholds: Thresholds
@@ -101,57 +98,6 @@ class Placing:
             if taken:
                 together[number] = (anchor, taken)
         return together, checks, spent
-
-    def _underlay(
-        self, request: str, scene: Scene, moves: list[tuple[str, str]], observer: Observer
-    ) -> tuple[list[tuple[str, str]], tuple[UnderlayCheck, ...] | None, Usage]:
-        """Put a mat or stand under a moved object too hot for its place.
-
-        The pads are the scene's objects that are both pickable and a place (a cork mat, a trivet)
-        and that no move touches. Each move onto a surface heat can mark (the graph's word:
-        :meth:`FactFinder.is_surface`; a table or a counter, not an oven, a sink or a bowl) is asked
-        "is the X too hot to put straight on the Y?" (:meth:`Decider.underneath`, with the object's
-        state and the request): the model judges heat well and places badly (on the labelled set,
-        "hot pan into the sink" scored as hot as on a table). Above ``Thresholds.underlay`` (P(Yes))
-        the move becomes two, in
-        order: a pad onto the place, then the object onto the pad. The pad is the one whose
-        graph statements of use are nearest to holding hot pots (:meth:`FactFinder.uses`), else
-        the first in the scene; each pad serves one object. A question that cannot be answered (a
-        backend error, NaN) adds no pad: the move stays as asked, since a mat protects a thing,
-        not a person. Without pads, or without a graph (the no-graph ablation), nothing is asked."""
-        spent = Usage(calls=0)
-        touched = {o for o, _ in moves} | {t for _, t in moves}
-        pads = [o.name for o in scene.objects if o.pickable and o.destination and o.name not in touched]
-        if not pads:
-            return moves, None, spent
-        use = self.decider.facts.uses(pads, HOT_PAD)
-        pads.sort(key=lambda p: -use[p][0] if math.isfinite(use[p][0]) else math.inf)
-        out: list[tuple[str, str]] = []
-        checks: list[UnderlayCheck] = []
-        surfaces: dict[str, bool] = {}
-        for obj, place in moves:
-            free = [p for p in pads if p not in touched and p != place]
-            surface = surfaces.setdefault(place, self.decider.facts.is_surface(place))
-            if not free or not surface or self.hazards.is_person(place):
-                out.append((obj, place))
-                continue
-            observer.progress(f"Underlay: is the {obj} too hot for the {place}?")
-            found = scene.get(obj)
-            state = found.state if found is not None and found.state else ""
-            try:
-                judgement, used = self.decider.underneath(request, obj, state, place)
-                spent = spent + used
-                p_yes, score = judgement.p_yes, judgement.score
-            except (ModelOutputError, BackendRequestError, BackendUnavailableError, NotSupportedError):
-                p_yes = score = math.nan  # shown as null in the trace; no pad is added
-            hot = math.isfinite(p_yes) and math.isfinite(score) and p_yes > self.thresholds.underlay
-            checks.append(UnderlayCheck(obj, place, free[0], p_yes, score, hot))
-            if not hot:
-                out.append((obj, place))
-                continue
-            touched.add(free[0])
-            out += [(free[0], place), (obj, free[0])]
-        return out, tuple(checks) or None, spent
 
     def _stack(
         self,

@@ -48,7 +48,6 @@ from conceptbot.core.trace import (
     RiskCheck,
     RiskEvent,
     StackTrace,
-    UnderlayCheck,
 )
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline.affordance import Gripper, affordance
@@ -126,10 +125,6 @@ class Thresholds:
             against a hand-over to the speaker): on the 96 labelled requests of
             ``benchmarks/bench_holder.py`` (AUC 0.97) 93 are right at 0.2, 92 at thresholds chosen
             leave-one-out.
-        underlay: A mat or stand of the scene goes under a moved object when "is it too hot to put
-            straight on the place?" has P(Yes) above this: on the 24 dev-written moves of
-            ``benchmarks/data/underlay_set.jsonl`` those that need a mat have 0.47-0.75 and the
-            others 0.16-0.35 (``benchmarks/bench_underlay.py``).
     """
 
     fit: float = -0.5
@@ -142,7 +137,6 @@ class Thresholds:
     one_sharpness: float = 1.5
     combined: float = 0.0
     unsafe_vulnerable: float = 0.3
-    underlay: float = 0.4
     holder: float = 0.2
 
 
@@ -367,13 +361,6 @@ class GoalPlanner(RiskChecks, Placing):
             for n, d in enumerate(decisions)
         )
         confidence = clarified.confidence(moves)
-        # A mat or stand of the scene goes under what needs one (a hot dish on a wooden table);
-        # the decisions and their confidence are about the moves the request asked for, before.
-        underlay: tuple[UnderlayCheck, ...] | None = None
-        if not stack:
-            moves, underlay, spent = self._underlay(request, scene, moves, observer)
-            if underlay is not None:  # only where something was asked: the usage keys are a contract
-                usage["underlay"] = spent
         steps = self._steps(moves, candidates, scene, properties, asked[-1] if asked else "")
         for step in steps:
             observer.event("step", step)
@@ -386,7 +373,6 @@ class GoalPlanner(RiskChecks, Placing):
             stack=pile,
             companions=companions,
             risk=risk,
-            underlay=underlay,
             vetoes=vetoes or None,
         )
         return GoalPlanResult(

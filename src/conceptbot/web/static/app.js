@@ -282,10 +282,6 @@ function showPlan(e) {
   // Thresholds fitted for another model do not keep the coverage they promise: say so.
   const c = e.calibration;
   if (c && !c.own) $("confidence").textContent += ` — the thresholds were fitted for ${c.fitted_for}, not for ${c.model}: the ${c.coverage} coverage is not promised (conceptbot calibrate --conformal fits this model's own)`;
-  // The mat checks: "is the X too hot to put straight on the Y?" and whether a mat went under it.
-  $("risk-checks").append(...(e.underlay || []).map((c) => el("li", { class: "kept" },
-    `too hot for the ${c.place}? the ${c.object}: ${c.p_yes === null ? "no answer" : "P(yes) " + c.p_yes.toFixed(2)}` +
-    (c.used ? ` — the ${c.pad} goes under it` : " — no mat"))));
   // Things used together: "would they also need the X with the Y?" and whether it went too.
   $("risk-checks").append(...(e.companions || []).map((c) => el("li", { class: c.used ? "kept" : "" },
     `used with the ${c.anchor}? the ${c.object}: ${c.p === null ? "no answer" : "P " + c.p.toFixed(2)}` +
