@@ -34,7 +34,7 @@ def graph_reader() -> GoalReader:
     graph = open_graph(settings, fallback=False)
     embedder = open_embedder(settings, None)
     facts = FactFinder(RelationRetriever(graph, embedder, default_theta(embedder.model)))
-    return GoalReader(is_dish=facts.may_be_dish, find_dish=facts.dish_concept, same_kind=facts.same_kind)
+    return GoalReader(is_dish=facts.may_be_dish)
 
 
 def main() -> None:

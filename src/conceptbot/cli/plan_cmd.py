@@ -293,7 +293,6 @@ def _goal(console: Console, trace: PlanTrace) -> None:
         criterion += f"; a dish the graph knows: {target.dish}" if target.dish else ""
         criterion += "; the rest (what no other target takes)" if target.rest else ""
         criterion += f"; {target.part}" if target.part else ""  # "as something to eat"
-        criterion += f"; not: {', '.join(target.excluded)}" if target.excluded else ""
         console.print(line(f"  -> {target.to} ({how}): {target.count}{named}{criterion}"))
     for decision in trace.decisions or ():
         if not decision.decided:

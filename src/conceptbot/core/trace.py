@@ -193,8 +193,6 @@ class TargetTrace:
         rest: Whether it takes whatever no other target takes ("the rest"; in the JSON only when so).
         part: What this target is for where the request asks for several things of different kinds
             ("as something to eat"; in the JSON only when set).
-        excluded: Objects the request leaves out of it ("a drink other than the juice box"; in
-            the JSON only when set).
     """
 
     to: str
@@ -207,7 +205,6 @@ class TargetTrace:
     ingredients: bool = False
     rest: bool = False
     part: str = ""
-    excluded: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form."""
@@ -222,7 +219,6 @@ class TargetTrace:
             "ingredients": self.ingredients,
             **({"rest": True} if self.rest else {}),
             **({"part": self.part} if self.part else {}),
-            **({"excluded": list(self.excluded)} if self.excluded else {}),
         }
 
 

@@ -166,9 +166,6 @@ class ConceptBot:
         reader = GoalReader(
             is_dish=facts.may_be_dish if graphed else None,
             is_person=self.hazards.is_person,
-            find_dish=facts.dish_concept if graphed else None,
-            # the graph tells a "basket" the person speaks of from the scene's "bins"
-            same_kind=facts.same_kind if graphed else None,
         )
         calibration = conformal.calibration_for(
             calibration_dir,

@@ -87,7 +87,6 @@ def target_trace(target: Target) -> TargetTrace:
         ingredients=target.ingredients,
         rest=target.rest,
         part=target.part,
-        excluded=tuple(target.excluded),
     )
 
 

@@ -105,13 +105,3 @@ def test_only_a_criterion_s_wording_differing_keeps_the_person_s_words() -> None
     other = Goal(targets=(GoalTarget("user", "criterion", (), "something to dry my hands with", 1),))
     said = "Give me something to dry my hands with."
     assert choose(own, other, "grounded", request, said).source == "words"
-
-
-def test_what_the_words_leave_out_stays_out_of_the_plain_reading() -> None:
-    # the model's plain form drops the exception, or names the excluded object itself
-    request = "Excluding the conch shell, put the shells in the shoe box."
-    dropped = _aided("Put the shells in the shoe box.").read(request, SHELLS)
-    assert [t.excluded for t in dropped.goal.targets] == [("conch shell",)]
-    named = _aided("Put the conch shell and the sand dollar in the shoe box.").read(request, SHELLS)
-    assert all("conch shell" not in t.named for t in named.goal.targets)
-    assert all("conch shell" in t.excluded for t in named.goal.targets if t.takes != "named")

@@ -774,22 +774,6 @@ def test_a_reading_whose_other_is_unlikely_is_not_asked_about() -> None:
     assert [q.kind for q in planner.plan("chips", SCENE).questions] == ["reading"]
 
 
-def test_an_object_the_request_leaves_out_is_never_a_candidate() -> None:
-    # "Pass me a drink other than the juice box": the juice box is not asked about, nor taken
-    scene = scene_from_dict(
-        {"pickable_objects": ["juice box", "bottle of water", "sandwich"], "destinations": ["user"]}
-    )
-    targets = [Target("user", 1, "named", criterion="drink", excluded=["juice box"])]
-    # "is it a drink?" for the content-free object, the bottle of water and the sandwich; then the
-    # name ranking is not asked for a criterion; the risk question of the move
-    llm = FakeLLM(scores=[PRIOR, [-0.1, -3.0], [-3.0, -0.1], *HOLDER, PRIOR, SAFE])
-    result = GoalPlanner(FixedTargets(targets), Decider(llm, FactFinder(None))).plan("a drink", scene)
-    assert format_actions(result.actions) == ["pick_and_place(bottle of water, user)", "done()"]
-    [decision] = result.trace.decisions
-    assert [j.object for j in decision.objects] == ["bottle of water", "sandwich"]
-    assert len(llm.score_requests) == 7  # nothing was asked about the juice box (two ask who holds it)
-
-
 def test_which_one_shares_are_sharpened_and_the_ranking_kept() -> None:
     from conceptbot.pipeline.goal_planner.choice import ChoiceWeights, ObjectChooser
 

@@ -128,7 +128,6 @@ def to_targets(goal: Goal, scene: Scene, choose: Chooser | None = None, dish_sai
                     dish_said if target.takes == "ingredients" and dish_said != dish else "",
                     target.criterion if several and target.takes == "need" else "",
                     target.takes == "need",
-                    list(target.excluded),
                 )
             )
     return targets

@@ -216,9 +216,5 @@ def read_twice(
     own = read(request, scene)
     said = restater.restate(request)
     restated = read(said.text, scene) if said.text else None
-    # What the person's own words leave out stays out whatever reading is taken: the plain form
-    # drops exceptions ("Excluding the highlighter, put ..." said as "Put the writing tools ...").
-    if restated is not None:
-        restated = restated.leaving_out(tuple(dict.fromkeys(n for t in own.targets for n in t.excluded)))
     chosen = choose(own, restated, policy, request, said.text, scene.names)
     return replace(chosen, plain=said.text, usage=said.usage)

@@ -7,18 +7,14 @@ from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 from conceptbot.pipeline.goal.mentions import OWN_PLACE, Mention
-from conceptbot.pipeline.goal.parse import Chunk, Clause, Place, asks_you_to, clause_verbs, vocabulary
+from conceptbot.pipeline.goal.parse import Chunk, Clause, Place, clause_verbs, vocabulary
 from conceptbot.pipeline.goal.runs import lower as _lower
 from conceptbot.pipeline.goal.runs import nominal
 from conceptbot.pipeline.goal.runs import runs as _runs
 from conceptbot.pipeline.goal.themes import extend_with_conjuncts
 from conceptbot.pipeline.goal.wishes import (
-    cleft,
     desire_clause,
     desire_verb,
-    existential,
-    offered,
-    recipient_question,
 )
 
 if TYPE_CHECKING:  # spaCy is loaded with the model, on first use (pipeline/goal imports light)
@@ -63,12 +59,9 @@ def _opened(doc: Doc, chunk: Chunk) -> tuple[int, bool, bool]:
     while i < chunk.end:
         word = _lower(doc[i])
         nxt = _lower(doc[i + 1]) if i + 1 < chunk.end else ""
-        asked = asks_you_to(doc, i, chunk.end)
         topic = _phrase_at(doc, i, chunk.end, vocab["topic"])
         sure = assured(doc, Chunk(i, chunk.end, ""))
-        if asked >= 0:
-            i = asked  # "I'd like you to put ...", "I'd appreciate it if you brought ..."
-        elif sure >= 0:
+        if sure >= 0:
             i, made_sure = sure, True
         elif topic >= 0 and topic < chunk.end:
             i = topic  # "as for the throw pillow": the topic of the next clause
@@ -260,25 +253,9 @@ def place_role(
     before_object = verb >= 0 and j - 1 == verb and nxt is not None and nxt.tag_ in _NP_START | {"PRP"}
     if person and (dative or before_object):
         return tuple(frame)  # "give the dog a treat"
-    if j == first and (_is_for(doc, mention.end, end) >= 0 or _receives(doc, mention.end, end) >= 0):
-        return tuple(frame)  # "the toxic tray is for ...", "the dog would like a treat"
+    if j == first and _is_for(doc, mention.end, end) >= 0:
+        return tuple(frame)  # "the toxic tray is for ..."
     return None
-
-
-def _receives(doc: Doc, at: int, end: int) -> int:
-    """After a subject destination: the index of a verb saying it should get something ("the mixed
-    bin takes X", "the dog would like X", "the coffee table needs X"), else -1."""
-    j = at
-    while j < end and (doc[j].tag_ in ("MD", "RB") or doc[j].dep_ in ("aux", "neg")):
-        j += 1
-    if j + 1 < end and doc[j].lemma_.lower() in vocabulary()["receiving"] and doc[j].tag_.startswith("VB"):
-        k = j + 1
-        while k + 1 < end and _lower(doc[k]) in vocabulary()["restrictors"]:
-            k += 1  # "takes only the paper"
-        after = doc[k]
-        if after.tag_ in _NP_START or _lower(after) in vocabulary()["one"]:
-            return j
-    return -1
 
 
 def _key(doc: Doc, first: int, end: int, mentions: Sequence[Mention]) -> tuple[str, list[int]]:
@@ -402,35 +379,13 @@ def analyse(doc: Doc, chunk: Chunk, mentions: Sequence[Mention], is_person: Call
     with "otherwise"."""
     clause = _analysed(doc, chunk, mentions, is_person)
     first, _, _ = _opened(doc, chunk)
-    if clause.theme and clause.form != "condition":
+    if clause.theme:
         # "bring me the pear, | the stapler and the juice box": the rest of the list is the theme's
         framed = {i for p in clause.places for i in p.frame} | {clause.verb_at}
         allowed = {i for i in range(first, chunk.end) if i not in framed and not doc[i].is_punct}
         clause.theme = extend_with_conjuncts(doc, clause.theme, allowed)
     clause.otherwise = any(_lower(t) in vocabulary()["otherwise"] for t in doc[chunk.start : first])
     return clause
-
-
-def condition_clause(doc: Doc, chunk: Chunk, first: int, end: int, mentions: Sequence[Mention]) -> Clause:
-    """ "If it's clothing", "if a potted plant is poisonous", "if something could poison the puppy":
-    the condition's predicate is a criterion for what the next clause's "it" sends ("clothing",
-    "could poison the puppy"); a subject that is a clause of its own stays ("swallowing it would
-    poison someone"), and one naming scene objects is what is sent."""
-    verb = doc[first].head
-    if not first < verb.i < end:
-        verb = next((t for t in doc[first + 1 : end] if t.tag_.startswith("VB")), doc[first])
-    subject = next((c for c in verb.children if c.dep_ in ("nsubj", "nsubjpass", "expl")), None)
-    drop = {first}
-    if subject is not None and first < subject.i < end:
-        inside = [t.i for t in subject.subtree if first < t.i < end]
-        if _names_object(inside, mentions):
-            return Clause(chunk, "condition", verb.lemma_.lower(), verb.i, [], tuple(inside), "", False, [])
-        drop |= set(inside)
-    rest = [i for i in range(first + 1, end) if i not in drop]
-    copula = ("'s", "’s")
-    while rest and (doc[rest[0]].lemma_ == "be" or _lower(doc[rest[0]]) in copula or doc[rest[0]].is_punct):
-        rest = rest[1:]  # "is made of glass", "'s poisonous"
-    return Clause(chunk, "condition", verb.lemma_.lower(), verb.i, [], tuple(rest), "", False, [tuple(rest)])
 
 
 def _analysed(
@@ -440,27 +395,18 @@ def _analysed(
     first, lets, made_sure = _opened(doc, chunk)
     end = _closed(doc, chunk)
     mine = [m for m in mentions if first <= m.start < end]
-    if first < end - 1 and _lower(doc[first]) in vocab["conditional"]:
-        return condition_clause(doc, chunk, first, end, mine)
-    given = offered(doc, first, end)
-    if given is not None:  # "have you got something for it?"
-        return Clause(chunk, "desire", "want", first, [], given, "", False, [given])
     verb, negated = _imperative(doc, first, end, mine, chunk.after == "")
     frame: set[int] = set(range(chunk.start, first))
     if negated:
         frame |= {verb - 2, verb - 1}  # "do n't"
     places: list[Place] = []
-    let = let_have(doc, verb, end, mine) if verb >= 0 else None
-    if let is not None:
-        frame |= set(range(verb, let[0]))
-        verb, places = let[0], [let[1]]  # "let the toddler have X": give X to the toddler
-    elif verb >= 0 and doc[verb].lemma_ in vocab["helping"]:
+    if verb >= 0 and doc[verb].lemma_ in vocab["helping"]:
         # "help me make a salad": the verb is the one helped
         inner = next((t.i for t in doc[verb + 1 : end] if t.tag_ == "VB"), -1)
         if inner >= 0:
             frame |= set(range(verb, inner))
             verb = inner
-    for mention in mine if let is None else []:
+    for mention in mine:
         if mention.kind == "object":
             continue
         role = place_role(doc, mention, chunk, (first, end), verb, mine, is_person)
@@ -476,9 +422,6 @@ def _analysed(
         # "set the hair dryer on the side of the tub for me": done for the person, put in the place
         frame |= {i for p in favour for i in p.frame}
         places = [p for p in places if p not in favour]
-    if verb >= 0 and not places:
-        inverted = inverted_place(doc, verb, end, mine, frame)
-        places = [inverted] if inverted is not None else []
     key, key_tokens = _key(doc, first, end, mine)
     frame |= {i for p in places for i in p.frame} | set(key_tokens)
     indices = list(range(first, end))
@@ -486,17 +429,11 @@ def _analysed(
         return imperative_clause(doc, chunk, verb, (first, end), places, frame, key, mine)
     if places and places[0].frame and min(places[0].frame) == first:
         at_for = _is_for(doc, places[0].mention.end, end)
-        if at_for < 0:
-            at_for = _receives(doc, places[0].mention.end, end)
         if at_for >= 0:
             frame |= set(range(places[0].mention.end, at_for + 1))
             runs = _runs(indices, frame, doc)
             theme = next((r for r in runs if r[0] > at_for and nominal(doc, r)), ())
             return Clause(chunk, "for", "be", at_for, places, theme, key, False, runs)
-    asked = existential(doc, first, end, mine) or recipient_question(doc, first, end, mine, is_person)
-    if asked is not None:
-        theme, place = asked
-        return Clause(chunk, "imperative", "give", -1, [place], theme, key, False, [theme])
     moving = _subject_verb(doc, first, end, places, mine, made_sure)
     if moving is not None:
         chain = _chain(doc, moving, first, end)
@@ -516,9 +453,6 @@ def _analysed(
             return Clause(
                 chunk, "subject", moving.lemma_.lower(), moving.i, places, pronoun[0], key, False, runs
             )
-    wished = cleft(doc, first, end)
-    if wished is not None:
-        return Clause(chunk, "desire", wished[0], -1, [], wished[1], "", False, [wished[1]])
     desire = desire_verb(doc, first, end, lets)
     if desire is not None:
         return desire_clause(doc, chunk, desire, first, end, places, frame, mine)
@@ -567,33 +501,3 @@ def imperative_clause(
 
 def _names_object(run: Sequence[int], mentions: Sequence[Mention]) -> bool:
     return any(m.kind in ("object", "both") and m.start in run for m in mentions)
-
-
-def inverted_place(
-    doc: Doc, verb: int, end: int, mentions: Sequence[Mention], frame: set[int]
-) -> Place | None:
-    """ "Load the tote bag with the groceries", "reward the dog with a treat": the verb's object is
-    the destination when "with" and what is sent follow it; so is "use the mixed bin for X"."""
-    reserving = doc[verb].lemma_ in ("use", "reserve", "save", "keep")
-    for mention in mentions:
-        if mention.kind == "object":
-            continue
-        j = _determiners_before(doc, mention.start, verb + 1, mentions)
-        joined = _lower(doc[mention.end]) if mention.end + 1 < end else ""
-        after = verb + 1
-        while after < j and _lower(doc[after]) in vocabulary()["particles"]:
-            after += 1  # "load up the washing machine with ..."
-        if j == after and (joined == "with" or (reserving and joined == "for")):
-            return Place(mention, (*range(j, mention.end + 1),))
-    return None
-
-
-def let_have(doc: Doc, verb: int, end: int, mentions: Sequence[Mention]) -> tuple[int, Place] | None:
-    """ "Let the toddler have X": the verb "have" and the person, who is where X goes."""
-    inner = next((t.i for t in doc[verb + 1 : end] if t.tag_ == "VB"), -1)
-    if _lower(doc[verb]) != "let" or inner < 0 or doc[inner].lemma_ not in ("have", "get", "keep"):
-        return None
-    person = next((m for m in mentions if verb < m.start < inner and m.kind != "object"), None)
-    if person is None:
-        return None
-    return inner, Place(person, tuple(range(verb + 1, inner)))

@@ -76,15 +76,13 @@ def _key(target: GoalTarget) -> tuple:
         tuple(sorted(target.named)),
         () if target.takes == "need" else words(target.criterion),  # a need's words: as the goal's
         str(target.count),
-        tuple(sorted(target.excluded)),
     )
 
 
 def _show(target: GoalTarget) -> str:
     named = f" {list(target.named)}" if target.named else ""
     criterion = f" {target.criterion!r}" if target.criterion else ""
-    excluded = f" except {list(target.excluded)}" if target.excluded else ""
-    return f"{target.takes}{named}{criterion} x{target.count}{excluded} -> {target.to}"
+    return f"{target.takes}{named}{criterion} x{target.count} -> {target.to}"
 
 
 def same_goal(read: Goal, gold: Goal) -> GoalMatch:

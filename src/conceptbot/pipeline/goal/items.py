@@ -36,8 +36,6 @@ class _Item:
     theme: tuple[int, ...]
     key: str = ""
     shared: bool = False  # the theme is shared with the item before ("and the plastic bin")
-    condition: bool = False  # an "if" clause's criterion, waiting for the clause that sends "it"
-    generic: bool = False  # sends whatever meets a condition: all of them
     remainder: bool = False  # "otherwise it goes in A": what the conditions before leave
 
 
@@ -68,30 +66,9 @@ def clause_items(
         stay = (clause.verb in vocab["stay"] and not places) or (
             clause.negated and clause.verb in (*vocab["untouched"], *vocab["stay"])
         )
-        waiting = items[-1] if items and items[-1].condition else None
         sorting = items and len({n for p in items[-1].places for n in p}) > 1
         if clause.key and not places and not clause.theme and sorting and not items[-1].key:
             items[-1].key = clause.key  # "... go in the recycling bins, | sorted by material"
-            continue
-        if clause.form == "condition":
-            if clause.theme:
-                items.append(_Item(clause, [], clause.theme, condition=True))
-            continue
-        if (
-            waiting is not None
-            and (stay or clause.verb in vocab["stay"])
-            and _pronoun_only(doc, clause.theme)
-        ):
-            items.pop()  # "if something combines materials, leave it on the desk": it stays
-            continue
-        if (
-            waiting is not None
-            and _pronoun_only(doc, clause.theme)
-            and clause.form in ("imperative", "subject")
-        ):
-            # "if it's poisonous, lock it away", "if it's clothing, it belongs in the basket"
-            items[-1] = _Item(clause, places, waiting.theme, clause.key or pending, generic=True)
-            pending = ""
             continue
         alone = prev is not None and all(  # "otherwise, | it goes ..."
             doc[i].text.lower() in vocab["otherwise"] or doc[i].is_punct
@@ -134,10 +111,6 @@ def clause_items(
                 items.append(_Item(clause, [tuple(users)] if handed else [], theme, clause.key))
             else:
                 pending = pending or clause.key  # "sort these by what they're made of, each one ..."
-            continue
-        if clause.form == "fragment" and not places and items and items[-1].places and _also(doc, clause):
-            # "fetch me the ruler. Oh, and the eraser as well."; "...; the hammer too."
-            items.append(_Item(clause, items[-1].places, clause.theme, items[-1].key))
             continue
         if clause.form == "imperative" and not places:
             if clause.verb in (*vocab["making"], *vocab["desire"], *vocab["helping"]):
@@ -206,15 +179,6 @@ def _says_pronoun(doc: Doc, clause: Clause) -> bool:
     return (bool(said) and not clause.theme) or (bool(clause.theme) and _pronoun_only(doc, clause.theme))
 
 
-def _also(doc: Doc, clause: Clause) -> bool:
-    """Whether a place-less fragment adds objects to the clause before: it names objects and says
-    "too", "also" or "as well", or opens with "and"."""
-    words = [doc[i].text.lower() for i in range(clause.chunk.start, clause.chunk.end)]
-    text = " " + " ".join(words) + " "
-    added = any(f" {w} " in text for w in vocabulary()["also"]) or "and" in words[:3]
-    return added and bool(clause.theme) and any(doc[i].tag_.startswith("NN") for i in clause.theme)
-
-
 def _plural(doc: Doc, run: Sequence[int]) -> bool | None:
     """Whether a pronoun theme is plural ("them", "they", "these"), singular ("it"), or says not."""
     words = {doc[i].text.lower() for i in run}
@@ -231,9 +195,6 @@ def antecedent(
     number ("I'm looking for something to write with"), as the phrase's tokens."""
     found: tuple[int, ...] = ()
     chunk = clause.chunk
-    asked = _asked_which(doc, chunk.start, chunk.end)
-    if asked:
-        return asked  # "Which things are paper through and through? Those go in the paper bin."
     named = [m for m in mentions if m.kind in ("object", "both") and chunk.start <= m.start < chunk.end]
     if named and plural:
         return tuple(range(named[0].start, named[-1].end))  # "the socks and the towel ...; load them"
@@ -247,17 +208,6 @@ def antecedent(
         if role and agrees and token.text.lower() not in vocabulary()["personal"]:
             found = tuple(t.i for t in token.subtree if chunk.start <= t.i < chunk.end and not t.is_punct)
     return found
-
-
-def _asked_which(doc: Doc, start: int, end: int) -> tuple[int, ...]:
-    """What a "which/what ... is/are X?" question asks about: X ("which things are paper through and
-    through?"); () for any other chunk."""
-    if start >= end or doc[start].text.lower() not in ("which", "what", "whichever", "whatever"):
-        return ()
-    be = next((t for t in doc[start:end] if t.lemma_ == "be"), None)
-    if be is None:
-        return ()
-    return tuple(i for i in range(be.i + 1, end) if not doc[i].is_punct)
 
 
 def _pronoun_only(doc: Doc, run: Sequence[int]) -> bool:
@@ -279,8 +229,8 @@ def _without_headers(items: list[_Item], vocab: dict) -> list[_Item]:
             clause = item.clause
             if clause.form == "fragment" or clause.verb in vocab["sort"]:
                 continue
-        if (not item.places and item.clause.form == "fragment") or item.condition:
-            continue  # a condition no clause sent anything by
+        if not item.places and item.clause.form == "fragment":
+            continue
         kept.append(item)
     return kept
 
@@ -306,7 +256,7 @@ def item_targets(doc: Doc, items: list[_Item], mentions: list[Mention]) -> list[
             targets += [GoalTarget(n, "criterion", (), key, ALL) for n in names if n not in own]
             continue
         to = names[0] if names else None
-        if theme and not group[0].remainder and not group[0].generic:
+        if theme and not group[0].remainder:
             # "the pear, the stapler and something to write with": each phrase of a list goes there
             readings = read_themes(doc, theme, mentions)
             if len(readings) > 1:
@@ -315,8 +265,6 @@ def item_targets(doc: Doc, items: list[_Item], mentions: list[Mention]) -> list[
         reading = read_theme(doc, theme, mentions) if theme else Reading("all")
         if group[0].remainder:
             reading = Reading("remainder")
-        elif group[0].generic and reading.takes == "criterion":
-            reading = Reading("criterion", (), reading.criterion, ALL)  # whatever meets the condition
         criterion = reading.criterion or (criterion_text(doc, theme) if reading.takes == "criterion" else "")
         targets.append(GoalTarget(to, reading.takes, reading.named, criterion, reading.count))
     return _merged_named(targets)

@@ -88,23 +88,6 @@ def _names(doc: Doc, scene: Scene, spelled: dict[str, list[str]], used: list[boo
             if head_ok and _ends_phrase(doc, end):
                 found.append(Mention((name,), start, end, kinds[name]))
                 used[start:end] = [True] * len(key)
-    return found + _shortened(doc, kinds, spelled, used)
-
-
-def _shortened(
-    doc: Doc, kinds: dict[str, str], spelled: dict[str, list[str]], used: list[bool]
-) -> list[Mention]:
-    """A one-word compound name said by its last part ("the tub" for "bathtub", "the box" for
-    "toolbox"), where that part is a noun of three letters or more that ends no other scene name."""
-    found = []
-    for token in doc:
-        word = token.lemma_.lower()
-        if used[token.i] or token.pos_ != "NOUN" or len(word) < 3 or not _ends_phrase(doc, token.i + 1):
-            continue
-        names = [n for n in kinds if len(spelled[n]) == 1 and spelled[n][0].endswith(word)]
-        if len(names) == 1 and spelled[names[0]][0] != word and kinds[names[0]] in ("place", "both"):
-            found.append(Mention((names[0],), token.i, token.i + 1, kinds[names[0]]))
-            used[token.i] = True
     return found
 
 
@@ -121,7 +104,7 @@ def _groups(doc: Doc, scene: Scene, spelled: dict[str, list[str]], used: list[bo
         singular = token.text.lower() == token.lemma_.lower()
         if used[token.i] or not group or token.tag_ == "VBG":
             continue
-        if singular and not (len(group) > 1 and _each_its_own(doc, token)):
+        if singular:
             continue
         if not _ends_phrase(doc, token.i + 1):
             continue
@@ -146,93 +129,8 @@ def _described(
     return start, modifiers, described
 
 
-def _unnamed(
-    doc: Doc,
-    scene: Scene,
-    spelled: dict[str, list[str]],
-    used: list[bool],
-    spatial: Sequence[str],
-    generic: Sequence[str],
-    same_kind: Callable[[str, str], bool] | None,
-) -> list[Mention]:
-    """Places said with a word the scene does not use for them, in a sort: "into the right
-    baskets" where the scene has bins, "the mixed basket" for the mixed bin.
-
-    A person does not know what the robot calls its places. Where the scene has one group of two
-    or more destinations sharing a last word ("glass bin", "paper bin", ...), a plural noun after a
-    place preposition ("in", "into", "on") that names nothing in the scene names that group, and a
-    singular one whose modifiers spell exactly one member's other words names that member ("the
-    mixed basket": "mixed bin"), where ``same_kind`` makes the word and the group's one the same
-    kind of thing ("basket", "bin": both containers; "shelves" are not bins). Nothing is guessed
-    where the scene has no such group, or two, or without ``same_kind``."""
-    if same_kind is None:
-        return []
-    heads: dict[str, list[str]] = {}
-    for name in scene.destinations:
-        if len(spelled.get(name, [])) > 0:
-            heads.setdefault(spelled[name][-1], []).append(name)
-    groups = [names for names in heads.values() if len(names) > 1]
-    if len(groups) != 1:
-        return []
-    group = groups[0]
-    head = spelled[group[0]][-1]
-    known = {w for words in spelled.values() for w in words}
-    from conceptbot.pipeline.goal.parse import vocabulary  # parse imports this module
-
-    # adjectives saying only that a place fits ("the right container"): they name no place
-    fitting = set(vocabulary()["fitting"])
-    found = []
-    for token in doc:
-        word = token.lemma_.lower()
-        if used[token.i] or token.pos_ != "NOUN" or {word, token.text.lower()} & (known | set(generic)):
-            continue
-        if not _ends_phrase(doc, token.i + 1):
-            continue
-        start, modifiers, described = _described(doc, token, used, group, spelled)
-        # after a place preposition, by the words rather than the parse, which misattaches such
-        # phrases ("go in the paper basket and plastic things ..." hung "basket" on "things")
-        before = start - 1
-        while before >= 0 and doc[before].tag_ in ("DT", "PRP$", "PDT"):
-            before -= 1
-        if before < 0 or doc[before].text.lower() not in spatial or not same_kind(word, head):
-            continue
-        plural = token.tag_ in ("NNS", "NNPS")
-        if plural and not (modifiers & known - {w for n in group for w in spelled[n][:-1]}):
-            names = tuple(described or group)
-        elif not plural and len(described) == 1:
-            names = (described[0],)
-        elif not plural and not modifiers - fitting and _each_its_own(doc, token):
-            names = tuple(group)  # "the right container for what it's made of": each its own
-        else:
-            continue
-        found.append(Mention(names, start, token.i + 1, "place"))
-        used[start : token.i + 1] = [True] * (token.i + 1 - start)
-    return found
-
-
 #: Verbs that make a singular head each object's own place ("the tray where it belongs").
 OWN_PLACE = frozenset({"belong", "match", "go", "fit", "suit", "correspond"})
-
-
-def _each_its_own(doc: Doc, token: Token) -> bool:
-    """Whether a singular head names each object's own place, so every place it could be: "the bin
-    for its material", "the bin for what it is made of", "the tray where it belongs", "the bin that
-    matches it"."""
-    after = doc[token.i + 1 : token.i + 3]
-    if (
-        len(after) == 2
-        and after[0].text.lower() == "for"
-        and after[1].text.lower() in ("its", "their", "what")
-    ):
-        return True
-    if any(c.dep_ == "relcl" and c.lemma_.lower() in OWN_PLACE for c in token.children):
-        return True
-    # the same said after it, whatever the parser joined it to ("the bin that matches its
-    # material", its relative clause read as the subject's; "the bin matching its material")
-    at = token.i + 1
-    if at < len(doc) and doc[at].text.lower() in ("that", "which"):
-        at += 1
-    return at < len(doc) and doc[at].lemma_.lower() in OWN_PLACE and doc[at].tag_.startswith("VB")
 
 
 def _modifies(token: Token) -> bool:
@@ -272,30 +170,12 @@ def _pronouns(
     for token in doc:
         if token.text.lower() not in pronouns or not people:
             continue
-        if token.tag_ != "PRP" and not _object_pronoun(doc, token):
+        if token.tag_ != "PRP":
             continue
         before = [m for m in people if m.end <= token.i]
         who = before[-1] if before else people[0]
         found.append(Mention(who.names, token.i, token.i + 1, "person"))
     return found
-
-
-def _object_pronoun(doc: Doc, token: Token) -> bool:
-    """ "her" tagged a possessive but an object: before a determiner, a pronoun such as
-    "something" (which takes no possessor) or the end ("hand her something", "give her the ball")."""
-    if token.tag_ != "PRP$":
-        return False
-    if token.i + 1 >= len(doc) or doc[token.i + 1].is_punct:
-        return True
-    nxt = doc[token.i + 1]
-    return nxt.tag_ in ("DT", "PDT", "PRP", "CD") or nxt.text.lower() in (
-        "something",
-        "anything",
-        "everything",
-        "one",
-        "some",
-        "any",
-    )
 
 
 def scene_mentions(
@@ -305,9 +185,6 @@ def scene_mentions(
     people: dict[str, list[str]],
     pronouns: Sequence[str],
     is_person: Callable[[str], bool],
-    spatial: Sequence[str] = (),
-    generic: Sequence[str] = (),
-    same_kind: Callable[[str, str], bool] | None = None,
 ) -> list[Mention]:
     """Every mention of the scene in the parsed request, in text order (see the module docstring).
 
@@ -318,18 +195,10 @@ def scene_mentions(
         people: Person destination name -> the words that name such a person.
         pronouns: The pronouns that refer back to a person ("her", "him").
         is_person: Whether a destination is a person or an animal.
-        spatial: Place prepositions ("in", "into", "on"): after one, a word the scene does not use
-            can name its places (``_unnamed``: "the right baskets" for the bins); none: it cannot.
-        generic: Words that name no place ("things", "ones"), whatever follows a preposition.
-        same_kind: Whether two nouns name the same kind of thing (a graph check), for those places;
-            None: only the scene's own words name places.
     """
     used = [False] * len(doc)
     found = _groups(doc, scene, spelled, used)  # before single names: "the paper and plastic bins"
     found += _names(doc, scene, spelled, used)
-    found += _unnamed(
-        doc, scene, spelled, used, spatial, generic, same_kind
-    )  # last: only words no name claimed
     found += _people(doc, scene, people, used)
     found = sorted(found, key=lambda m: m.start)
     found += _pronouns(doc, found, pronouns, is_person)

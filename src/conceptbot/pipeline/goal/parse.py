@@ -149,15 +149,11 @@ def chunks(doc: Doc, mentions: Sequence[Mention]) -> list[Chunk]:
             start, after = i, "hard"
         if _in_mention(mentions, i):
             continue
-        if (word in HARD and not _lists_items(token, mentions)) or _dash(token):
+        if word in HARD or _dash(token):
             if i > start:
                 pieces.append(Chunk(start, i, after))
             start, after = i + 1, "colon" if word == ":" else "hard"
-        elif (
-            (_soft(token) or _or_places(token, mentions))
-            and i > start
-            and not all(doc[j].text.lower() in SOFT for j in range(start, i))
-        ):
+        elif _soft(token) and i > start and not all(doc[j].text.lower() in SOFT for j in range(start, i)):
             # a run of boundary words (", and then") stays at the head of the next chunk
             pieces.append(Chunk(start, i, after))
             start, after = i, "soft"
@@ -165,19 +161,6 @@ def chunks(doc: Doc, mentions: Sequence[Mention]) -> list[Chunk]:
         pieces.append(Chunk(start, len(doc), after))
     pieces = [p for p in pieces if any(not doc[i].is_punct for i in range(p.start, p.end))]
     return _merged(doc, pieces, mentions)
-
-
-def _lists_items(token: Token, mentions: Sequence[Mention]) -> bool:
-    """Whether a colon opens the list of the phrase before it ("two tools: one to measure with and
-    one for screws"), so that it joins, not divides: the parser makes the list's first item an
-    apposition of that phrase, with the other items its conjuncts, and no place follows (a place
-    pairs what comes before with it: "food in the pantry basket, everything poisonous in ...")."""
-    if token.text != ":" or any(m.kind in ("place", "both") and m.start > token.i for m in mentions):
-        return False
-    return any(
-        t.dep_ == "appos" and t.head.i < token.i and any(c.dep_ == "conj" for c in t.children)
-        for t in token.doc[token.i + 1 :]
-    )
 
 
 def _dash(token: Token) -> bool:
@@ -200,25 +183,6 @@ def _soft(token: Token) -> bool:
     if word == "then":
         return token.tag_ in ("RB", "CC")
     return word in SOFT and token.tag_ in ("IN", "CC") and token.dep_ in ("mark", "cc", "prep", "advmod")
-
-
-def _or_places(token: Token, mentions: Sequence[Mention]) -> bool:
-    """Whether an "or" joins two places ("into either the kitchen basket or the disposal bin"), a
-    sort over both, as "and" would: a soft boundary then, not inside a list of things."""
-    if token.text.lower() != "or" or token.tag_ != "CC":
-        return False
-    doc = token.doc
-    after = token.i + 1
-    while after < len(doc) and doc[after].tag_ in ("DT", "PRP$"):
-        after += 1
-    places = [m for m in mentions if m.kind in ("place", "both")]
-    if not (any(m.end == token.i for m in places) and any(m.start == after for m in places)):
-        return False
-    # a sort only where everything is placed ("sort everything here into ..."): "put the rhubarb
-    # in the basket or the bin" leaves one thing's place to the planner
-    vocab = vocabulary()
-    whole = {"everything", "each", "every", "all"}
-    return any(t.lemma_.lower() in vocab["sort"] or t.text.lower() in whole for t in doc[: token.i])
 
 
 def _has_place(chunk: Chunk, mentions: Sequence[Mention]) -> bool:
@@ -306,49 +270,9 @@ def _finite_first(doc: Doc, chunk: Chunk) -> bool:
     return not any(c.dep_ in ("nsubj", "nsubjpass") for c in doc[i].children)
 
 
-def asks_you_to(doc: Doc, at: int, end: int) -> int:
-    """After "I'd like you to", "I want you to", "we need you to" at ``at``: the index of the verb
-    asked for; else -1 (the request is then the imperative that follows)."""
-    words = [t.text.lower() for t in doc[at : min(end, at + 6)]]
-    if not words or words[0] not in ("i", "we"):
-        return _asks_if(doc, at, end)
-    k = 1 + (len(words) > 1 and words[1] in ("'d", "would", "really"))
-    if (
-        len(words) > k + 2
-        and doc[at + k].lemma_ in ("like", "want", "need")
-        and words[k + 1 : k + 3] == ["you", "to"]
-    ):
-        return at + k + 3
-    return _asks_if(doc, at, end)
-
-
-def _asks_if(doc: Doc, at: int, end: int) -> int:
-    """After a polite frame with "if you" ("I'd appreciate it if you", "it would be great if you",
-    "I'd be grateful if you could"): the index of the verb asked for; else -1. The frame is the
-    speaker's (or "it") with verbs, adjectives and "it" only: no noun of its own."""
-    words = [t.text.lower() for t in doc[at:end]]
-    if not words or words[0] not in ("i", "we", "it"):
-        return -1
-    for j in range(at + 2, min(end - 2, at + 8)):
-        if doc[j].text.lower() != "if" or doc[j + 1].text.lower() != "you":
-            continue
-        frame = doc[at:j]
-        if any(t.tag_.startswith("NN") or t.is_punct for t in frame):
-            return -1
-        if not any(t.tag_.startswith("VB") for t in frame):
-            return -1
-        k = j + 2
-        if k < end and doc[k].tag_ == "MD":
-            k += 1  # "if you could pass me ..."
-        return k if k < end and doc[k].tag_ in ("VB", "VBD", "VBP") else -1
-    return -1
-
-
 def _statement_like(doc: Doc, chunk: Chunk, mentions: Sequence[Mention]) -> bool:
     """Whether a chunk has a personal pronoun as the subject of its own verb ("I need ...")."""
     personal = set(vocabulary()["personal"])
-    if asks_you_to(doc, chunk.start, chunk.end) >= 0:
-        return False
     for token in doc[chunk.start : chunk.end]:
         subject = token.dep_ in ("nsubj", "nsubjpass") and token.text.lower() in personal - {"you"}
         if subject and token.head.dep_ not in ("relcl", "acl"):

@@ -40,15 +40,10 @@ from conceptbot.pipeline.goal.clauses import analyse
 from conceptbot.pipeline.goal.items import clause_items as _items
 from conceptbot.pipeline.goal.items import indefinite, item_targets, names_itself
 from conceptbot.pipeline.goal.mentions import Mention, scene_mentions
-from conceptbot.pipeline.goal.needs import need_parts
 from conceptbot.pipeline.goal.parse import Clause, chunks, vocabulary
-from conceptbot.pipeline.goal.repair import parsed
 from conceptbot.pipeline.goal.themes import (
-    EXCEPTED,
     Reading,
     conjuncts,
-    excepted_mentions,
-    exception,
     objects_in,
     read_theme,
     read_themes,
@@ -58,7 +53,7 @@ from conceptbot.pipeline.hazards import is_person as default_is_person
 
 if TYPE_CHECKING:  # spaCy is loaded with the model, on first use (pipeline/goal imports light)
     from spacy.language import Language
-    from spacy.tokens import Doc, Token
+    from spacy.tokens import Doc
 
 logger = logging.getLogger(__name__)
 
@@ -71,12 +66,6 @@ class GoalReader:
             ``en_core_web_sm``, loaded on first use).
         is_dish: Whether a phrase names a dish to prepare (a graph check); None: trust the parse.
         is_person: Whether a destination is a person or an animal (things are handed to it).
-        find_dish: The graph's dish for a phrase (the phrase and the scene's pickable objects in, the
-            dish's concept or None out), for a request the rules read no placed target in ("Could
-            we get started on some guacamole?"); None: no such reading.
-        same_kind: Whether two nouns name the same kind of thing (a graph check: "basket" and
-            "bin"), for places the person calls by a word the scene does not use ("the right
-            baskets" where the scene has bins); None: only the scene's own words name places.
     """
 
     def __init__(
@@ -84,14 +73,10 @@ class GoalReader:
         nlp: Language | None = None,
         is_dish: Callable[[str], bool] | None = None,
         is_person: Callable[[str], bool] = default_is_person,
-        find_dish: Callable[[str, Sequence[str]], str | None] | None = None,
-        same_kind: Callable[[str, str], bool] | None = None,
     ) -> None:
         self._nlp = nlp
-        self.same_kind = same_kind
         self.is_dish = is_dish
         self.is_person = is_person
-        self.find_dish = find_dish
         self._spelled: dict[str, list[str]] = {}
 
     @property
@@ -132,7 +117,7 @@ class GoalReader:
     def _read(self, request: str, scene: Scene) -> Goal:
         vocab = vocabulary()
         # the tokenizer leaves a final "." on a word with a symbol in it ("a PB&J."): split it off
-        doc = parsed(self.nlp, re.sub(r"(?<=[^\s.!?])([.!?]+)\s*$", r" \1", request))
+        doc = self.nlp(re.sub(r"(?<=[^\s.!?])([.!?]+)\s*$", r" \1", request))
         spelled = self._spell(scene.names)
         mentions = scene_mentions(
             doc,
@@ -141,21 +126,7 @@ class GoalReader:
             vocab["people"],
             vocab["recipient_pronouns"],
             self.is_person,
-            # "by" also keys a sort ("by material"): no place follows it there
-            [w for w in vocab["spatial"] if w not in vocab["key"]],
-            [*vocab["generic"], *vocab["whole"], *vocab["remainder"]],
-            self.same_kind,
         )
-        # Objects an exception names ("a drink other than the juice box", "excluding the
-        # highlighter, ...") are no mentions of things to send: each target leaves them out.
-        excepted = excepted_mentions(doc, mentions)
-        doc.user_data[EXCEPTED] = {i for m in excepted for i in range(m.start, m.end)}
-        excluded = tuple(dict.fromkeys(n for m in excepted for n in m.names))
-        comma = _fronted_exception(doc, excepted)
-        if comma is not None:
-            # "Excluding the highlighter, put the writing tools ...": the rest is the request
-            return self._read(doc[comma + 1 :].text, scene).leaving_out(excluded)
-        mentions = [m for m in mentions if m not in excepted]
         clauses = [analyse(doc, c, mentions, self.is_person) for c in chunks(doc, mentions)]
         stack = is_stacking(doc)
         users = [d for d in scene.destinations if d.lower() == "user"]
@@ -167,20 +138,10 @@ class GoalReader:
             targets = [_stacked(doc, clauses, mentions)]
         if not targets and not stack:
             targets, dish = self._wished(doc, clauses, mentions, scene)
-        unplaced = all(t.to is None and t.takes == "criterion" for t in targets)
-        if unplaced and not stack and self.find_dish is not None:
-            # with no target, or only place-less descriptions ("finish the meal with a fruit
-            # salad"), a dish the graph knows is what the request asks for
-            found, named_dish = self._dish_named(doc, mentions, scene)
-            if found:
-                targets, dish = found, named_dish
         if not targets and not stack:
             need = request.strip().rstrip(".!?")
-            # "I'm chilly and there's nothing to do": a need per part, each met by its own object
-            targets = [GoalTarget(None, "need", (), part) for part in need_parts(doc)] or [
-                GoalTarget(None, "need")
-            ]
-        return Goal(stack, dish, need, tuple(targets)).leaving_out(excluded)
+            targets = [GoalTarget(None, "need")]
+        return Goal(stack, dish, need, tuple(targets))
 
     def _wished(
         self, doc: Doc, clauses: list[Clause], mentions: list[Mention], scene: Scene
@@ -223,85 +184,7 @@ class GoalReader:
                 return [GoalTarget(None, "ingredients", named, "", ALL)], dish
             if not making:
                 return [_to(users, reading)], None
-        made = making_anywhere(doc, mentions)
-        if made and (self.is_dish is None or self.is_dish(dish_words(doc, made))):
-            return [GoalTarget(None, "ingredients", objects_in(made, mentions), "", ALL)], dish_words(
-                doc, made
-            )
         return [], None
-
-    def _dish_named(
-        self, doc: Doc, mentions: list[Mention], scene: Scene
-    ) -> tuple[list[GoalTarget], str | None]:
-        """A dish the graph knows, said as the object of a verb or a preposition in a request with no
-        other reading ("let's finish the meal with a fruit salad", "I've got a craving for pancakes"):
-        its words in the request, its ingredients to a place the planner chooses."""
-        assert self.find_dish is not None
-        pickable = [o.name for o in scene.objects if o.pickable]
-        needs = bool(need_parts(doc))  # once per request, not per noun
-        for token in doc:
-            if not token.tag_.startswith("NN") or token.dep_ not in ("dobj", "pobj", "attr", "conj", "appos"):
-                continue
-            if any(m.covers(token.i) for m in mentions) or token.lemma_.lower() in vocabulary()["measure"]:
-                continue  # "cut this baguette into slices": a measure, not a dish
-            if any(t.tag_ == "TO" for t in token.subtree):
-                continue  # "it's time for me to brush my teeth": what follows is an activity
-            if _had(token) or not _may_name_dish(token, needs):
-                continue  # "I've got a cut on my finger": what the speaker has, not a dish
-            phrase = tuple(t.i for t in token.subtree if not t.is_punct)
-            words = dish_words(doc, phrase)
-            if words and self.find_dish(words, pickable):
-                return [GoalTarget(None, "ingredients", objects_in(phrase, mentions), "", ALL)], words
-        return [], None
-
-
-#: Modifiers that make a noun no dish: "at the same time", "my own hands", "whichever tray".
-NOT_DISH_MODIFIERS = frozenset({"same", "own", "whichever", "whatever", "next", "last", "right", "other"})
-#: Words opening a clause that gives the request's reason or time, not what it asks for.
-REASON_MARKS = frozenset({"since", "because", "as", "while", "after", "when", "now", "before", "until"})
-
-
-def _may_name_dish(token: Token, needs: bool) -> bool:
-    """Whether a noun can be the dish a request asks for: not one with a modifier that makes it no
-    dish (:data:`NOT_DISH_MODIFIERS`), nor one inside a clause giving the request's reason or time
-    ("I picked up a baguette ... to go with the soup", "fresh out of the bath, ...", "since it's
-    Sunday, ..."), nor, where the request states how the speaker is, any but what is wished "for"
-    ("I'm burning up and shivering at the same time"; "I've got a craving for pancakes"), nor any
-    where it states two needs (``needs``: :func:`need_parts` of the request found some)."""
-    if any(c.text.lower() in NOT_DISH_MODIFIERS for c in token.children):
-        return False
-    for ancestor in token.ancestors:
-        marks = {c.text.lower() for c in ancestor.children if c.dep_ == "mark"}
-        if ancestor.dep_ == "advcl" and (marks & REASON_MARKS or ancestor.tag_ in ("VBG", "VBN", "JJ")):
-            return False
-        if ancestor.dep_ == "relcl" or (ancestor.dep_ == "xcomp" and ancestor.tag_ == "VB"):
-            return False  # "... to go with the soup": what the thing is for
-    stated = _speaker_state(token.sent.root) and token.head.text.lower() != "for"
-    return not (needs or stated)
-
-
-def _speaker_state(root: Token) -> bool:
-    """Whether a sentence's main clause says how the speaker is ("I'm so dehydrated", "my hair's
-    soaked through")."""
-    subject = next((c for c in root.children if c.dep_ in ("nsubj", "nsubjpass")), None)
-    if subject is None:
-        return False
-    mine = subject.text.lower() in ("i", "we") or any(
-        c.dep_ == "poss" and c.text.lower() in ("my", "our") for c in subject.children
-    )
-    return mine and root.lemma_ == "be" and any(c.dep_ in ("acomp", "attr") for c in root.children)
-
-
-def _had(token: Token) -> bool:
-    """Whether a noun is what the speaker says they have ("I've got a cut", "I have a cold and a
-    cough"): the object of "have"/"get" said of "I"/"we" with no modal ("could I have" asks)."""
-    while token.dep_ == "conj" and token.head.i != token.i:
-        token = token.head
-    verb = token.head
-    if token.dep_ != "dobj" or verb.lemma_ not in ("have", "get"):
-        return False
-    speaker = any(c.dep_ == "nsubj" and c.text.lower() in ("i", "we") for c in verb.children)
-    return speaker and not any(c.tag_ == "MD" for c in verb.children)
 
 
 def _polite(doc: Doc, clause: Clause) -> bool:
@@ -320,50 +203,6 @@ def _described(doc: Doc, run: Sequence[int]) -> bool:
         if token.dep_ == "relcl" and token.head.i in inside and any(c.tag_ == "WDT" for c in token.children):
             return True
     return False
-
-
-def making_anywhere(doc: Doc, mentions: list[Mention]) -> tuple[int, ...]:
-    """The object of a making verb anywhere in the request ("Time to make some guacamole!", "let's
-    put together a salad"), for a request with no other target; () if none."""
-    vocab = vocabulary()
-    for token in doc:
-        phrasal = any(
-            token.lemma_.lower() == a and any(c.text.lower() == b for c in token.children)
-            for a, b in vocab["making_phrases"]
-        )
-        plain = token.lemma_.lower() in vocab["making"] and not any(c.dep_ == "prt" for c in token.children)
-        if not token.tag_.startswith("VB") or not (plain or phrasal):
-            continue
-        made = next((c for c in token.children if c.dep_ == "dobj"), None)
-        if made is not None and made.text.lower() in ("one", "some", "it") and not list(made.children):
-            return _indefinite_before(doc, made.i)  # "the pasta needs a green salad; let's make one"
-        if made is not None and made.lemma_.lower() not in vocab["stack"]["nouns"]:
-            return tuple(t.i for t in made.subtree if not t.is_punct)
-    return ()
-
-
-def _indefinite_before(doc: Doc, at: int) -> tuple[int, ...]:
-    """What "one" stands for: the last noun phrase before ``at`` opened by "a", "an" or "some" (its
-    words up to the noun); () if none."""
-    for token in reversed(doc[:at]):
-        if token.tag_ in ("NN", "NNS") and any(
-            c.dep_ == "det" and c.text.lower() in ("a", "an", "some") for c in token.children
-        ):
-            return tuple(range(token.left_edge.i, token.i + 1))
-    return ()
-
-
-def _fronted_exception(doc: Doc, excepted: list[Mention]) -> int | None:
-    """The comma that ends an exception opening the request ("Excluding the highlighter, put
-    ...", "Apart from the thermos, ..."), or None: the exception's words start the request, and
-    every object mention before the comma is excepted."""
-    if not excepted or exception(doc, range(min(3, len(doc)))) != 0:
-        return None
-    end = max(m.end for m in excepted)
-    comma = next((t.i for t in doc[end:] if t.text == ","), None)
-    if comma is None or comma != end or comma + 1 >= len(doc):
-        return None
-    return comma
 
 
 def _to(users: list[str], reading: Reading) -> GoalTarget:

@@ -194,87 +194,8 @@ def criterion_text(doc: Doc, run: Sequence[int]) -> str:
     return text.strip(" ,;:.!?")
 
 
-#: Relative pronouns and the verbs that carry a negated relative clause ("that isn't", "which is
-#: not"): the exception starts at the pronoun.
-_RELATIVE = frozenset({"that", "which", "who"})
-_CARRIERS = frozenset({"is", "'s", "are", "was", "were", "be", "does", "do", "has", "have"})
-
-
-def exception(doc: Doc, run: Sequence[int]) -> int:
-    """Where a phrase's exception begins, as an index into ``run``, or ``len(run)`` without one:
-    "a drink | that isn't the juice box", "any drink | except the juice box", "a snack | other than
-    the crisps", "anything | but the vase". Not "nothing but the X" or "nothing except the X",
-    which say *only* the X (``only_phrases`` in ``words.json``)."""
-    vocab = vocabulary()
-    words = [_lower(doc[i]) for i in run]
-    for k in range(len(words)):
-        for phrase in vocab["exception"]:
-            if words[k : k + len(phrase)] != phrase:
-                continue
-            before = words[max(0, k - 2) : k]
-            if (before[-1:] and before[-1] in ("nothing", "none")) or before == ["no", "one"]:
-                continue  # "nothing but the plum": only the plum
-            if phrase == ["but"] and not (before[-1:] and before[-1] in vocab["quantifiers"]):
-                continue  # "but" excepts only after "anything", "everything", "all"
-            start = k
-            if phrase in (["not"], ["n't"]) and start >= 1 and words[start - 1] in _CARRIERS:
-                start -= 1
-                if start >= 1 and words[start - 1] in _RELATIVE:
-                    start -= 1
-            elif phrase in (["not"], ["n't"]) and start >= 1 and words[start - 1] == "but":
-                start -= 1  # "a drink, but not the juice box"
-            while start >= 1 and words[start - 1] == ",":
-                start -= 1
-            return start
-    return len(words)
-
-
-#: ``Doc.user_data`` key of the token indices of objects named in an exception (set by the reader).
-EXCEPTED = "conceptbot_excepted"
-
-
-def excepted_mentions(doc: Doc, mentions: Sequence[Mention]) -> list[Mention]:
-    """The object mentions an exception names, wherever it stands: "a drink other than the juice
-    box", "excluding the highlighter, put ...", "..., but not the juice box", "except the thermos
-    and the napkins" (a list an exception opens is excepted whole). The exception's words
-    (:func:`exception`) come right before the mention, determiners aside; "nothing but the plum"
-    is no exception."""
-    found: list[Mention] = []
-    for mention in sorted((m for m in mentions if m.kind in ("object", "both")), key=lambda m: m.start):
-        before = mention.start
-        while before > 0 and doc[before - 1].tag_ in ("DT", "PRP$", "PDT"):
-            before -= 1
-        window = list(range(max(0, before - 4), before))
-        cue = exception(doc, window)
-        # the exception's words must end right before the mention ("not the X", "other than the X")
-        if window and cue < len(window) and _ends_exception(doc, window, cue):
-            found.append(mention)
-        elif found and window and _lower(doc[window[-1]]) in ("and", "or") and found[-1].end >= before - 1:
-            found.append(mention)  # "except the thermos and the napkins"
-    return found
-
-
-def _ends_exception(doc: Doc, window: Sequence[int], cue: int) -> bool:
-    """Whether the exception found at ``cue`` in ``window`` reaches its end: nothing but the
-    exception's own words (and a relative clause's "that isn't") between it and the mention."""
-    words = [_lower(doc[i]) for i in window[cue:]]
-    own = {w for phrase in vocabulary()["exception"] for w in phrase} | _RELATIVE | _CARRIERS | {",", "for"}
-    return all(w in own for w in words)
-
-
-def _excepted_after(doc: Doc, run: Sequence[int]) -> int:
-    """Where the run's exception begins if it names an object the reader marked as excepted, else
-    ``len(run)`` ("not poisonous" names none and stays in the criterion)."""
-    marked = doc.user_data.get(EXCEPTED, set())
-    cut = exception(doc, run)
-    return cut if cut > 0 and any(i in marked for i in run[cut:]) else len(run)
-
-
 def read_theme(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> Reading:
-    """What a theme phrase sends (named objects, a remainder, everything, or a criterion). An
-    exception that names an object ("a drink that isn't the juice box") is cut off: the phrase
-    before it is read on its own; what it leaves out is the request's (the reader adds it)."""
-    run = run[: _excepted_after(doc, run)]
+    """What a theme phrase sends (named objects, a remainder, everything, or a criterion)."""
     named = objects_in(run, mentions)
     if named:
         return Reading("named", named, "", len(named))
@@ -305,21 +226,6 @@ def _listed(token: Token) -> list[Token]:
     return found
 
 
-def _enumerated(token: Token) -> list[Token]:
-    """The items a phrase lists after a colon or a comma ("two tools: one to measure with and one
-    for screws", "two things, a pen and a pad"): the apposition and its conjuncts; [] where the
-    phrase lists none (an apposition without a conjunct only renames the phrase)."""
-    for child in token.children:
-        if child.dep_ != "appos" or child.i < token.i or child.left_edge.i == 0:
-            continue
-        if child.doc[child.left_edge.i - 1].text not in (":", ","):
-            continue
-        items = [child, *_listed(child)]
-        if len(items) >= 2:
-            return items
-    return []
-
-
 def _own_span(token: Token, members: set[int]) -> tuple[int, ...]:
     """A conjunct's own words: its subtree without the other conjuncts, their "and" and commas."""
     drop: set[int] = set()
@@ -339,13 +245,7 @@ def conjuncts(doc: Doc, run: Sequence[int]) -> list[tuple[int, ...]]:
     head = next((t for t in heads if t.tag_.startswith("NN") or t.pos_ in ("NOUN", "PROPN", "PRON")), None)
     if head is None:
         return [tuple(run)]
-    listed_out = _enumerated(head)
-    if listed_out:  # "two tools: one to measure with and one for screws": the items, not the head
-        head, listed = listed_out[0], [t for t in listed_out[1:] if t.i in inside]
-        if head.i not in inside:
-            return [tuple(run)]
-    else:
-        listed = [t for t in _listed(head) if t.i in inside]
+    listed = [t for t in _listed(head) if t.i in inside]
     if not listed:
         return [tuple(run)]
     members = {head.i, *(t.i for t in listed)}
@@ -406,16 +306,6 @@ def read_themes(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> li
     """What a theme sends, one reading per coordinated phrase: the named objects as one reading,
     each phrase describing objects as one of its own ("the pear and something to write with"); a list
     of plural or mass criteria ("apples and pears") stays one criterion."""
-    cut = _excepted_after(doc, run)
-    if cut < len(run):
-        # "a drink that isn't the juice box and a fruit": the exception ends with the last object
-        # it names; the phrases before it and after it are read on their own
-        marked = doc.user_data.get(EXCEPTED, set())
-        last = max(i for i in run[cut:] if i in marked) + 1
-        after = [i for i in run if i >= last]
-        while after and (doc[after[0]].is_punct or _lower(doc[after[0]]) in ("and", "or", "plus")):
-            after = after[1:]
-        return read_themes(doc, run[:cut], mentions) + (read_themes(doc, after, mentions) if after else [])
     parts = conjuncts(doc, run)
     if len(parts) < 2:
         return [read_theme(doc, run, mentions)]
@@ -429,9 +319,7 @@ def read_themes(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> li
         )
         for p in parts
     ]
-    listing = next((doc[i] for i in run if _enumerated(doc[i]) and i not in parts[0]), None)
-    noun = listing.lemma_ if listing is not None else None  # "two tools: one ..., one ..."
-    readings = [_standing_in(doc, p, parts[0], read_theme(doc, p, mentions), noun) for p in parts]
+    readings = [_standing_in(doc, p, parts[0], read_theme(doc, p, mentions), None) for p in parts]
     if any(r.takes not in ("named", "criterion") for r in readings):
         return [read_theme(doc, run, mentions)]
     criteria = [r for r in readings if r.takes == "criterion"]

@@ -8,7 +8,7 @@ for (``"all"``: as many as it takes).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any, Literal
 
 #: How a target's objects are chosen (see :class:`GoalTarget`).
@@ -35,8 +35,6 @@ class GoalTarget:
             material"), a need's part for one of several needs ("I'm chilly"), "" otherwise (a
             place in a sort the words give nothing else for: its name decides).
         count: How many objects the words ask for, or ``"all"``.
-        excluded: Scene objects the request leaves out of it ("a drink that isn't the juice box",
-            "everything except the vase"): never sent there. In the JSON form only when set.
     """
 
     to: str | None
@@ -44,7 +42,6 @@ class GoalTarget:
     named: tuple[str, ...] = ()
     criterion: str = ""
     count: Count = ALL
-    excluded: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if self.takes not in TAKES:
@@ -61,8 +58,6 @@ class GoalTarget:
             "criterion": self.criterion,
             "count": self.count,
         }
-        if self.excluded:
-            data["excluded"] = list(self.excluded)
         return data
 
     @classmethod
@@ -79,7 +74,6 @@ class GoalTarget:
                 named=tuple(data.get("named", ())),
                 criterion=data.get("criterion", ""),
                 count=data.get("count", ALL),
-                excluded=tuple(data.get("excluded", ())),
             )
         except KeyError as exc:
             raise ValueError(f"goal target without {exc.args[0]!r}: {dict(data)}") from exc
@@ -101,25 +95,6 @@ class Goal:
     dish: str | None = None
     need: str | None = None
     targets: tuple[GoalTarget, ...] = field(default_factory=tuple)
-
-    def leaving_out(self, excluded: tuple[str, ...]) -> Goal:
-        """The goal less the objects ``excluded``: never named (a named target left naming none is
-        dropped), and left out of every target that takes what fits (a criterion, every object,
-        the rest, a need, a dish's ingredients)."""
-        if not excluded:
-            return self
-        targets = []
-        for target in self.targets:
-            if target.takes != "named":
-                targets.append(replace(target, excluded=tuple(dict.fromkeys((*target.excluded, *excluded)))))
-                continue
-            kept = tuple(n for n in target.named if n not in excluded)
-            if kept == target.named:
-                targets.append(target)
-            elif kept:
-                count = target.count if target.count == ALL else len(kept)
-                targets.append(replace(target, named=kept, count=count))
-        return replace(self, targets=tuple(targets))
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (the goal set's)."""

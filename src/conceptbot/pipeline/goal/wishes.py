@@ -1,10 +1,9 @@
-"""Wishes: "I'd love an omelette", "we should have a fruit salad", "guacamole is what I want to
-make", "is there something for my sore throat you could hand me?" (step 2 of
+"""Wishes: "I'd love an omelette", "we should have a fruit salad" (step 2 of
 :mod:`conceptbot.pipeline.goal.parse`, the ``desire`` form)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from conceptbot.pipeline.goal.mentions import Mention
@@ -38,15 +37,8 @@ def desire_verb(doc: Doc, first: int, end: int, lets: bool) -> Token | None:
             return token
         if token.lemma_ in vocab["receiving_asked"] and token.tag_ == "VB" and speaker and _asks(token):
             return token  # "could I borrow something to write with?", "I'll take the tape measure"
-        phrase = _wishing_phrase(doc, token, end)
-        wishers = ("i", "we", "who", "anyone", "anybody", "everyone")  # "who's up for pancakes?"
-        if phrase is not None and any(_lower(t) in wishers for t in doc[first:end] if t.dep_ == "nsubj"):
-            return phrase  # "I'm in the mood for an omelette": the phrase's preposition
         if _lower(token) == "about" and token.i > first and _lower(doc[token.i - 1]) == "how":
             return token
-        other = _other_wish(token, subject, speaker)
-        if other is not None:
-            return other
         conditional = any(_lower(c) in ("would", "could") for c in token.children)
         praised = any(c.dep_ == "acomp" for c in token.children)
         thing = bool(subject) and not any(_lower(c) in vocab["personal"] for c in subject)
@@ -54,36 +46,6 @@ def desire_verb(doc: Doc, first: int, end: int, lets: bool) -> Token | None:
             return token
         if token.lemma_ == "sound" and praised and any(c.pos_ in ("NOUN", "PROPN") for c in subject):
             return token  # "a fruit salad sounds great right now"
-    return None
-
-
-def _other_wish(token: Token, subject: list[Token], speaker: bool) -> Token | None:
-    """Wishes said about the meal or by comparison: "breakfast should be an omelette" (the copula),
-    "I'm thinking fruit salad" (the verb), "this morning calls for pancakes", "nothing would hit the
-    spot like a PB&J" (the preposition before what is wished for); else None."""
-    vocab = vocabulary()
-    if not token.tag_.startswith("VB"):
-        return None
-    # the meal is the subject (or, misparsed, a noun phrase before the verb: "Lunch today should be")
-    # "dessert tonight is going to be X": the subject is the head's
-    said = [*token.children, *(token.head.children if token.dep_ == "xcomp" else ())]
-    meal = any(
-        c.lemma_.lower() in vocab["meals"] and c.i < token.i and c.dep_ in ("nsubj", "npadvmod") for c in said
-    )
-    if token.lemma_ == "be" and meal and any(c.dep_ == "attr" for c in token.children):
-        return token
-    if token.lemma_ == "think" and speaker and any(c.dep_ == "dobj" for c in token.children):
-        return token
-    if token.lemma_ == "call":
-        return next((c for c in token.children if c.dep_ == "prep" and _lower(c) == "for"), None)
-    if any(_lower(c) == "nothing" for c in subject):
-        # "nothing beats X" is a wish for X, and so is "nothing would hit the spot like X"
-        after = [t for t in token.subtree if t.i > token.i]
-        compared = next((t for t in after if t.tag_ == "IN" and _lower(t) in vocab["comparing"]), None)
-        if compared is not None:
-            return compared
-        if token.lemma_ == "beat" and any(c.dep_ == "dobj" for c in token.children):
-            return token
     return None
 
 
@@ -106,19 +68,6 @@ def _wishes_to_have(token: Token, subject: list[Token], lets: bool) -> bool:
     if lets or (we and (modals & {"should", "could", "can", "shall"} or token.tag_ == "VBG")):
         return True
     return speaker_i and bool(modals & {"could", "can", "may"})
-
-
-def _wishing_phrase(doc: Doc, token: Token, end: int) -> Token | None:
-    """The last word of a wishing phrase starting at ``token`` ("in the mood for", "feel like")
-    when a noun phrase follows it."""
-    for phrase in vocabulary()["wishing_phrases"]:
-        last = token.i + len(phrase) - 1
-        if last + 1 >= end or [_lower(t) for t in doc[token.i : last + 1]] != phrase:
-            continue
-        after = doc[last + 1]
-        if after.tag_ in ("DT", "NN", "NNS", "JJ", "CD") or _lower(after) in ("some", "something"):
-            return doc[last]
-    return None
 
 
 def _names_object(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> bool:
@@ -178,99 +127,3 @@ def desire_clause(
     elif verb.lemma_ == "need":
         lemma = "need"
     return Clause(chunk, "desire", lemma, at.i, [], theme, "", False, runs)
-
-
-def cleft(doc: Doc, first: int, end: int) -> tuple[str, tuple[int, ...]] | None:
-    """ "Guacamole is what I want to make", "What I'd love for breakfast is an omelette": the wished
-    activity's verb ("make", or "want") and what is wished for; None for anything else."""
-    vocab = vocabulary()
-    wishes = {*vocab["desire"], *vocab["making"]}
-    for be in doc[first:end]:
-        if be.lemma_ != "be":
-            continue
-        for clause in be.children:
-            inside = {t.i for t in clause.subtree}
-            if not clause.tag_.startswith("VB") or not any(_lower(doc[i]) == "what" for i in inside):
-                continue
-            verbs = [
-                doc[i] for i in sorted(inside) if doc[i].lemma_ in wishes and doc[i].tag_.startswith("VB")
-            ]
-            if not verbs or not any(_lower(doc[i]) in ("i", "we") for i in inside):
-                continue
-            other = next((c for c in be.children if c.dep_ in ("nsubj", "attr") and c.i not in inside), None)
-            if other is None:
-                continue
-            theme = tuple(t.i for t in other.subtree if first <= t.i < end and not t.is_punct)
-            making = next((v.lemma_ for v in verbs if v.lemma_ in vocab["making"]), "want")
-            return making, theme
-    return None
-
-
-def existential(
-    doc: Doc, first: int, end: int, mentions: Sequence[Mention]
-) -> tuple[tuple[int, ...], Place] | None:
-    """ "Is there something for my sore throat you could hand me?": the thing asked for and the
-    person a relative clause asks "you" to hand it to; else None."""
-    if first + 1 >= end or doc[first].lemma_ != "be" or _lower(doc[first + 1]) != "there":
-        return None
-    for asking in doc[first + 2 : end]:
-        you = next((c for c in asking.children if _lower(c) == "you" and c.dep_ == "nsubj"), None)
-        if asking.dep_ != "relcl" or you is None:
-            continue
-        for child in asking.children:
-            person = next((m for m in mentions if m.kind == "person" and m.covers(child.i)), None)
-            if person is not None and child.dep_ in ("dobj", "dative"):
-                theme = tuple(i for i in range(first + 2, you.i) if not doc[i].is_punct)
-                return (theme, Place(person, tuple(range(you.i, end)))) if theme else None
-    return None
-
-
-def offered(doc: Doc, first: int, end: int) -> tuple[int, ...] | None:
-    """ "Have you got something for it?", "do you have any plasters?", "got a pen?": what the speaker
-    asks to be given; else None."""
-    words = [_lower(t) for t in doc[first : min(end, first + 3)]]
-    at = -1
-    if words[:3] in (["have", "you", "got"], ["do", "you", "have"], ["you", "got", "any"]):
-        at = first + (3 if words[:3] != ["you", "got", "any"] else 2)
-    elif words[:2] == ["you", "got"]:
-        at = first + 2
-    elif (
-        words[:1] == ["got"]
-        and len(words) > 1
-        and words[1] in ("a", "an", "any", "some", "anything", "something")
-    ):
-        at = first + 1
-    if at < 0 or at >= end:
-        return None
-    theme = tuple(i for i in range(at, end) if not doc[i].is_punct)
-    thing = any(doc[i].tag_.startswith("NN") or _lower(doc[i]) in ("something", "anything") for i in theme)
-    return theme if thing else None
-
-
-def recipient_question(
-    doc: Doc, first: int, end: int, mentions: Sequence[Mention], is_person: Callable[[str], bool]
-) -> tuple[tuple[int, ...], Place] | None:
-    """ "Could the dog have a treat?", "can she get something to play with?": a question whose
-    subject is a person or an animal of the scene asks for something to be given to them; the thing
-    and the person, else None."""
-    vocab = vocabulary()
-    modal = first < end and doc[first].tag_ == "MD"
-    if not modal or _lower(doc[first]) not in [*vocab["question"], "may"]:
-        return None
-    verb = next((t for t in doc[first + 1 : end] if t.tag_ == "VB"), None)
-    if verb is None or verb.lemma_ not in ("have", "get", "keep"):
-        return None
-    person = next(
-        (
-            m
-            for m in mentions
-            if first < m.start < verb.i
-            and m.kind != "object"
-            and (m.kind == "person" or any(is_person(n) for n in m.names))
-        ),
-        None,
-    )
-    if person is None:
-        return None
-    theme = tuple(i for i in range(verb.i + 1, end) if not doc[i].is_punct)
-    return (theme, Place(person, tuple(range(first, verb.i + 1)))) if theme else None

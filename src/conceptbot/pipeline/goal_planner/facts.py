@@ -148,19 +148,6 @@ class FactFinder:
         head = (found.matched or concept).lower()
         return list(dict.fromkeys(e.tail.lower() for e in found.edges if e.head.lower() in (concept, head)))
 
-    def same_kind(self, word: str, other: str) -> bool:
-        """Whether the graph makes ``word`` and ``other`` the same kind of thing: one is an IsA
-        parent of the other, or both have a parent in common ("basket" and "bin": both IsA
-        container; "shelf" and "bin": no). For a place the person calls by another word than the
-        scene does ("the right baskets" where the scene has bins)."""
-        if self.retriever is None:
-            return False
-        word, other = word.lower(), other.lower()
-        if word == other:
-            return True
-        mine, theirs = self._parents(word), self._parents(other)
-        return other in mine or word in theirs or bool(set(mine) & set(theirs))
-
     def _is_a(self, concept: str, classes: set[str] | frozenset[str], depth: int = 3) -> bool:
         """Whether an IsA chain of at most ``depth`` steps leads from ``concept`` to one of ``classes``."""
         assert self.retriever is not None

@@ -426,11 +426,7 @@ class GoalPlanner(RiskChecks, Placing):
                 ranked[number] = named
                 decisions.append(DecisionTrace(target_trace(target), decided=False))
                 continue
-            others = [
-                o
-                for o in scene.pickable
-                if o != target.name and o not in named_anywhere and o not in target.excluded
-            ]
+            others = [o for o in scene.pickable if o != target.name and o not in named_anywhere]
             observer.progress(f"Decide: which objects go to the {target.name} ({len(others)} objects)")
             if target.criterion:
                 # Sorting by a property: "is the foxglove poisonous?" is a question the model answers
@@ -524,13 +520,7 @@ class GoalPlanner(RiskChecks, Placing):
         for target in (t for t in targets if t.rest):
             # "The rest go in B": every object no other target took, in scene order.
             for obj in pickable:
-                left_out = obj in target.excluded  # "the rest, except the vase, go in B"
-                if (
-                    obj not in wanted
-                    and obj != target.name
-                    and (obj, target.name) not in blocked
-                    and not left_out
-                ):
+                if obj not in wanted and obj != target.name and (obj, target.name) not in blocked:
                     wanted[obj] = (target.name, 0.0)
         order = {t.name: i for i, t in enumerate(targets)}
         moves = sorted(wanted.items(), key=lambda item: (order[item[1][0]], -item[1][1]))

@@ -114,8 +114,6 @@ class Target:
         helps: It takes what helps with a need the request states ("I can't make out this tiny
             print"): each object is asked "would the X help with what the person said?", and
             ranked with what the graph states it is for.
-        excluded: Objects the request leaves out of it ("a drink that isn't the juice box"): never
-            its candidates.
     """
 
     name: str
@@ -131,7 +129,6 @@ class Target:
     dish_said: str = ""
     need: str = ""
     helps: bool = False
-    excluded: list[str] = field(default_factory=list)
 
     def to_dict(self) -> dict:
         """JSON form for the trace."""

@@ -179,7 +179,7 @@ function showGoal(goal) {
     `→ ${t.to}: ${t.count} (${t.how}${t.named.length ? ", named: " + t.named.join(", ") : ""}` +
     `${t.criterion ? ", objects that fit “" + t.criterion + "”" : ""}` +
     `${t.dish ? ", a dish the graph knows: " + t.dish : ""}${t.rest ? ", the rest" : ""}` +
-    `${t.part ? ", " + t.part : ""}${t.excluded ? ", not: " + t.excluded.join(", ") : ""})`)));
+    `${t.part ? ", " + t.part : ""})`)));
   if (goal.stack) $("targets").append(el("li", {}, "stack the objects"));
   // Where the model said the request plainly first (pipeline/goal/aided.py), which reading won.
   const readings = {both: "its own words read the same", plain: "read from this plain form",
