@@ -1,7 +1,5 @@
-"""Clauses as targets: each clause's theme and places as an item (colon pairs, pronoun themes, "if"
-conditions, "otherwise" remainders and sort headers resolved), and the items as the goal's targets
-(a sort split into one target per place). :class:`~conceptbot.pipeline.goal.reader.GoalReader`
-calls :func:`clause_items` and then :func:`item_targets`; see its module docstring for the forms.
+"""Clauses as targets: :func:`clause_items` resolves each clause's theme and places (pronouns,
+remainders, sort headers); :func:`item_targets` makes them the goal's targets (a sort: one per place).
 """
 
 from __future__ import annotations
@@ -40,8 +38,7 @@ class _Item:
 
 
 def names_itself(doc: Doc, run: Sequence[int], mentions: list[Mention]) -> bool:
-    """Whether a phrase is a scene object ("the watering can"), not a thing made of some ("a tomato
-    and cucumber salad")."""
+    """Whether a phrase is a scene object ("the watering can"), not a thing made of some (a salad)."""
     head = head_of(doc, run)
     return head is not None and any(m.kind in ("object", "both") and m.covers(head.i) for m in mentions)
 
@@ -94,8 +91,7 @@ def clause_items(
         ):
             continue  # "make me a PB&J": a dish, not a thing to hand over
         if clause.form == "imperative" and not places and _says_pronoun(doc, clause):
-            # "hand it over", "put those in", "put it somewhere safe": what "it" is, the clause
-            # before says; handing it is to the speaker
+            # "hand it over": the clause before says what "it" is; handing it is to the speaker
             handed = clause.verb in vocab["handing"] and users
             if items and items[-1].places and not handed:
                 continue  # said twice: "the paper bin is for X; put those in"
@@ -190,9 +186,8 @@ def _plural(doc: Doc, run: Sequence[int]) -> bool | None:
 def antecedent(
     doc: Doc, clause: Clause, mentions: Sequence[Mention] = (), plural: bool | None = None
 ) -> tuple[int, ...]:
-    """What "it" or "them" refers back to in the clause before: the objects it names (all of them
-    for "them", the last for "it"), else its last noun phrase that is not a person and agrees in
-    number ("I'm looking for something to write with"), as the phrase's tokens."""
+    """The tokens "it"/"them" refers back to in the clause before: the objects it names, else its last
+    noun phrase that is not a person and agrees in number."""
     found: tuple[int, ...] = ()
     chunk = clause.chunk
     named = [m for m in mentions if m.kind in ("object", "both") and chunk.start <= m.start < chunk.end]
@@ -220,8 +215,7 @@ def _pronoun_only(doc: Doc, run: Sequence[int]) -> bool:
 
 
 def _without_headers(items: list[_Item], vocab: dict) -> list[_Item]:
-    """Drops what says only which objects are sorted ("Sort the potted plants:"), and place-less
-    fragments that no place was paired with ("Dinner's ready")."""
+    """Drops sort headers ("Sort the potted plants:") and place-less fragments paired with no place."""
     placed = any(i.places for i in items)
     kept = []
     for item in items:
