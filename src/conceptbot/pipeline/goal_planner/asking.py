@@ -111,6 +111,75 @@ def question_for(number: int, target: Target, unsure: list[Judgement]) -> Clarif
     )
 
 
+def _yes_no_sets(
+    targets: list[Target], ranked: dict[int, list[Judgement]], qhat: float
+) -> tuple[dict[tuple[int, str], DecisionSet], dict[int, list[Judgement]]]:
+    """The conformal set of each calibrated yes/no judgement of an "all that fit" target, and per
+    target the judgements whose set is not one answer."""
+    sets: dict[tuple[int, str], DecisionSet] = {}
+    unsure: dict[int, list[Judgement]] = {}
+    for number, target in enumerate(targets):
+        if target.count != ALL or target.rest:
+            continue
+        for judgement in ranked.get(number, []):
+            if judgement.model is None:  # named, or not a calibrated combination
+                continue
+            found = decision_set(judgement.p_yes, qhat)
+            sets[(number, judgement.subject)] = found
+            if not found.sure:
+                unsure.setdefault(number, []).append(judgement)
+    return sets, unsure
+
+
+def _asked(
+    doubt: dict[int, tuple[float, ClarifyingQuestion]], ranked: dict[int, list[Judgement]], ask: Ask | None
+) -> tuple[list[ClarifyingQuestion], dict[tuple[int, str], str]]:
+    """One question per target, the most uncertain first: the questions (with their answers) and
+    the answer ("yes"/"no") per target and object."""
+    questions = []
+    answered: dict[tuple[int, str], str] = {}
+    for number in sorted(doubt, key=lambda n: doubt[n][0])[:MAX_QUESTIONS]:
+        question = doubt[number][1]
+        chosen = question.read(ask(question)) if ask is not None else None
+        if chosen is None:
+            questions.append(question)
+            continue
+        questions.append(replace(question, answer=question.normalised(chosen)))
+        # A "which one" answer settles every candidate of the target, listed or not.
+        about = (
+            question.objects
+            if question.kind != "one"
+            else [j.subject for j in ranked[number] if j.p_one is not None]
+        )
+        for obj in about:
+            answered[(number, obj)] = "yes" if obj in chosen else "no"
+    return questions, answered
+
+
+def _answered(
+    ranked: dict[int, list[Judgement]], answered: dict[tuple[int, str], str]
+) -> dict[int, list[Judgement]]:
+    """The rankings with the person's answers as certain judgements, re-sorted (named objects first)."""
+    if not answered:
+        return ranked
+    ranked = dict(ranked)
+    for number in {n for n, _ in answered}:
+        changed = [
+            replace(
+                j,
+                p_yes=1.0 if answered[(number, j.subject)] == "yes" else 0.0,
+                score=ANSWERED if answered[(number, j.subject)] == "yes" else -ANSWERED,
+            )
+            if (number, j.subject) in answered
+            else j
+            for j in ranked[number]
+        ]
+        named = [j for j in changed if j.model is None and j.scoring == ""]
+        rest = [j for j in changed if j not in named]
+        ranked[number] = named + sorted(rest, key=lambda j: -j.score)
+    return ranked
+
+
 def clarify(
     targets: list[Target],
     ranked: dict[int, list[Judgement]],
@@ -133,18 +202,7 @@ def clarify(
         rule: How a which-one decision is judged (``fits`` or ``softmax``), as ``qhat`` was fitted.
         qhat_one: The which-one decisions' own threshold (None: ``qhat``).
     """
-    sets: dict[tuple[int, str], DecisionSet] = {}
-    unsure: dict[int, list[Judgement]] = {}
-    for number, target in enumerate(targets):
-        if target.count != ALL or target.rest:
-            continue
-        for judgement in ranked.get(number, []):
-            if judgement.model is None:  # named, or not a calibrated combination
-                continue
-            found = decision_set(judgement.p_yes, qhat)
-            sets[(number, judgement.subject)] = found
-            if not found.sure:
-                unsure.setdefault(number, []).append(judgement)
+    sets, unsure = _yes_no_sets(targets, ranked, qhat)
     candidates = {
         number: one_of(ranked.get(number, []), qhat if qhat_one is None else qhat_one, rule)
         for number, target in enumerate(targets)
@@ -164,41 +222,9 @@ def clarify(
             others = [j.subject for j in ranked.get(number, []) if j.p_one is not None]
             question = which_one_question(targets[number], found, others, rule)
             doubt[number] = (abs(top - 0.5), question)
-    # One question per target, the most uncertain first.
-    questions = []
-    answered: dict[tuple[int, str], str] = {}
-    for number in sorted(doubt, key=lambda n: doubt[n][0])[:MAX_QUESTIONS]:
-        question = doubt[number][1]
-        chosen = question.read(ask(question)) if ask is not None else None
-        if chosen is None:
-            questions.append(question)
-            continue
-        questions.append(replace(question, answer=question.normalised(chosen)))
-        # A "which one" answer settles every candidate of the target, listed or not.
-        about = (
-            question.objects
-            if question.kind != "one"
-            else [j.subject for j in ranked[number] if j.p_one is not None]
-        )
-        for obj in about:
-            answered[(number, obj)] = "yes" if obj in chosen else "no"
+    questions, answered = _asked(doubt, ranked, ask)
     settled = {n for n, _ in answered}
-    if answered:
-        ranked = dict(ranked)
-        for number in settled:
-            changed = [
-                replace(
-                    j,
-                    p_yes=1.0 if answered[(number, j.subject)] == "yes" else 0.0,
-                    score=ANSWERED if answered[(number, j.subject)] == "yes" else -ANSWERED,
-                )
-                if (number, j.subject) in answered
-                else j
-                for j in ranked[number]
-            ]
-            named = [j for j in changed if j.model is None and j.scoring == ""]
-            rest = [j for j in changed if j not in named]
-            ranked[number] = named + sorted(rest, key=lambda j: -j.score)
+    ranked = _answered(ranked, answered)
     traced = []
     for number, decision in enumerate(decisions):
         decision = _with_sets(decision, number, sets, answered)

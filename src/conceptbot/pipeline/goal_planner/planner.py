@@ -28,6 +28,7 @@ from conceptbot.core.trace import (
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline.affordance import Gripper, affordance
 from conceptbot.pipeline.goal_planner.asking import (
+    Clarified,
     clarify,
     move_words,
     reading_options,
@@ -43,7 +44,7 @@ from conceptbot.pipeline.goal_planner.conformal import Calibration, shipped
 from conceptbot.pipeline.goal_planner.decide import Decider, Judgement
 from conceptbot.pipeline.goal_planner.placing import Placing
 from conceptbot.pipeline.goal_planner.risk import RiskChecks
-from conceptbot.pipeline.goal_planner.targets import ALL, Target, TargetsRead
+from conceptbot.pipeline.goal_planner.targets import ALL, ReadingDoubt, Target, TargetsRead
 from conceptbot.pipeline.hazards import HazardCheck
 from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
 from conceptbot.pipeline.tracing import judgement_trace, target_trace
@@ -132,6 +133,50 @@ def _why(check: RiskCheck) -> str:
     return f"{check.move}: {check.why}" + (f", {check.reason}" if check.reason else "")
 
 
+@dataclass(frozen=True)
+class _Chosen:
+    """What the moves are chosen from: the targets, their ranked objects, what goes together with a
+    need's object, whether they make a pile (its moves are fixed) and who holds each hand-over."""
+
+    targets: list[Target]
+    ranked: dict[int, list[Judgement]]
+    together: dict[int, tuple[str, list[str]]]
+    pile: bool
+    holders: dict[str, str]
+
+
+def _goal_trace(read: TargetsRead, doubt: ReadingDoubt | None) -> GoalTrace:
+    """The goal as read, for the trace: the targets, the plain form and the reading in doubt."""
+    return GoalTrace(
+        tuple(target_trace(t) for t in read.targets),
+        read.stack,
+        read.plain,
+        read.reading,
+        read.other,
+        doubt.step if doubt else "",
+        reading_options(doubt) if doubt else (),
+        doubt.preference if doubt else None,
+    )
+
+
+def _candidates(
+    moves: list[tuple[str, str]], targets: list[Target], ranked: dict[int, list[Judgement]]
+) -> dict[tuple[str, str], list[Judgement]]:
+    """Each move's candidates, for the steps: those of the target that took it (two targets may
+    share a place)."""
+    return {
+        (obj, place): next(
+            (
+                ranked[number]
+                for number, target in enumerate(targets)
+                if target.name == place and any(j.subject == obj for j in ranked.get(number, []))
+            ),
+            [],
+        )
+        for obj, place in moves
+    }
+
+
 class GoalPlanner(RiskChecks, Placing):
     """Targets -> decisions -> plan (see the module docstring).
 
@@ -194,16 +239,7 @@ class GoalPlanner(RiskChecks, Placing):
         # Where the request reads two ways, which was meant comes first: it changes the targets.
         read, about_reading, meant = self._reading(read, qhat, ask)
         stack, targets, usage["goal"] = read.stack, read.targets, read.usage
-        goal = GoalTrace(
-            tuple(target_trace(t) for t in targets),
-            stack,
-            read.plain,
-            read.reading,
-            read.other,
-            doubt.step if doubt else "",
-            reading_options(doubt) if doubt else (),
-            doubt.preference if doubt else None,
-        )
+        goal = _goal_trace(read, doubt)
         observer.event("goal", goal)
         if meant is None:
             # The person meant neither reading: nothing is decided or moved (fail closed).
@@ -217,19 +253,11 @@ class GoalPlanner(RiskChecks, Placing):
         # A which-one question never offers what the veto would not let the recipient have.
         holders, held = self._holders(request, targets)
         ranked = self._unvetoed(targets, ranked, holders)
-        clarified = clarify(
-            targets,
-            ranked,
-            decisions,
-            self.calibration.threshold_yes_no(self.coverage),
-            ask,
-            self.calibration.which_one,
-            self.calibration.rule,
-            self.calibration.threshold_one(self.coverage),
-        )
+        clarified = self._clarify(targets, ranked, decisions, ask)
         ranked, decisions = clarified.ranked, clarified.decisions
         observer.event("decisions", DecisionsEvent(tuple(decisions)))
         pile: StackTrace | None = None
+        moves: list[tuple[str, str]] = []
         if stack:
             moves, pile = self._stack(request, scene, usage, asked)
             ranked = {}
@@ -239,21 +267,90 @@ class GoalPlanner(RiskChecks, Placing):
             together, found, spent = self._companions(request, targets, ranked, decided, observer)
             if found:  # only where something was asked: the usage keys are a contract
                 usage["companions"] = spent
+        usage["ope"] = Usage(calls=0)
+        usage["risk"] = held
+        chosen = _Chosen(targets, ranked, together, stack, holders)
+        moves, checks, blocked, properties = self._checked(
+            request, scene, chosen, moves, risk, usage, observer, asked
+        )
+        risk = tuple(checks.values())
+        vetoes = tuple(c.veto for c in risk if c.veto is not None)
+        companions = tuple(replace(c, used=(c.object, c.place) in moves) for c in found) or None
+        observer.event("risk", RiskEvent(risk))
+        candidates = _candidates(moves, targets, ranked)
+        # Where the confidence is lost: each target's share, from the final moves.
+        factors = clarified.factors(moves)
+        decisions = [
+            replace(d, confidence=round(factors[n], 4)) if n in factors else d
+            for n, d in enumerate(decisions)
+        ]
+        confidence = clarified.confidence(moves)
+        steps = self._steps(moves, candidates, scene, properties, asked[-1] if asked else "")
+        for step in steps:
+            observer.event("step", step)
+        refused = not moves and bool(blocked)
+        reason = "; ".join(_why(c) for c in risk if c.dropped) if refused else None
+        actions: list[Action] = [*(PickAndPlace(o, t) for o, t in moves), Done()]
+        trace = PlanTrace(goal=goal, decisions=tuple(decisions), stack=pile, risk=risk, vetoes=vetoes or None)
+        trace = replace(trace, companions=companions)
+        questions = (*about_reading, *clarified.questions)
+        # The confidence of the final moves, times the odds that the reading acted on is the one meant.
+        return GoalPlanResult(
+            actions, steps, refused, reason, trace, usage, properties, questions, _times(confidence, meant)
+        )
+
+    def _clarify(
+        self,
+        targets: list[Target],
+        ranked: dict[int, list[Judgement]],
+        decisions: list[DecisionTrace],
+        ask: Ask | None,
+    ) -> Clarified:
+        """Where a calibrated decision is unsure, its question (asked where someone answers)."""
+        calibration = self.calibration
+        return clarify(
+            targets,
+            ranked,
+            decisions,
+            calibration.threshold_yes_no(self.coverage),
+            ask,
+            calibration.which_one,
+            calibration.rule,
+            calibration.threshold_one(self.coverage),
+        )
+
+    def _checked(
+        self,
+        request: str,
+        scene: Scene,
+        chosen: _Chosen,
+        pile: list[tuple[str, str]],
+        risk: bool,
+        usage: dict[str, Usage],
+        observer: Observer,
+        asked: list[str],
+    ) -> tuple[
+        list[tuple[str, str]],
+        dict[tuple[str, str], RiskCheck],
+        set[tuple[str, str]],
+        dict[str, ObjectProperties],
+    ]:
+        """Choose the moves, check the new ones, choose again where a check removed one (each round
+        blocks at least one more move, so this ends): the moves, every check, the blocked moves and
+        OPE's properties. A pile's moves (``pile``) keep their order and only lose moves."""
         blocked: set[tuple[str, str]] = set()
         checks: dict[tuple[str, str], RiskCheck] = {}
         properties: dict[str, ObjectProperties] = {}
-        usage["ope"] = Usage(calls=0)
-        usage["risk"] = held
-        # Choose, check the new moves, choose again where a check removed one; each round blocks at
-        # least one more move, so this ends.
+        moves = pile
         while True:
-            if not stack:
-                moves = self._choose(targets, ranked, blocked, scene.pickable, together)
+            if not chosen.pile:
+                moves = self._choose(chosen.targets, chosen.ranked, blocked, scene.pickable, chosen.together)
             fresh = [m for m in moves if m not in checks]
             if not fresh:
                 break
             # Hand-overs to a child or an animal are rated first (the veto reads the ratings);
             # others only when the risk question flags them, as each rating is slow.
+            holders = chosen.holders
             handed = [o for o, t in fresh if risk or self.hazards.is_vulnerable(holders.get(t, t))]
             self._properties(request, scene, handed, properties, usage, observer, tuple(t for _, t in fresh))
             for obj, target in fresh:
@@ -264,56 +361,9 @@ class GoalPlanner(RiskChecks, Placing):
             if not dropped:
                 break
             blocked |= dropped
-            if stack:
+            if chosen.pile:
                 moves = [m for m in moves if m not in dropped]
-        risk = tuple(checks.values())
-        vetoes = tuple(c.veto for c in risk if c.veto is not None)
-        companions = tuple(replace(c, used=(c.object, c.place) in moves) for c in found) or None
-        observer.event("risk", RiskEvent(risk))
-        # Each move's candidates, for the steps: those of the target that took it (two may share a place).
-        candidates: dict[tuple[str, str], list[Judgement]] = {}
-        for obj, place in moves:
-            candidates[(obj, place)] = next(
-                (
-                    ranked[number]
-                    for number, target in enumerate(targets)
-                    if target.name == place and any(j.subject == obj for j in ranked.get(number, []))
-                ),
-                [],
-            )
-        # Where the confidence is lost: each target's share, from the final moves.
-        factors = clarified.factors(moves)
-        decisions = tuple(
-            replace(d, confidence=round(factors[n], 4)) if n in factors else d
-            for n, d in enumerate(decisions)
-        )
-        confidence = clarified.confidence(moves)
-        steps = self._steps(moves, candidates, scene, properties, asked[-1] if asked else "")
-        for step in steps:
-            observer.event("step", step)
-        refused = not moves and bool(blocked)
-        reason = "; ".join(_why(c) for c in risk if c.dropped) if refused else None
-        actions: list[Action] = [*(PickAndPlace(o, t) for o, t in moves), Done()]
-        trace = PlanTrace(
-            goal=goal,
-            decisions=decisions,
-            stack=pile,
-            companions=companions,
-            risk=risk,
-            vetoes=vetoes or None,
-        )
-        return GoalPlanResult(
-            actions,
-            steps,
-            refused,
-            reason,
-            trace,
-            usage,
-            properties,
-            (*about_reading, *clarified.questions),
-            # From the final moves, times the odds that the reading acted on is the one meant.
-            _times(confidence, meant),
-        )
+        return moves, checks, blocked, properties
 
     def _reading(
         self, read: TargetsRead, qhat: float, ask: Ask | None
