@@ -5,6 +5,7 @@ Index, the plain safety question for hand-overs to the vulnerable, and failing c
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
@@ -62,6 +63,22 @@ def _plainly(judgement: Judgement, limit: float) -> str:
 def _evidence(props: ObjectProperties, target: str) -> str:
     """OPE's finding about an object as evidence for one move (its danger with that destination only)."""
     return props.answer.move_summary(props.name, target)
+
+
+def _answer(
+    question: Callable[[], tuple[Judgement, Usage]], usage: dict[str, Usage], asked: list[str]
+) -> Judgement | str:
+    """A risk question's judgement, or why it could not be made (a backend error, a non-finite
+    score): the caller then drops the move (safety fails closed)."""
+    try:
+        judgement, used = question()
+    except UNANSWERED as exc:
+        return exc.message
+    usage["risk"] = usage["risk"] + used
+    asked.append(judgement.scoring)
+    if not (math.isfinite(judgement.score) and math.isfinite(judgement.p_yes)):
+        return "the backend gave a non-finite score"
+    return judgement
 
 
 class RiskChecks:
@@ -137,14 +154,9 @@ class RiskChecks:
             observer.progress(f"Risk: {move}: vetoed ({veto.statement})")
             return _vetoed(veto, move, ope, s_aff)
         observer.progress(f"Risk: is it safe to {move}?")
-        try:
-            judgement, used = self.decider.dangerous(request, move, obj, scene, ())
-        except UNANSWERED as exc:
-            return _vetoed(_failed(obj, target, exc.message), move, ope, s_aff)
-        usage["risk"] = usage["risk"] + used
-        asked.append(judgement.scoring)
-        if not (math.isfinite(judgement.score) and math.isfinite(judgement.p_yes)):
-            return _vetoed(_failed(obj, target, "the backend gave a non-finite score"), move, ope, s_aff)
+        judgement = _answer(lambda: self.decider.dangerous(request, move, obj, scene, ()), usage, asked)
+        if isinstance(judgement, str):
+            return _vetoed(_failed(obj, target, judgement), move, ope, s_aff)
         limit = self.thresholds.risk if self.hazards.is_person(who) else self.thresholds.risk_place
         flagged = judgement.score > limit
         reason = None
@@ -156,14 +168,9 @@ class RiskChecks:
             reason = self._reason(obj, target, properties, flagged, who)
         if reason is None and self.hazards.is_vulnerable(who):
             # Asked without the request, which sways the small model towards what was asked.
-            try:
-                plain, used = self.decider.unsafe(who, obj)
-            except UNANSWERED as exc:
-                return _vetoed(_failed(obj, target, exc.message), move, ope, s_aff)
-            usage["risk"] = usage["risk"] + used
-            asked.append(plain.scoring)
-            if not (math.isfinite(plain.score) and math.isfinite(plain.p_yes)):
-                return _vetoed(_failed(obj, target, "the backend gave a non-finite score"), move, ope, s_aff)
+            plain = _answer(lambda: self.decider.unsafe(who, obj), usage, asked)
+            if isinstance(plain, str):
+                return _vetoed(_failed(obj, target, plain), move, ope, s_aff)
             if plain.score > self.thresholds.unsafe_vulnerable:
                 reason = _plainly(plain, self.thresholds.unsafe_vulnerable)
         dangerous = reason is not None
