@@ -1,32 +1,8 @@
 """A goal as the goal planner's targets (:class:`~conceptbot.pipeline.goal_planner.targets.Target`).
 
-Where the goal names a destination the target is ``how="named"``. Where it leaves the destination
-open (``to`` None) a :data:`Chooser` settles it; :class:`ScoredChooser` asks the model the question
-``TargetFinder`` asks ("should the robot put things in the X?", against a content-free
-request). Without a chooser a need goes to the scene's user (the speaker).
-
-What each kind of target becomes (chosen to keep the planner's behaviour where today's reader was
-right):
-
-* ``named``: the named objects, their count.
-* ``criterion`` taking all: ``criterion`` is the request's words; a place in a sort without words of
-  its own gets "belongs in the <place>" (with the key: "belongs in the glass bin, by material").
-  Taking a number ("something to write with"): no criterion, as the word rules before it gave none: the
-  planner then asks the move question and ranks names, which it was tuned on.
-* ``remainder``: ``rest=True``, every object left.
-* ``ingredients``: ``ingredients=True``, ``dish`` and the criterion "an ingredient of <dish>".
-* ``need``: one object (the word rules' rule for a need of the speaker's: right on 13 of the 14
-  dev needs; "brush my teeth" needs two), decided by the move question and the name ranking. Judged
-  instead against "helps when <the need>" with the fitted combination (the judgement set's
-  question: 88% per object), the dev needs fell from 10/21 to 8/21 (2026-12-02): a yes/no per
-  object ranks the one that helps worse than the name ranking does.
-* ``all``: every object. A stacking goal gives no targets: the planner piles the objects itself.
-
-Where the goal asks for two or more things of different kinds, each taking a number ("something to
-eat and something to drink") or each a need of its own ("I'm chilly and there's nothing to do"),
-each target carries its ``part`` ("as something to eat", 'for "I'm chilly"'): without it the
-targets asked the same question against the whole request and took its two best answers, often
-two of one kind.
+An open destination (``to`` None) is settled by a :data:`Chooser`. Where the goal asks for several
+kinds of thing, each target carries its ``part`` ("as something to eat") so that its questions are
+not asked against the whole request.
 """
 
 from __future__ import annotations
@@ -55,8 +31,7 @@ from conceptbot.pipeline.goal_planner.targets import (
     TargetsRead,
 )
 
-#: Chooses the destinations of a target whose goal names none: ``(destination, score)`` pairs, best
-#: first (the score is kept in :attr:`Target.score`).
+#: Chooses an open target's destinations: ``(destination, score)`` pairs, best first.
 Chooser = Callable[[GoalTarget, Scene], list[tuple[str, float]]]
 
 
@@ -82,11 +57,8 @@ def to_targets(goal: Goal, scene: Scene, choose: Chooser | None = None, dish_sai
     Args:
         goal: The goal read from the request.
         scene: Its scene.
-        choose: Chooses destinations for targets the goal leaves open, or whose place is not one
-            of the scene's destinations (a plain form may name an object as the place); None: a
-            need goes to the scene's user, and any other open target is an error.
-        dish_said: The dish as the request says it, where ``goal.dish`` is the graph's concept
-            for it (``Target.dish_said``).
+        choose: Chooses open destinations; None: a need goes to the user, any other is an error.
+        dish_said: The dish as the request says it, where ``goal.dish`` is the graph's concept.
 
     Returns:
         The targets, in the goal's order (a chosen target's places best first).
@@ -146,16 +118,13 @@ def _part(target: GoalTarget) -> str:
 
 
 class ScoredChooser:
-    """Chooses an open target's destinations with the model: each destination scored "should the robot put
-    things in the X?" minus the same for a content-free request; the best, and (except for a dish, made
-    in one place) those above the finder's threshold. A need goes to the user where the scene has one
-    (the speaker); any other open target goes to a place, never to a person or an animal (the goal names
-    those it hands to).
+    """Chooses an open target's destinations with the model: the best and (except for a dish) those
+    above the finder's threshold. A need goes to the user; any other to a place, never a person.
 
     Args:
         finder: Its LLM, ``is_person``, threshold and food knowledge are used.
         request: The request the goal was read from.
-        dish: The dish the goal asks to be made ("" for none): where it is made is asked about it.
+        dish: The dish the goal asks to be made ("" for none).
 
     Attributes:
         usage: The model calls made so far.
@@ -173,8 +142,7 @@ class ScoredChooser:
             return [(_users(scene)[0], 0.0)]
         candidates = list(scene.destinations)
         if target.takes != "need":
-            # A place the request leaves open is a place ("put the pill bottle out of the toddler's
-            # reach", "throw away the poisonous ones"): whoever it hands things to, it names.
+            # An open place is a place: whoever the request hands things to, it names.
             candidates = [d for d in candidates if not self.finder.is_person(d)] or candidates
         making = target.takes == "ingredients"
         if making and self.finder.food is not None:
@@ -186,7 +154,6 @@ class ScoredChooser:
                 odds, used = self.finder.prep_log_odds(self.dish, dest)
                 prior, used_prior = self.finder.prep_log_odds(CONTENT_FREE_DISH, dest)
             else:
-                # TargetFinder's scored question.
                 odds, used = self.finder.log_odds(self.request, dest)
                 prior, used_prior = self.finder.log_odds(CONTENT_FREE_REQUEST, dest)
             self.usage = self.usage + used + used_prior
@@ -200,21 +167,15 @@ class ScoredChooser:
 
 
 class GoalFinder:
-    """The goal planner's targets from :class:`~conceptbot.pipeline.goal.reader.GoalReader`: the
-    request's structure from its parse, and where the words leave a place open, the model's scored
-    choice (:class:`ScoredChooser`).
+    """The goal planner's targets from the goal reader, open places chosen by :class:`ScoredChooser`.
 
     Args:
         reader: Reads the goal.
-        finder: Asks the scored question for open places (its LLM, threshold and food knowledge).
-        dish_concept: The graph's concept for the dish the request names in its own words ("a
-            hollandaise sauce" -> "hollandaise"), so that its definition can be found; None: the
-            words, lower case.
-        restater: Says the request plainly first, and the rules read both (:mod:`.aided`, with
-            ``policy``); None: the rules read the words alone.
+        finder: Asks the scored question for open places.
+        dish_concept: The graph's concept for the dish as said ("a hollandaise sauce" -> "hollandaise").
+        restater: Says the request plainly first and both are read (:mod:`.aided`); None: words alone.
         policy: Which reading wins where the two differ (:data:`~conceptbot.pipeline.goal.aided.POLICIES`).
-        judge: Where the two readings differ, the model's view of which was meant weighs with the
-            step's odds (:mod:`.judge`, :func:`.doubt.judged`); None: the step's odds alone.
+        judge: Weighs the model's view of which reading was meant with the step's odds; None: odds alone.
     """
 
     def __init__(
@@ -248,8 +209,7 @@ class GoalFinder:
                 self.policy,
             )
         read = self._targets(request, scene, reading.goal, reading.usage, started)
-        # No plain form (no restater, or the model failed or said nothing): the words alone were
-        # read, and the trace says no reading.
+        # No plain form: the words alone were read, and the trace says no reading.
         source = reading.source if reading.restated is not None else ""
         other = reading.other
         if other is None:
@@ -262,7 +222,6 @@ class GoalFinder:
             read = replace(read, usage=read.usage + judged_by.usage)
 
         def alternative() -> TargetsRead:
-            # The other reading: its targets, and the reading it was chosen over as its other.
             assert other is not None
             again = self._targets(request, scene, other, Usage(calls=0), time.perf_counter())
             return replace(again, plain=reading.plain, reading=flipped, other=reading.goal.to_dict())
@@ -286,8 +245,7 @@ class GoalFinder:
             concept = found(goal.dish, scene.pickable) if found is not None else None
             goal = replace(goal, dish=concept or said)
         chooser = ScoredChooser(self.finder, request, goal.dish or "")
-        # The model is asked about the dish as it was said ("is the kiwi an ingredient of tomato and
-        # cucumber salad?"); the graph's concept ("salad") is what its facts are read for.
+        # The model is asked about the dish as said; the graph's concept is what facts are read for.
         targets = to_targets(goal, scene, choose=chooser, dish_said=said)
         usage = (chooser.usage + usage).with_latency(time.perf_counter() - started)
         return TargetsRead(goal.stack, targets, usage)
@@ -299,9 +257,8 @@ def _plain(name: str) -> str:
 
 
 def read_plainly(reader: GoalReader, request: str, scene: Scene) -> Goal:
-    """``reader.read``, with scene names that carry brackets, slashes or other marks read as their
-    words: the parser splits "apple [/x]" into pieces that no longer make a noun phrase. The goal
-    names the scene's own spellings."""
+    """``reader.read``, with scene names carrying marks ("apple [/x]") read as their words (the parser
+    would split them); the goal names the scene's own spellings."""
     plain = {o.name: _plain(o.name) for o in scene.objects}
     odd = {n: p for n, p in plain.items() if p and p != n and p not in plain}
     if not odd or len(set(odd.values())) < len(odd):

@@ -1,10 +1,5 @@
-"""Reading a request twice: the rules on its own words, and the rules on the model's plain form of it.
-
-:class:`AidedReader` reads the words with :class:`~conceptbot.pipeline.goal.reader.GoalReader`, has
-:class:`~conceptbot.pipeline.goal.restate.Restater` say the request plainly, reads that too, and
-:func:`choose` decides between the two readings by a policy (:data:`POLICIES`, measured on the goal
-set by ``benchmarks/bench_restated_reading.py``). Where the two disagree the reading is in doubt;
-:class:`Reading` keeps both, so the planner can ask which was meant.
+"""Reading a request twice: the rules on its own words and on the model's plain form of it.
+:func:`choose` picks one; where they disagree :class:`Reading` keeps both, so the planner can ask.
 """
 
 from __future__ import annotations
@@ -40,8 +35,7 @@ class Reading:
         restated: The rules' reading of the plain form, or None.
         source: Which reading ``goal`` is: ``words``, ``plain`` or ``both`` (they agree).
         usage: The model's calls.
-        step: Which of :func:`choose`'s steps decided (one of :data:`STEPS`; "" where only one
-            reading was made or a fixed policy chose): how sure the choice is depends on it.
+        step: Which of :func:`choose`'s steps decided (:data:`STEPS`; "" for one reading or a fixed policy).
     """
 
     goal: Goal
@@ -73,25 +67,11 @@ def choose(
     plain: str = "",
     names: Sequence[str] = (),
 ) -> Reading:
-    """The reading ``policy`` picks from the words' (``own``) and the plain form's (``restated``,
-    read from the text ``plain``), without text or usage. ``words`` and ``plain`` always take that
-    one; ``grounded`` (which needs ``request`` and ``plain``), in this order:
+    """The reading ``policy`` picks from the words' (``own``) and the plain form's (``restated``).
 
-    1. Where the two differ only in a criterion's wording: the person's own words.
-    2. Where both read needs only: the words (the model drops one of two statements).
-    3. Where one reads a need and the other a command that is not :func:`ungrounded`: the command
-       ("It'd be lovely if the teddy bear were back in the toy chest" is a wish the rules take for
-       a statement; "Heat up the leftovers" said as "make the leftovers hot" is not a need).
-       Where the command is ungrounded, the need ("Give me the splinter" for "I've got a splinter").
-    4. Where the words are not ungrounded (but for signs the plain form shares) and the plain
-       form's targets are some of theirs (the model left one out), or it sends an object the words
-       name, or the kind of thing they ask for, to another place or person: the words.
-    5. Otherwise the reading with fewer signs of being made up (:func:`ungrounded`, and a criterion
-       the plain form dropped where the words keep one for the same place: "put everything in the
-       basket" for "all the clothing"), the plain form on a tie: the model reads talk better than
-       the rules where both stay within the request.
-
-    ``names``: the scene's objects, for :func:`ungrounded`.
+    ``words`` and ``plain`` always take that one; ``grounded``: the words where only a criterion's
+    wording differs, both are needs, or the plain form drops or moves a target; a command over a need
+    unless :func:`ungrounded`; else fewer signs of being made up (with ``names``), the plain on a tie.
     """
     if restated is None:
         return Reading(own, own)
@@ -112,8 +92,7 @@ def choose(
         if command_ok:
             return replace(taken if own_need else kept, step="command")
         return replace(kept if own_need else taken, step="need")
-    # A sign of being made up that both readings carry ("the marker" where the scene has two) is
-    # no reason to doubt the words more than the plain form.
+    # A sign both readings carry is no reason to doubt the words more than the plain form.
     mine_only = [sign for sign in mine if sign not in theirs]
     if set(restated.targets) < set(own.targets) and not mine_only:
         return replace(kept, step="dropped")
@@ -127,18 +106,8 @@ def choose(
 
 
 def ungrounded(goal: Goal, request: str, text: str, names: Sequence[str] = ()) -> list[str]:
-    """What in ``goal``, read from ``text``, the request does not bear out:
-
-    * a target of things with no place (the place the plain form named is not the scene's: "put
-      the splinter in the trash");
-    * a criterion or dish with words the request does not have ("the toast in the toaster");
-    * one thing that the text calls "the" and the scene does not have: the rules found no such
-      object, so the model made a thing of the statement ("Give me the jam" for "I've got jam all
-      over my fingers"); where ``names`` (the scene's objects) are given, not where two or more
-      of them have every content word of it ("the marker" where the scene has a permanent and a
-      washable one: the rules found two, not none);
-    * the same criterion twice ("Give me a game. Put it on the table.").
-    """
+    """What in ``goal``, read from ``text``, the request does not bear out: a target with no place, words
+    the request lacks, a "the" thing the scene lacks (unless two ``names`` match), a criterion twice."""
     said = set(words(request))
     lowered = " ".join(text.lower().split())
     found = [f"no place for {t.criterion or ', '.join(t.named) or t.takes}" for t in goal.targets
@@ -163,12 +132,7 @@ def ungrounded(goal: Goal, request: str, text: str, names: Sequence[str] = ()) -
 
 
 def _moved_elsewhere(own: Goal, restated: Goal) -> bool:
-    """The plain form sends an object the words name, or the kind of thing they ask for, to another
-    of the scene's places or people ("give me the honey jar" said as "put the honey jar in the
-    cutting board"; "hand my son the marker" said as "give me the marker"): the model mixed up
-    which place goes with which, or who the thing is for. A kind is the same where the plain form's
-    criterion has the same content words as the words' ("him the marker" for "marker"; not "non-toxic
-    plants" for "toxic plants", a sort's other place)."""
+    """The plain form sends a named object, or the kind asked for (same content words), elsewhere."""
     placed = {n: t.to for t in own.targets if t.to for n in t.named}
     if any(t.to and placed.get(n, t.to) != t.to for t in restated.targets for n in t.named):
         return True

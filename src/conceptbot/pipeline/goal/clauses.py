@@ -1,5 +1,4 @@
-"""One chunk of a request read as a clause: its form, verb, destinations and theme (steps 2-4 of
-:mod:`conceptbot.pipeline.goal.parse`)."""
+"""One chunk of a request read as a clause: form, verb, destinations and theme (see :mod:`.parse`)."""
 
 from __future__ import annotations
 
@@ -35,9 +34,7 @@ def _phrase_at(doc: Doc, at: int, end: int, phrases: Sequence[Sequence[str]]) ->
 
 
 def assured(doc: Doc, chunk: Chunk) -> int:
-    """The index after "make sure (that)", "ensure", "see to it that" opening the chunk (after its
-    boundary words), else -1: what follows is the state asked for ("make sure the stapler ends up in
-    the drawer", "make sure anything poisonous is up in the cabinet")."""
+    """The index after "make sure (that)" or the like opening the chunk (the state asked for), else -1."""
     vocab = vocabulary()
     i = chunk.start
     while i < chunk.end and (_lower(doc[i]) in vocab["openers"] or doc[i].is_punct):
@@ -51,9 +48,7 @@ def assured(doc: Doc, chunk: Chunk) -> int:
 
 
 def _opened(doc: Doc, chunk: Chunk) -> tuple[int, bool, bool]:
-    """The index after the chunk's opening words ("and", "please", "could you", "let's", "as for",
-    "make sure", "I'd appreciate it if you"), whether they were "let's", and whether they were "make
-    sure"."""
+    """The index after the chunk's opening words ("please", "could you"), and whether "let's", "make sure"."""
     vocab = vocabulary()
     i, lets, made_sure = chunk.start, False, False
     while i < chunk.end:
@@ -91,9 +86,8 @@ def _mention_at(mentions: Sequence[Mention], index: int) -> Mention | None:
 
 
 def _imperative(doc: Doc, at: int, end: int, mentions: Sequence[Mention], opening: bool) -> tuple[int, bool]:
-    """The index of the verb an imperative opens with at ``at`` (-1: none), and whether it is
-    negated ("don't touch"). A participle opens one only after another clause ("..., putting X in
-    A"); opening the request it describes the speaker ("Sitting here on the sofa, I'm freezing")."""
+    """The index of the imperative's verb at ``at`` (-1: none), and whether it is negated. A participle
+    opens one only after another clause; opening the request it describes the speaker."""
     vocab = vocabulary()
     negated = False
     if at + 2 < end and _lower(doc[at]) == "do" and _lower(doc[at + 1]) in ("n't", "not"):
@@ -152,8 +146,7 @@ def _particles(doc: Doc, verb: int, end: int) -> list[int]:
     if i < end and _lower(doc[i]) == "of":
         found.append(i)
     for token in doc[verb + 1 : end]:
-        # only the verb's own: "back" in "something that will cut back the branches" is the
-        # relative clause's ("up" before a destination's preposition goes with the destination)
+        # Only the verb's own: a particle may belong to a relative clause or a destination.
         own = token.head.i == verb and (token.dep_ in ("prt", "advmod") or token.tag_ == "RP")
         if own and _lower(token) in vocab["particles"]:
             found.append(token.i)
@@ -174,8 +167,7 @@ def _determiners_before(doc: Doc, start: int, floor: int, mentions: Sequence[Men
 
 
 def _is_for(doc: Doc, at: int, end: int) -> int:
-    """After a subject destination: the index of "for" in "is (only) for" or of "where" in "is
-    where", else -1."""
+    """After a subject destination: the index of "for" in "is for" or "where" in "is where", else -1."""
     if (
         at < end
         and _lower(doc[at]) == "for"
@@ -192,8 +184,7 @@ def _is_for(doc: Doc, at: int, end: int) -> int:
 
 
 def _befalls(preposition: Token) -> bool:
-    """Whether "on" before a person says what befalls them ("my phone died on me"): the "on" of a
-    verb that moves nothing (no object, not a handing verb), not "put the towel on me"."""
+    """Whether "on" before a person says what befalls them ("my phone died on me"), not a place."""
     verb = preposition.head
     if _lower(preposition) != "on" or verb.pos_ != "VERB" or verb.lemma_ in vocabulary()["handing"]:
         return False
@@ -209,8 +200,7 @@ def place_role(
     mentions: Sequence[Mention],
     is_person: Callable[[str], bool],
 ) -> tuple[int, ...] | None:
-    """The frame tokens of a mention in a destination role (its preposition, determiners and
-    itself), or None where it is not one (see :mod:`conceptbot.pipeline.goal.parse`, step 3)."""
+    """The frame tokens of a mention in a destination role, or None (see :mod:`.parse`, step 3)."""
     vocab = vocabulary()
     first, end = bounds
     person = mention.kind == "person" or any(is_person(n) for n in mention.names)
@@ -243,8 +233,7 @@ def place_role(
         if k == first and _is_for(doc, mention.end, end) >= 0:
             return (*frame, *range(k, j))  # "the edge of the bathtub is where ..."
     if person and prev is not None and _lower(prev) in ("with", "for"):
-        # "share it with the dog"; "find something for me to read" (the words stay the
-        # criterion's); not "too small for me to read"
+        # "share it with the dog"; not "too small for me to read" (the criterion's words)
         if nxt is None or nxt.tag_ != "TO":
             return (*frame, j - 1)
         if verb >= 0:
@@ -259,8 +248,7 @@ def place_role(
 
 
 def _key(doc: Doc, first: int, end: int, mentions: Sequence[Mention]) -> tuple[str, list[int]]:
-    """A "by <key>" phrase ("by material", "according to colour", "into the bin for its material")
-    and its tokens."""
+    """A "by <key>" phrase ("by material", "according to colour") and its tokens."""
     for i in range(first, end):
         word = _lower(doc[i])
         if word == "for" and i + 2 < end and _lower(doc[i + 1]) in ("its", "their") and i > first:
@@ -292,8 +280,7 @@ def _key(doc: Doc, first: int, end: int, mentions: Sequence[Mention]) -> tuple[s
 
 
 def _matching_key(doc: Doc, i: int, end: int, mentions: Sequence[Mention]) -> tuple[str, list[int]]:
-    """ "the bin that matches its material", "the tray matching their colour", "the box which
-    corresponds to its size" at ``i`` (just after a place): "by <noun>" and its tokens; else none."""
+    """ "the bin that matches its material" at ``i`` (after a place): "by <noun>" and its tokens."""
     place = _mention_at(mentions, i - 1) if i > 0 else None
     if place is None or place.kind != "place" or place.end != i:
         return "", []
@@ -326,8 +313,7 @@ def _chain(doc: Doc, verb: Token, first: int, end: int) -> list[int]:
 def _subject_verb(
     doc: Doc, first: int, end: int, places: list[Place], mentions: Sequence[Mention], state: bool = False
 ) -> Token | None:
-    """The verb of a "X go(es) in A" / "X should be thrown away" clause, or None; with ``state``
-    (after "make sure") also "X is (up) in A"."""
+    """The verb of a "X goes in A" / "X should be thrown away" clause, or None; ``state``: "X is in A"."""
     vocab = vocabulary()
     motion = {*vocab["motion"], "be"} if state else set(vocab["motion"])
     place_tokens = {i for p in places for i in p.frame}
@@ -355,8 +341,7 @@ def _subject_verb(
         if token.tag_ == "VBN" and any(a.dep_ == "auxpass" for a in auxes) and obliged and placed:
             return token  # "X should be thrown away"; not "this baguette needs to be sliced" (a need)
         if token.tag_ == "VBG" and token.dep_ == "xcomp" and token.head.lemma_ == "need":
-            # "the leftovers need heating up in the microwave", "X needs locking away"; not "this
-            # baguette needs slicing" (a need: nothing says where)
+            # "X needs locking away"; not "this baguette needs slicing" (a need: nothing says where)
             away = any(_lower(c) == "away" for c in token.children)
             if away or any(i in place_tokens for i in range(token.i + 1, end)):
                 return token
@@ -375,8 +360,7 @@ def _personal_subject(doc: Doc, first: int, end: int) -> Token | None:
 
 
 def analyse(doc: Doc, chunk: Chunk, mentions: Sequence[Mention], is_person: Callable[[str], bool]) -> Clause:
-    """Read one chunk (see :mod:`conceptbot.pipeline.goal.parse`); ``otherwise`` set where it opens
-    with "otherwise"."""
+    """Read one chunk (see :mod:`.parse`); ``otherwise`` set where it opens with "otherwise"."""
     clause = _analysed(doc, chunk, mentions, is_person)
     first, _, _ = _opened(doc, chunk)
     if clause.theme:
@@ -476,9 +460,7 @@ def imperative_clause(
     key: str,
     mentions: Sequence[Mention],
 ) -> Clause:
-    """An imperative's clause: its theme is the first phrase after the verb with a noun in it, and
-    the objects named in later phrases joined by "and" ("put the teddy bear in the toy chest, and the
-    toy car too"); "load the tote bag with the groceries" sends the groceries to the tote bag."""
+    """An imperative's clause: its theme is the first noun phrase after the verb, plus objects after "and"."""
     end = bounds[1]
     negated = verb - 2 in frame and _lower(doc[verb - 1]) in ("n't", "not")
     frame |= {verb, *_particles(doc, verb, end)}

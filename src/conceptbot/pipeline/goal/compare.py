@@ -1,13 +1,5 @@
-"""Whether two goals are the same: the exact match of ``benchmarks/bench_goal_reading.py``.
-
-Two goals match when they agree on ``stack``, on the dish (its words compared as below, or both
-none), on whether there is a need (its words are not compared: any wording of "my phone is almost
-dead" is the same need, and so are a need target's words, but not how many need targets there
-are), and on their targets taken as a multiset: equal ``to``, ``takes``,
-``named`` (as sets) and ``count``, and criteria equal as word sequences after lemmatising and
-dropping punctuation, stop words and the generic nouns "one", "thing", "item", "object", "stuff"
-(so "the broken ones" == "broken" == "ones that are broken"). spaCy's stop words include words that
-change a criterion's meaning ("whole", "several", "not", "empty"); those are kept.
+"""Whether two goals are the same (the goal bench's exact match): ``stack``, the dish's words, whether
+there is a need, and the targets as a multiset, criteria compared as content words (:func:`words`).
 """
 
 from __future__ import annotations
@@ -40,8 +32,7 @@ class GoalMatch:
 
 @lru_cache(maxsize=4096)
 def _lemma(word: str) -> str:
-    """A word's lemma, taken alone: the same word gets the same lemma in any phrase ("broken" is an
-    adjective in "the broken ones" and a verb on its own)."""
+    """A word's lemma, taken alone, so that the same word gets the same lemma in any phrase."""
     from conceptbot.knowledge.triples import load_model
 
     return load_model()(word)[0].lemma_.lower().strip(".,;:!?'\"()-")
@@ -49,8 +40,7 @@ def _lemma(word: str) -> str:
 
 @lru_cache(maxsize=4096)
 def words(text: str) -> tuple[str, ...]:
-    """A criterion's or dish's content words: lemmas, lower case, without punctuation, stop words
-    (but :data:`MEANINGFUL`) and :data:`GENERIC` nouns."""
+    """A criterion's or dish's content words: lemmas less stop words (but :data:`MEANINGFUL`) and generics."""
     from spacy.lang.en.stop_words import STOP_WORDS
 
     from conceptbot.knowledge.triples import load_model

@@ -1,14 +1,6 @@
 """How sure the choice between two readings of a request is, and the readings in words for a question.
 
-Where the rules read the request's words and its plain form differently (:class:`.aided.Reading`),
-:func:`.aided.choose` keeps one by a step (:data:`.aided.STEPS`). How often each step keeps the right
-reading, and how often the reading it dropped was the right one, was counted on the goal set's tuning
-rounds (``benchmarks/bench_restated_reading.py --fit-odds --write``; round 11 is held out to check
-them) and ships as ``reading_odds.json``. The goal planner asks which reading was meant where the
-dropped one is too likely to rule out at its coverage (:mod:`conceptbot.pipeline.goal_planner.asking`).
-
-:func:`describe` says what a reading would do, in words a person can choose between ('give the user
-one "fruit" and one "soda"').
+How often each step of :func:`.aided.choose` keeps the right reading ships as ``reading_odds.json``.
 """
 
 from __future__ import annotations
@@ -60,8 +52,7 @@ def _odds_data() -> dict[str, Any]:
 
 
 def odds(step: str) -> Odds:
-    """The shipped odds of ``step`` (:data:`UNKNOWN` for a step without counts). A value that is not
-    a probability reads as :data:`UNKNOWN` too: the person is asked rather than a guess made."""
+    """The shipped odds of ``step``; :data:`UNKNOWN` for a step without valid counts (the person is asked)."""
     found = _odds_data()["steps"].get(step)
     if not isinstance(found, dict):
         return Odds(*UNKNOWN)
@@ -73,8 +64,7 @@ def odds(step: str) -> Odds:
 
 @dataclass(frozen=True)
 class JudgeWeights:
-    """How the model's preference between the two readings (:class:`.judge.Preference`) moves a
-    step's odds, fitted on the goal set's tuning rounds (``bench_restated_reading.py --fit-judge``).
+    """How the model's preference between two readings moves a step's odds (fitted by ``--fit-judge``).
 
     Attributes:
         weight: Log-odds of the reading dropped per nat the model prefers it.
@@ -105,11 +95,8 @@ def _finite(value: object) -> bool:
 
 
 def judged(found: Odds, preference: float, weights: JudgeWeights) -> Odds:
-    """A step's odds moved by the model's ``preference`` for the reading taken over the one dropped
-    (log-odds): of the mass the two readings share, the dropped one gets
-    ``sigmoid(log(other / taken) + bias - weight * preference)``; what neither reading holds stays.
-    A preference that is not a number gives :data:`UNKNOWN`: the person is asked, never a guess made.
-    """
+    """A step's odds moved by the model's ``preference`` (log-odds) for the reading taken: the dropped one
+    gets ``sigmoid(log(other / taken) + bias - weight * preference)`` of their mass; NaN gives UNKNOWN."""
     if not math.isfinite(preference):
         return Odds(*UNKNOWN, found.rows)
     if found.taken <= 0.0 or found.other <= 0.0:
@@ -153,9 +140,8 @@ def _move(target: GoalTarget, dish: str | None, need: str | None) -> str:
 
 
 def describe(goal: Goal) -> str:
-    """What a reading of a request would do, in words ('give the user one "fruit" and put the rest in
-    or on the box'); "do nothing" for a goal with no targets. No commas between moves, so an answer
-    naming it reads whole."""
+    """What a reading would do, in words ("do nothing" for no targets); no commas between moves, so an
+    answer naming it reads whole."""
     if goal.stack:
         return "stack the objects on each other"
     moves = [_move(t, goal.dish, goal.need) for t in goal.targets]

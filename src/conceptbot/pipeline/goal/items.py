@@ -1,7 +1,5 @@
-"""Clauses as targets: each clause's theme and places as an item (colon pairs, pronoun themes, "if"
-conditions, "otherwise" remainders and sort headers resolved), and the items as the goal's targets
-(a sort split into one target per place). :class:`~conceptbot.pipeline.goal.reader.GoalReader`
-calls :func:`clause_items` and then :func:`item_targets`; see its module docstring for the forms.
+"""Clauses as targets: :func:`clause_items` resolves each clause's theme and places (pronouns,
+remainders, sort headers); :func:`item_targets` makes them the goal's targets (a sort: one per place).
 """
 
 from __future__ import annotations
@@ -40,8 +38,7 @@ class _Item:
 
 
 def names_itself(doc: Doc, run: Sequence[int], mentions: list[Mention]) -> bool:
-    """Whether a phrase is a scene object ("the watering can"), not a thing made of some ("a tomato
-    and cucumber salad")."""
+    """Whether a phrase is a scene object ("the watering can"), not a thing made of some (a salad)."""
     head = head_of(doc, run)
     return head is not None and any(m.kind in ("object", "both") and m.covers(head.i) for m in mentions)
 
@@ -94,23 +91,7 @@ def clause_items(
         ):
             continue  # "make me a PB&J": a dish, not a thing to hand over
         if clause.form == "imperative" and not places and _says_pronoun(doc, clause):
-            # "hand it over", "put those in", "put it somewhere safe": what "it" is, the clause
-            # before says; handing it is to the speaker
-            handed = clause.verb in vocab["handing"] and users
-            if items and items[-1].places and not handed:
-                continue  # said twice: "the paper bin is for X; put those in"
-            said = tuple(i for r in clause.runs for i in r)
-            theme = items[-1].theme if items else ()
-            if not theme and n:
-                theme = antecedent(doc, clauses[n - 1], mentions, _plural(doc, said))
-                if not handed and not objects_in(theme, mentions):
-                    continue  # "we'll want a green salad; can you set that up?": a dish, not a thing
-            if items and not items[-1].places:
-                items.pop()
-            if theme:
-                items.append(_Item(clause, [tuple(users)] if handed else [], theme, clause.key))
-            else:
-                pending = pending or clause.key  # "sort these by what they're made of, each one ..."
+            pending = pending or _pronoun_command(doc, clauses, n, mentions, items, users)
             continue
         if clause.form == "imperative" and not places:
             if clause.verb in (*vocab["making"], *vocab["desire"], *vocab["helping"]):
@@ -125,23 +106,7 @@ def clause_items(
                 items.append(_Item(clause, [tuple(users)] if handed else [], clause.theme, clause.key))
             continue
         if clause.form == "fragment" and places and not clause.theme:
-            if (
-                prev is not None
-                and clause.chunk.after == "colon"
-                and prev.form == "fragment"
-                and not prev.places
-            ):
-                if items and items[-1].clause is prev:
-                    items.pop()
-                items.append(_Item(clause, places, prev.theme, clause.key))
-                continue
-            if clause.chunk.after == "soft" and items and items[-1].places:
-                items.append(_Item(clause, places, items[-1].theme, items[-1].key, shared=True))
-                continue
-            nxt = clauses[n + 1] if n + 1 < len(clauses) else None
-            if nxt is not None and nxt.chunk.after == "colon" and nxt.form == "fragment" and not nxt.places:
-                items.append(_Item(clause, places, nxt.theme, clause.key))
-                continue
+            _place_only(clauses, n, places, items)
             continue
         if clause.form == "fragment" and not places and clause.key and not clause.theme:
             pending = clause.key
@@ -153,24 +118,80 @@ def clause_items(
             if clause.theme:
                 items.append(_Item(clause, [], clause.theme, clause.key))
             continue
-        theme = clause.theme
-        if places and _pronoun_only(doc, theme) and not items and n:
-            # "I'm looking for X; pass it to me"
-            said = theme or tuple(i for r in clause.runs for i in r)
-            theme = antecedent(doc, clauses[n - 1], mentions, _plural(doc, said)) or theme
-        if places and _pronoun_only(doc, theme) and items:
-            before = items[-1]
-            if before.places == places:
-                continue  # "the dog would like a treat; give him one": said twice
-            theme = before.theme
-            fetched = before.clause.verb in vocab["fetching"] and all(
-                p.mention.kind == "person" for p in before.clause.places
-            )
-            if not before.places or fetched:
-                items.pop()  # "fetch one game ... and set it on the coffee table", "grab us a game and ..."
+        theme = _placed_theme(doc, clauses, n, mentions, items, places)
+        if theme is None:
+            continue  # "the dog would like a treat; give him one": said twice
         items.append(_Item(clause, places, theme, clause.key or pending))
         pending = ""
     return _without_headers(items, vocab)
+
+
+def _pronoun_command(
+    doc: Doc, clauses: list[Clause], n: int, mentions: list[Mention], items: list[_Item], users: list[str]
+) -> str:
+    """An instruction that sends only a pronoun ("hand it over"): what the clause before names goes,
+    handed to the speaker for a handing verb. Returns the clause's sort key where it sends nothing
+    yet ("sort these by what they're made of, each one ..."), else ""."""
+    clause = clauses[n]
+    handed = clause.verb in vocabulary()["handing"] and users
+    if items and items[-1].places and not handed:
+        return ""  # said twice: "the paper bin is for X; put those in"
+    said = tuple(i for r in clause.runs for i in r)
+    theme = items[-1].theme if items else ()
+    if not theme and n:
+        theme = antecedent(doc, clauses[n - 1], mentions, _plural(doc, said))
+        if not handed and not objects_in(theme, mentions):
+            return ""  # "we'll want a green salad; can you set that up?": a dish, not a thing
+    if items and not items[-1].places:
+        items.pop()
+    if not theme:
+        return clause.key
+    items.append(_Item(clause, [tuple(users)] if handed else [], theme, clause.key))
+    return ""
+
+
+def _place_only(clauses: list[Clause], n: int, places: list[tuple[str, ...]], items: list[_Item]) -> None:
+    """A fragment that names only places: it takes the theme of a colon pair ("Pears: the bowl",
+    "the bowl: pears") or, after a soft boundary, the theme of the item before."""
+    clause, prev = clauses[n], clauses[n - 1] if n else None
+    if prev is not None and clause.chunk.after == "colon" and prev.form == "fragment" and not prev.places:
+        if items and items[-1].clause is prev:
+            items.pop()
+        items.append(_Item(clause, places, prev.theme, clause.key))
+        return
+    if clause.chunk.after == "soft" and items and items[-1].places:
+        items.append(_Item(clause, places, items[-1].theme, items[-1].key, shared=True))
+        return
+    nxt = clauses[n + 1] if n + 1 < len(clauses) else None
+    if nxt is not None and nxt.chunk.after == "colon" and nxt.form == "fragment" and not nxt.places:
+        items.append(_Item(clause, places, nxt.theme, clause.key))
+
+
+def _placed_theme(
+    doc: Doc,
+    clauses: list[Clause],
+    n: int,
+    mentions: list[Mention],
+    items: list[_Item],
+    places: list[tuple[str, ...]],
+) -> tuple[int, ...] | None:
+    """What a clause with places sends: its theme, or for a pronoun what the clause or item before
+    names ("I'm looking for X; pass it to me"); None where it repeats the item before."""
+    clause, theme = clauses[n], clauses[n].theme
+    if places and _pronoun_only(doc, theme) and not items and n:
+        said = theme or tuple(i for r in clause.runs for i in r)
+        theme = antecedent(doc, clauses[n - 1], mentions, _plural(doc, said)) or theme
+    if places and _pronoun_only(doc, theme) and items:
+        before = items[-1]
+        if before.places == places:
+            return None
+        theme = before.theme
+        fetched = before.clause.verb in vocabulary()["fetching"] and all(
+            p.mention.kind == "person" for p in before.clause.places
+        )
+        if not before.places or fetched:
+            items.pop()  # "fetch one game ... and set it on the coffee table", "grab us a game and ..."
+    return theme
 
 
 def _says_pronoun(doc: Doc, clause: Clause) -> bool:
@@ -190,9 +211,8 @@ def _plural(doc: Doc, run: Sequence[int]) -> bool | None:
 def antecedent(
     doc: Doc, clause: Clause, mentions: Sequence[Mention] = (), plural: bool | None = None
 ) -> tuple[int, ...]:
-    """What "it" or "them" refers back to in the clause before: the objects it names (all of them
-    for "them", the last for "it"), else its last noun phrase that is not a person and agrees in
-    number ("I'm looking for something to write with"), as the phrase's tokens."""
+    """The tokens "it"/"them" refers back to in the clause before: the objects it names, else its last
+    noun phrase that is not a person and agrees in number."""
     found: tuple[int, ...] = ()
     chunk = clause.chunk
     named = [m for m in mentions if m.kind in ("object", "both") and chunk.start <= m.start < chunk.end]
@@ -220,8 +240,7 @@ def _pronoun_only(doc: Doc, run: Sequence[int]) -> bool:
 
 
 def _without_headers(items: list[_Item], vocab: dict) -> list[_Item]:
-    """Drops what says only which objects are sorted ("Sort the potted plants:"), and place-less
-    fragments that no place was paired with ("Dinner's ready")."""
+    """Drops sort headers ("Sort the potted plants:") and place-less fragments paired with no place."""
     placed = any(i.places for i in items)
     kept = []
     for item in items:

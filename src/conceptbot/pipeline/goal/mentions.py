@@ -1,16 +1,7 @@
 """Where a request names the scene's objects, destinations and people, as noun phrases.
 
-A scene name matches a run of tokens spelling it (case-insensitive; its last word also in the plural:
-"bins" for "bin"; a one-word compound destination also by its last part: "the tub" for "bathtub")
-only where that run ends a noun phrase: "dog" does not match in "the dog biscuit", nor "toddler" in
-"the toddler's reach" (a possessor is not a destination). Longer names are matched first and each
-token belongs to one mention ("non-toxic tray" before "toxic tray"). A plural head names several
-destinations: "the wood, metal and fabric bins" the bins whose other words it has,
-"the recycling bins" (no such words) every bin.
-
-People: "me" names the destination ``user`` where the scene has one, a people word ("my son", "the
-kids") the scene's person destination of that kind (``people`` in ``words.json``), and "her"/"him"
-the person the request spoke of last.
+A name matches only where its tokens end a noun phrase ("dog" not in "the dog biscuit"), longest
+first; a plural head names several destinations; "me" is ``user``, "her"/"him" the last person named.
 """
 
 from __future__ import annotations
@@ -33,8 +24,7 @@ class Mention:
         names: The scene names (several for a plural head: "the paper and plastic bins").
         start: The first token's index.
         end: One past the last token's index.
-        kind: ``place`` (a destination), ``object`` (a pickable object), ``both`` (a name that is
-            both; the role decides) or ``person`` ("me", "my son", "her").
+        kind: ``place``, ``object`` (pickable), ``both`` (the role decides) or ``person``.
     """
 
     names: tuple[str, ...]
@@ -53,8 +43,7 @@ def _forms(word: str) -> set[str]:
 
 
 def _ends_phrase(doc: Doc, end: int) -> bool:
-    """Whether the noun phrase ends at token ``end - 1``: not followed by a noun it modifies, nor by a
-    possessive "'s"."""
+    """Whether the noun phrase ends at token ``end - 1`` (no noun it modifies or possessive follows)."""
     if end >= len(doc):
         return True
     after = doc[end]
@@ -92,8 +81,7 @@ def _names(doc: Doc, scene: Scene, spelled: dict[str, list[str]], used: list[boo
 
 
 def _groups(doc: Doc, scene: Scene, spelled: dict[str, list[str]], used: list[bool]) -> list[Mention]:
-    """Plural heads naming several destinations ("the wood, metal and fabric bins", "the bins"), and
-    a singular head naming each object's own one of them ("the bin for its material")."""
+    """Plural heads naming several destinations ("the wood, metal and fabric bins", "the bins")."""
     heads: dict[str, list[str]] = {}
     for name in scene.destinations:
         if spelled[name]:
@@ -119,8 +107,7 @@ def _groups(doc: Doc, scene: Scene, spelled: dict[str, list[str]], used: list[bo
 def _described(
     doc: Doc, token: Token, used: list[bool], group: list[str], spelled: dict[str, list[str]]
 ) -> tuple[int, set[str], list[str]]:
-    """A head noun's modifiers before it ("the wood, metal and fabric | bins"): where its phrase
-    starts, the modifier words, and the places of ``group`` whose other words they all are."""
+    """Where a head noun's phrase starts, its modifier words, and the places of ``group`` they describe."""
     start = token.i
     while start > 0 and not used[start - 1] and _modifies(doc[start - 1]):
         start -= 1

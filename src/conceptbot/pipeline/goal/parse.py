@@ -1,35 +1,11 @@
-"""The request's clauses, read off spaCy's parse: where each one sends things and what it sends.
+"""The request's clauses, read off spaCy's parse (trusted for tags, nearby labels and sentence ends,
+as the small model often misparses imperatives): where each one sends things and what it sends.
 
-The small English model misparses imperatives often enough ("Sort" as an adverb, "finds" as a verb,
-"objects" as a verb) that the reader leans on the parse for what it gets right: tags, dependency
-labels near a word, sentence ends; and on the order of words for the rest.
-
-1. **Chunks.** The request splits at sentence ends, ";" and ":" (hard boundaries) and at ",", "and",
-   "but", "then", "so", "because", "since" (soft ones), never inside a mention. A soft chunk that has
-   neither a clause verb nor a destination continues the one before ("hand me the ruler | and the
-   eraser"); a chunk naming no destination followed by one that has a destination but no verb is one
-   phrase ("put the hammer | and the screwdriver in the toolbox"), and so is a chunk whose verb has
-   its subject in the one before ("I'd like the tweezers | and the thermometer put in the kit") or
-   a bare noun phrase before a verb with no subject ("the shampoo bottle | then goes in ..."). A
-   chunk with a destination and no verb after one with a destination is a gapped clause ("the
-   poisonous ones go on the toxic tray, | the ones that are safe to eat on the edible tray").
-2. **Clauses** (:mod:`.clauses`, :mod:`.wishes`). Each chunk's form: ``imperative`` (it opens with
-   a verb, after "could you", "please", "let's", "I'd like you to"; also "let X have Y", "load A
-   with X", "is there X you could hand me?"), ``subject`` ("X go(es)/belong(s)/end(s) up in A", "X
-   should be thrown away", "X need(s) heating up in A"), ``for`` ("A is for X", "A is where X
-   go(es)", "A takes/needs/would like X", the fragment "A for X"), ``desire`` ("I need/want/'d love
-   X", "we're having X", "I could go for X", "X would be lovely", "how about X", "guacamole is what
-   I want to make"), ``fragment`` (no verb of its own: "TV remote: coffee table") or ``statement``
-   (anything else: "I'm freezing here on the sofa").
-3. **Places.** A destination mention is where things go only in a destination role: after a spatial
-   preposition ("in", "onto", "up to", "on the edge of"), as the indirect object of the verb ("give
-   the dog a treat"), as the subject of "is for", alone in a fragment; a person also after "with"
-   or "for" ("share it with the dog"). Never as a possessor, a subject of a statement, or after
-   "out of"/"from".
-4. **Theme.** What is sent: the tokens left once the frame is taken out (opening words, the verb
-   and its particles, modal and auxiliary verbs, destinations with their prepositions, recipients,
-   a "by <key>" phrase), the run before the verb for the ``subject`` form, after "for" for ``for``,
-   else the first run after the verb that has a noun in it.
+1. **Chunks**: split at hard (".", ";") and soft (",", "and") boundaries; one phrase is joined back.
+2. **Clauses** (:mod:`.clauses`, :mod:`.wishes`): each chunk's form, ``imperative``, ``subject``
+   ("X goes in A"), ``for`` ("A is for X"), ``desire`` ("I want X"), ``fragment`` or ``statement``.
+3. **Places**: a destination mention only in a destination role (after a spatial preposition...).
+4. **Theme**: what is sent, the tokens left once the frame (verb, destinations...) is taken out.
 """
 
 from __future__ import annotations
@@ -87,8 +63,7 @@ class Clause:
 
     Attributes:
         chunk: Its tokens.
-        form: ``imperative``, ``subject``, ``for``, ``desire``, ``condition`` ("if it's X": its theme
-            is the criterion X), ``fragment`` or ``statement``.
+        form: ``imperative``, ``subject``, ``for``, ``desire``, ``fragment`` or ``statement``.
         verb: The main verb's lemma ("" for a fragment).
         places: Its destinations in a destination role.
         theme: The token indices of what it sends (empty: none).
@@ -115,9 +90,8 @@ def _in_mention(mentions: Sequence[Mention], index: int) -> Mention | None:
 
 
 def clause_verbs(doc: Doc, start: int, end: int, mentions: Sequence[Mention]) -> list[Token]:
-    """The verbs heading a clause of their own in ``doc[start:end]``: not inside a relative clause
-    or a noun phrase ("the ones that are safe"), not a "to" infinitive ("to make a stronger
-    cleaner"), not part of a scene name ("throw pillow")."""
+    """The verbs heading a clause of their own in ``doc[start:end]`` (not in a relative clause or noun
+    phrase, not a "to" infinitive, not part of a scene name)."""
     found = []
     for token in doc[start:end]:
         if not token.tag_.startswith("VB") and token.tag_ != "MD":
@@ -164,8 +138,7 @@ def chunks(doc: Doc, mentions: Sequence[Mention]) -> list[Chunk]:
 
 
 def _dash(token: Token) -> bool:
-    """A dash standing apart between words ("put them on the tray - we're setting up a garden"), a
-    boundary like ";"; not the hyphen of "non-toxic"."""
+    """A dash standing apart between words, a boundary like ";" (not the hyphen of "non-toxic")."""
     doc = token.doc
     if token.text not in ("-", "--", "–", "—") or token.i == 0 or token.i + 1 >= len(doc):
         return False
@@ -173,8 +146,7 @@ def _dash(token: Token) -> bool:
 
 
 def _soft(token: Token) -> bool:
-    """Whether a token is a soft boundary: a comma, a coordinating "and"/"but", "then", or a
-    subordinating "so", "because", "since" ("I'm so thirsty" is not one)."""
+    """Whether a token is a soft boundary: a comma, a coordinating "and"/"but", "then", or a subordinator."""
     word = token.text.lower()
     if word == ",":
         return True
@@ -214,8 +186,7 @@ def _merged(doc: Doc, pieces: list[Chunk], mentions: Sequence[Mention]) -> list[
                 prev.end = piece.end  # "I'd like the tweezers | and the thermometer put in the kit"
                 continue
         out.append(piece)
-    # A first chunk that is a bare noun phrase is the subject of the next ("The cotton socks | and
-    # the beach towel need to go ...").
+    # A first chunk that is a bare noun phrase is the subject of the next ("The socks | and the towel go").
     while (
         len(out) > 1
         and out[1].after == "soft"
@@ -225,8 +196,7 @@ def _merged(doc: Doc, pieces: list[Chunk], mentions: Sequence[Mention]) -> list[
     ):
         out[1] = Chunk(out[0].start, out[1].end, out[0].after)
         out.pop(0)
-    # A bare noun phrase before a verb with no subject of its own is that verb's subject ("...; the
-    # shampoo bottle | then goes in the high cabinet").
+    # A bare noun phrase before a verb with no subject of its own is that verb's subject.
     n = 0
     while n + 1 < len(out):
         if (
@@ -242,9 +212,8 @@ def _merged(doc: Doc, pieces: list[Chunk], mentions: Sequence[Mention]) -> list[
 
 
 def opens_with_verb(doc: Doc, chunk: Chunk, mentions: Sequence[Mention]) -> bool:
-    """Whether a chunk opens, after its boundary words, with a verb in the base form before its
-    object ("so empty the bleach ...", ", put them on the tray"), even where the tagger took the verb
-    for an adjective; a chunk so opened is a clause of its own."""
+    """Whether a chunk opens with a base-form verb before its object (a clause of its own), also where
+    the tagger took the verb for an adjective ("so empty the bleach")."""
     vocab = vocabulary()
     closed = {*SOFT, *vocab["openers"], *vocab["determiners"], *vocab["quantifiers"], *vocab["restrictors"]}
     i = chunk.start
@@ -281,8 +250,7 @@ def _statement_like(doc: Doc, chunk: Chunk, mentions: Sequence[Mention]) -> bool
 
 
 def _wants(doc: Doc, chunk: Chunk) -> bool:
-    """Whether a chunk is the speaker's "I want/I'd like X" ("I want the socks | and the towel in
-    the washing machine": one phrase)."""
+    """Whether a chunk is the speaker's "I want/I'd like X" (joined with what follows as one phrase)."""
     for token in doc[chunk.start : chunk.end]:
         if token.lemma_ in ("want", "like") and any(
             c.dep_ == "nsubj" and c.text.lower() in ("i", "we") for c in token.children

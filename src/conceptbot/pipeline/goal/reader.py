@@ -1,31 +1,8 @@
 """The goal reader: a request and a scene in, a :class:`~conceptbot.pipeline.goal.types.Goal` out.
 
-The request is first said plainly and parsed, and the parse repaired where the small parser
-misattaches (:mod:`conceptbot.pipeline.goal.repair`). Clauses
-(:mod:`conceptbot.pipeline.goal.parse`) then become targets:
-
-* A clause with destinations sends its theme there; a plural head ("into the recycling bins") or a
-  destination-only continuation ("into the paper bin | and the plastic bin") makes a **sort**: each
-  place takes the objects that belong in it, by the request's key ("by material") or by its name
-  (criterion ""). A place the request also gives a clause of its own leaves the sort ("anything made
-  of several materials goes in the mixed bin").
-* "TV remote: coffee table" and "Kitchen basket: everything that's safe to eat" pair a theme with a
-  place across a colon; "fetch one game ... and set it on the coffee table" gives the first
-  clause's theme to the second's place.
-* A sorting clause with no place before others that have places only says what is sorted ("Sort the
-  potted plants: ..."); "leave X", "don't touch X", "X stays" send nothing.
-* An instruction with no place ("throw away just the poisonous mushrooms", "X should be locked
-  away") is a target with ``to`` None: the planner chooses where.
-* "I need/want something ..." (or a scene object) sends it to the user where the scene has one.
-* With no target: a dish when the request asks for one ("I want to make guacamole", "I'd love an
-  omelette", "pancakes would be lovely", "a bowl of guacamole" is guacamole); the dish's
-  ingredients go to a place the planner chooses. ``is_dish`` (a graph check) can reject a dish, and
-  then the thing wished for goes to the user.
-* With neither: a need ("my phone battery is almost empty"), met by what the planner chooses; a
-  request stating two needs ("I'm chilly and there's nothing to do") has a need target per part,
-  with the part's words as its criterion (:mod:`conceptbot.pipeline.goal.needs`).
-* Stacking ("stack", "pile ... up", "into one pile", "on top of each other") makes ``stack`` true and
-  one target, to None, of what is stacked (every object unless the request says otherwise).
+Clauses (:mod:`.parse`) become targets: a clause's theme goes to its destinations (several places
+make a sort), or to ``to`` None where it names none. With no target, a dish when the request asks
+for one, else a need; the planner chooses where those go. Stacking makes ``stack`` true.
 """
 
 from __future__ import annotations
@@ -62,8 +39,7 @@ class GoalReader:
     """Reads the goal of a request (see the module docstring and :mod:`conceptbot.pipeline.goal`).
 
     Args:
-        nlp: A spaCy pipeline with a parser and a lemmatizer (default: the project's
-            ``en_core_web_sm``, loaded on first use).
+        nlp: A spaCy pipeline with a parser and lemmatizer (default: the project's, loaded on first use).
         is_dish: Whether a phrase names a dish to prepare (a graph check); None: trust the parse.
         is_person: Whether a destination is a person or an animal (things are handed to it).
     """
@@ -102,10 +78,7 @@ class GoalReader:
             scene: What the robot sees (its names are the goal's).
 
         Returns:
-            The goal: targets with scene names, ``to`` None where the planner must choose. It never
-            raises on odd input (empty, punctuation only, very long): a request longer than the
-            parser takes is read up to its limit, and one the rules cannot read is a need (the
-            planner then reads the whole request with the model).
+            The goal (never raises: a request the rules cannot read is a need).
         """
         text = request[: self.nlp.max_length - 1]
         try:
@@ -193,8 +166,7 @@ def _polite(doc: Doc, clause: Clause) -> bool:
 
 
 def _described(doc: Doc, run: Sequence[int]) -> bool:
-    """Whether a wished-for phrase describes a thing by its use ("a tool for driving in nails", "a
-    tool that drives in nails"): a thing to hand over, not a dish."""
+    """Whether a wished-for phrase describes a thing by its use ("a tool for driving nails"), not a dish."""
     inside = set(run)
     for i in run:
         token = doc[i]
@@ -218,10 +190,8 @@ def _all_to(users: list[str], readings: list[Reading]) -> list[GoalTarget]:
 
 
 def dish_words(doc: Doc, run: Sequence[int]) -> str:
-    """The dish a wished-for phrase names: its words up to the head noun and an "of" or "with" phrase
-    ("a salad with tomato and cucumber"), without
-    determiners or a following "for breakfast", "to go with ..."; "a bowl of guacamole" is
-    guacamole (a measure noun before "of": ``measure`` in ``words.json``)."""
+    """The dish a wished-for phrase names: its words up to the head noun and an "of"/"with" phrase,
+    without determiners; "a bowl of guacamole" is guacamole."""
     vocab = vocabulary()
     words = []
     for i in run:
@@ -242,8 +212,7 @@ def dish_words(doc: Doc, run: Sequence[int]) -> str:
 
 
 def is_stacking(doc: Doc) -> bool:
-    """Whether the request asks for a pile: "stack"/"pile" as its verb, "into one pile", "make a
-    stack", "on top of each other" (``stack`` in ``words.json``); "sort this pile" is not one."""
+    """Whether the request asks for a pile ("stack these", "into one pile"); "sort this pile" is not one."""
     words = vocabulary()["stack"]
     text = " ".join(t.text.lower() for t in doc)
     if any(p in text for p in words["phrases"]):
@@ -286,8 +255,7 @@ def _stacked(doc: Doc, clauses: list[Clause], mentions: list[Mention]) -> GoalTa
 
 
 def _stacked_things(doc: Doc, run: list[int], nouns: Sequence[str]) -> list[int]:
-    """What a stacking clause's theme stacks: "all of these" in "all of these into one pile", "a
-    single stack out of all of these" or "these on top of each other"."""
+    """What a stacking clause's theme stacks: "all of these" in "all of these into one pile"."""
     at = next((k for k, i in enumerate(run) if doc[i].lemma_.lower() in nouns), None)
     if (at is not None and doc[run[0]].text.lower() in ("a", "an", "one")) or at == 0:
         # the pile comes first: what it is made of follows "out of", "of", "from", "with"

@@ -1,16 +1,5 @@
-"""The request said as plain commands by the model, for the rules to read.
-
-The goal reader's rules read plain requests well (the dev requests 97/98, ordinary rewordings 84%)
-and the spoken, terse and very polite ones badly (51-56% on blind rounds of the goal set): each
-construction of talk needs a rule of its own, and rules written for one do not carry to the next
-(``docs/notes/2026-12-02-reading-repairs.md``). A language model reads talk well but writes goals
-badly. So the model does the part it is good at: it says the request again in the few plain forms
-the rules read ("Put the X in the Y." "Give me something to write with." "Make D."), keeping the
-person's words for what they want and leaving out the talk around it. The rules then read that.
-
-:class:`Restater` is that step (prompts ``restate_system.txt`` and ``restate_user.txt``).
-:class:`~conceptbot.pipeline.goal.aided.AidedReader` reads both the request's own words and the
-plain form and decides between the two readings.
+"""The request said as plain commands by the model ("Put the X in the Y."), for the rules to read: the
+rules read talk badly, and a language model reads talk well but writes goals badly.
 """
 
 from __future__ import annotations
@@ -26,11 +15,9 @@ from conceptbot.pipeline import prompts
 
 logger = logging.getLogger(__name__)
 
-#: The longest request restated (characters); past it the rules read the words alone. The plain
-#: form of a long monologue is not worth the model's minute.
+#: The longest request restated (characters); past it the rules read the words alone.
 MAX_REQUEST = 600
-#: The prompt's placeholders ("Put the X in the Y.", "Make D."), as words: a sampled plain form
-#: sometimes copied one (20 of 2324 samples of the goal set's dev requests; never a greedy one).
+#: The prompt's placeholders ("Put the X in the Y."), as words: a sampled plain form may copy one.
 PLACEHOLDER = re.compile(r"(?<![&\w'])[DWXYZ](?![&\w'])")
 
 
@@ -79,9 +66,7 @@ class Restater:
 
     def _chat(self, words: str) -> ChatRequest:
         """The restating request for ``words``."""
-        # The scene is not in the prompt: given its objects, the small model picks them for the person
-        # ("something to read" became "the paperback novel") or lists them all, which is the
-        # planner's job; the rules match the person's words to the scene's names.
+        # The scene is not in the prompt: given it, the model picks objects itself (the planner's job).
         return ChatRequest.of(
             prompts.fill("restate_user", request=words),
             system=prompts.render("restate_system"),

@@ -1,5 +1,4 @@
-"""Runs of tokens: the pieces of a chunk left once its frame (verb, destinations, ...) is taken out,
-and whether a run can be what a clause sends."""
+"""Runs of tokens: the pieces of a chunk left once its frame is taken out, and whether one can be a theme."""
 
 from __future__ import annotations
 
@@ -44,8 +43,7 @@ def runs(indices: Sequence[int], frame: set[int], doc: Doc) -> list[tuple[int, .
 
 
 def nominal(doc: Doc, run: Sequence[int]) -> bool:
-    """Whether a run can be a theme: it has a noun, an indefinite or demonstrative pronoun, or an
-    adjective used as one ("everything poisonous"), and is not only a personal pronoun."""
+    """Whether a run can be a theme: a noun, indefinite pronoun or adjective, not only a personal pronoun."""
     vocab = vocabulary()
     words = [lower(doc[i]) for i in run]
     if all(w in _PRONOUN_THEMES for w in words):

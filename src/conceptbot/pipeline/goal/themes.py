@@ -1,5 +1,4 @@
-"""What a theme phrase sends: named objects, a remainder, everything, or the objects a criterion
-describes, and how many."""
+"""What a theme phrase sends: named objects, a remainder, everything, or a criterion, and how many."""
 
 from __future__ import annotations
 
@@ -28,8 +27,7 @@ class Reading:
     count: Count = ALL
 
 
-#: Words that stand in for the phrase's noun in a second conjunct ("a tool to measure with and one
-#: to tighten screws"): the criterion says the noun ("tool to tighten screws").
+#: Words standing in for the noun in a second conjunct ("a tool to measure with and one to cut").
 STANDS_IN = frozenset({"one", "another"})
 
 
@@ -50,8 +48,7 @@ def objects_in(run: Sequence[int], mentions: Sequence[Mention]) -> tuple[str, ..
 
 
 def _remainder(doc: Doc, run: Sequence[int]) -> bool:
-    """ "the rest", "everything else", "the other ones", "whatever is left": the marker belongs to the
-    phrase itself, not to a clause inside it."""
+    """Whether the run is a remainder ("the rest", "everything else"), by a marker of the phrase itself."""
     markers = set(vocabulary()["remainder"])
     for i in run:
         token = doc[i]
@@ -76,8 +73,7 @@ def _whole(doc: Doc, run: Sequence[int]) -> bool:
 
 
 def _stripped(doc: Doc, run: Sequence[int]) -> list[int]:
-    """The run without its leading determiners, quantifiers and restrictors ("only the", "all of
-    the", "everything"), nor a "here" after them."""
+    """The run without its leading determiners, quantifiers and restrictors ("only the", "all of the")."""
     vocab = vocabulary()
     lead = {
         *vocab["determiners"],
@@ -139,9 +135,8 @@ def _plural_noun(token: Token) -> bool:
 
 
 def count_of(doc: Doc, run: Sequence[int]) -> Count:
-    """How many objects a criterion phrase asks for: a number; 1 for "a", "one", "something" or a
-    definite singular count noun ("the toy made of metal"); else all (plurals, "all", "every",
-    "anything", mass nouns: "the food", "the paper")."""
+    """How many objects a criterion phrase asks for: a number; 1 for "a", "something" or a definite
+    singular count noun; else all (plurals, "all", "anything", mass nouns)."""
     vocab = vocabulary()
     words = [_lower(doc[i]) for i in run]
     for i in run:
@@ -207,8 +202,7 @@ def read_theme(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> Rea
 
 
 def _listed(token: Token) -> list[Token]:
-    """The noun phrases coordinated with ``token`` after it, by spaCy's ``conj`` (a list "A, B and
-    C" the parser often reads as "B" in apposition to "A", or as a ``dep``, with "C" its ``conj``)."""
+    """The noun phrases coordinated with ``token`` after it (``conj``, or a listed ``appos``/``dep``)."""
     found = []
     for child in token.children:
         nominal = child.tag_.startswith("NN") or child.pos_ in ("NOUN", "PROPN", "PRON")
@@ -236,10 +230,8 @@ def _own_span(token: Token, members: set[int]) -> tuple[int, ...]:
 
 
 def conjuncts(doc: Doc, run: Sequence[int]) -> list[tuple[int, ...]]:
-    """The coordinated object phrases of a theme ("the pear, the stapler and the juice box", "a
-    bag of crackers and something to drink"), each as its tokens within ``run``; ``[run]`` when the
-    theme is one phrase. Only the phrase's head is split: "a salad with tomato and cucumber" and
-    "made of glass and metal" are one; a negated conjunct ("and nothing else") is not one."""
+    """The coordinated object phrases of a theme ("the pear and the stapler"), each as its tokens;
+    ``[run]`` when it is one phrase (only the head is split: "made of glass and metal" is one)."""
     inside = set(run)
     heads = [doc[i] for i in run if doc[i].head.i not in inside or doc[i].head.i == i]
     head = next((t for t in heads if t.tag_.startswith("NN") or t.pos_ in ("NOUN", "PROPN", "PRON")), None)
@@ -256,8 +248,7 @@ def conjuncts(doc: Doc, run: Sequence[int]) -> list[tuple[int, ...]]:
 
 
 def extend_with_conjuncts(doc: Doc, theme: Sequence[int], allowed: set[int]) -> tuple[int, ...]:
-    """A theme with the phrases coordinated with its head that the clause's runs split off ("the
-    pear | , the stapler and the juice box"), within ``allowed`` (the clause's non-frame tokens)."""
+    """A theme with the phrases coordinated with its head that the runs split off, within ``allowed``."""
     if not theme:
         return tuple(theme)
     inside = set(theme)
@@ -287,9 +278,7 @@ def extend_with_conjuncts(doc: Doc, theme: Sequence[int], allowed: set[int]) -> 
 def _standing_in(
     doc: Doc, part: Sequence[int], first: Sequence[int], reading: Reading, listed: str | None = None
 ) -> Reading:
-    """A conjunct led by "one"/"another" with the first conjunct's noun in its place (see
-    :data:`STANDS_IN`), counted as one; ``listed``: the noun of a phrase listing its items ("two
-    tools: one ... and one ..."), which every item stands in for, the first included."""
+    """A conjunct led by "one"/"another" with the first conjunct's (or ``listed``) noun, counted as one."""
     if _lower(doc[part[0]]) not in STANDS_IN or reading.takes != "criterion":
         return reading
     if listed is None and part == first:
@@ -303,9 +292,8 @@ def _standing_in(
 
 
 def read_themes(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> list[Reading]:
-    """What a theme sends, one reading per coordinated phrase: the named objects as one reading,
-    each phrase describing objects as one of its own ("the pear and something to write with"); a list
-    of plural or mass criteria ("apples and pears") stays one criterion."""
+    """What a theme sends: the named objects as one reading, each describing phrase as its own; plural
+    or mass criteria ("apples and pears") stay one."""
     parts = conjuncts(doc, run)
     if len(parts) < 2:
         return [read_theme(doc, run, mentions)]

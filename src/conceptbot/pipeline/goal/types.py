@@ -1,9 +1,5 @@
-"""The goal a request states, as typed values: where things go, which things, how many.
-
-A :class:`Goal` is what the request's words settle and nothing more: a destination the words do not
-name is ``None`` (the planner chooses it by scoring), and so is the number of objects a need calls
-for (``"all"``: as many as it takes).
-"""
+"""The goal a request states, as typed values: where things go, which things, how many (what the
+words settle and nothing more: a destination they do not name is ``None``)."""
 
 from __future__ import annotations
 
@@ -24,16 +20,10 @@ class GoalTarget:
     """One destination of the goal and the objects that go there.
 
     Attributes:
-        to: The destination as the scene names it, or None: the request names none and the planner
-            chooses it by scoring (a need, a dish, "throw away", "out of the toddler's reach").
-        takes: ``named``: only the objects it names; ``criterion``: the objects ``criterion``
-            describes; ``remainder``: whatever no other target takes ("the rest"); ``ingredients``:
-            the dish's ingredients; ``need``: whatever meets the need; ``all``: every object.
+        to: The destination as the scene names it, or None (the planner chooses).
+        takes: ``named``, ``criterion``, ``remainder`` ("the rest"), ``ingredients``, ``need`` or ``all``.
         named: The scene objects the request names for it, in scene spelling.
-        criterion: The request's words that say which objects go ("poisonous", "made entirely of
-            glass", "something to write with"), "by <key>" for a place in a sort by a key ("by
-            material"), a need's part for one of several needs ("I'm chilly"), "" otherwise (a
-            place in a sort the words give nothing else for: its name decides).
+        criterion: The request's words for which objects go ("poisonous"), "by <key>" in a sort, or "".
         count: How many objects the words ask for, or ``"all"``.
     """
 
@@ -85,9 +75,8 @@ class Goal:
 
     Attributes:
         stack: The request asks for a pile (the objects go on each other, not to a destination).
-        dish: The dish the request asks to be made, in its words ("guacamole", "fruit salad"), or None.
-        need: The request's words stating a need no object phrase names ("my phone battery is almost
-            empty"), or None.
+        dish: The dish the request asks to be made, in its words, or None.
+        need: The request's words stating a need no object phrase names, or None.
         targets: Where things go; order carries no meaning.
     """
 

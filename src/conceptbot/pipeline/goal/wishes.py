@@ -1,5 +1,4 @@
-"""Wishes: "I'd love an omelette", "we should have a fruit salad" (step 2 of
-:mod:`conceptbot.pipeline.goal.parse`, the ``desire`` form)."""
+"""Wishes: "I'd love an omelette" (the ``desire`` form of :mod:`.parse`, step 2)."""
 
 from __future__ import annotations
 
@@ -17,8 +16,7 @@ if TYPE_CHECKING:  # spaCy is loaded with the model, on first use (pipeline/goal
 
 
 def desire_verb(doc: Doc, first: int, end: int, lets: bool) -> Token | None:
-    """The verb (or "about", or the copula) of a wish: "I'd love X", "we should have X", "how about
-    X", "X would be lovely"; None for anything else."""
+    """The verb (or "about", or the copula) of a wish ("I'd love X", "how about X"), else None."""
     vocab = vocabulary()
     for token in doc[first:end]:
         subject = [c for c in token.children if c.dep_ == "nsubj"]
@@ -50,8 +48,7 @@ def desire_verb(doc: Doc, first: int, end: int, lets: bool) -> Token | None:
 
 
 def _asks(token: Token) -> bool:
-    """Whether the speaker's verb asks to receive: "could/can/may I ...?" (the modal first), or "I'll
-    ..." ("I'll take the tape measure")."""
+    """Whether the speaker's verb asks to receive: "could I ...?" or "I'll ..."."""
     modals = [c for c in token.children if c.tag_ == "MD"]
     subject = next((c for c in token.children if c.dep_ == "nsubj"), None)
     if subject is None:
@@ -84,8 +81,7 @@ def desire_clause(
     frame: set[int],
     mentions: Sequence[Mention] = (),
 ) -> Clause:
-    """A wish as a clause: its theme is what is wished for (the subject of "X would be lovely", the
-    object otherwise); for "I want to make X" the verb is the wished activity's ("make")."""
+    """A wish as a clause: its theme is what is wished for; for "I want to make X" the verb is "make"."""
     attr = next((c for c in verb.children if c.dep_ == "attr"), None)
     if verb.lemma_ == "be" and attr is not None:
         # "breakfast should be an omelette": what the meal is to be

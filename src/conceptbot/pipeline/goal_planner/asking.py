@@ -1,37 +1,10 @@
-"""Where the goal planner is unsure, a question (issue 35; KnowNo's recipe). Two kinds of calibrated
-decision get conformal prediction sets (:mod:`.conformal`):
+"""Where the goal planner is unsure, a question (KnowNo's recipe): conformal sets (:mod:`.conformal`)
+for yes/no decisions, for which object a target taking one gets, and for which reading was meant.
 
-- each yes/no decision of a target that takes every object fitting it (in a sort too: "is the
-  milk jug plastic?" for the plastic bin): a set with both answers is unsure. A target's unsure
-  decisions make one question: about one object, yes or no ("Should I put the lemon in or on the
-  bowl (an ingredient of hollandaise)?"); about several, which of them go ("Which of these should I
-  put in or on the salad bowl (...): the kiwi, the olive oil or the sugar? Name them, or say all or none.");
-- which object a target taking one gets: a set of two or more is a question of which one ("Which
-  one should I give to the user: the coke or the water? One of them, another, or none."); the
-  person may name another of the target's candidates, since a set can miss what they meant. By the
-  ``softmax`` rule (the default), the set holds each candidate whose share of a softmax over the
-  ranking is at least ``1 - qhat``, so candidates that fit alike split the mass and are asked
-  about. By the ``fits`` rule, the decision is whether the likeliest candidate fits, by its
-  calibrated P(yes): any object that fits will do, so two that both fit ("a drink": the water or
-  the juice) are no reason to ask. Sure that it fits, the set is that one; else it is every
-  candidate at least ``1 - qhat`` likely to fit (two at least). On dev the two are level on
-  success against help (docs/asking.md), so the default stayed. Which-one decisions have their
-  own threshold where the calibration has one (``qhat_one``: conformal per kind of decision,
-  :mod:`conceptbot.bench.conformal_fit`), ``qhat`` otherwise;
-
-- which of two readings of the request was meant, where the rules read its words and the model's
-  plain form of it differently (:class:`~conceptbot.pipeline.goal_planner.targets.ReadingDoubt`):
-  the set holds each reading at least ``1 - qhat`` likely by the odds of the step that chose
-  (:mod:`conceptbot.pipeline.goal.doubt`), with the reading decisions' own threshold where the
-  calibration has one (``qhat_reading``), ``qhat`` otherwise; unless it is the reading taken
-  alone, the person is asked before anything is decided ("Did you mean: give the user one "fruit"
-  and one "soda", or give the user one "fruit"?"). Neither is a refusal.
-
-The target with the most uncertain decision is asked first, at most :data:`MAX_QUESTIONS` per
-plan. Asked (``ask`` given), the answer replaces the decisions; not asked, the plan acts on each
-likelier answer and lists the question. The plan's confidence (:meth:`Clarified.confidence`) is read
-from its final moves, after the risk checks: the product of the probabilities of what those moves do
-for each calibrated decision (an answer given counts as sure).
+Which one: by ``softmax``, candidates whose share is at least ``1 - qhat``; by ``fits``, the
+likeliest alone where sure it fits, else every candidate likely enough to fit (see docs/asking.md).
+The most uncertain target is asked first, at most :data:`MAX_QUESTIONS` per plan; not asked, the plan
+acts on the likelier answers and lists the questions.
 """
 
 from __future__ import annotations
@@ -79,24 +52,14 @@ class Clarified:
     rule: str = OLD_RULE
 
     def confidence(self, moves: Iterable[tuple[str, str]]) -> float | None:
-        """The probability that the plan's final ``moves`` (object, destination) are right in every
-        calibrated decision no answer settled (None: the plan has no calibrated decision): the
-        product of :meth:`factors`."""
+        """The product of :meth:`factors` for the final ``moves`` (None: no calibrated decision)."""
         if not self.calibrated:
             return None
         return math.prod(self.factors(moves).values())
 
     def factors(self, moves: Iterable[tuple[str, str]]) -> dict[int, float]:
-        """Per target position, the probability that ``moves`` are right in its calibrated
-        decisions no answer settled (1.0 for a target whose decisions were all answered; targets
-        without a calibrated decision are left out).
-
-        A yes/no decision counts its P(yes) when its object went to its target, else P(no): an
-        object the risk checks dropped counts as not moved. A which-one decision counts the
-        probability of the object the target got (a replacement after a veto included): that it
-        fits (``p_yes``) by the ``fits`` rule, its ``p_one`` by the ``softmax`` rule; a target the
-        risk checks left empty counts for nothing: what it does is the checks' decision, which has
-        no calibrated probability. A probability that cannot be read (NaN) counts as 0."""
+        """Per target position, the probability that ``moves`` are right in its unanswered decisions:
+        P(yes) or P(no) per yes/no decision, the got object's by ``rule`` per which-one; NaN counts 0."""
         done = set(moves)
         found = dict.fromkeys(self.asked, 1.0)
         for (number, obj), decision in self.sets.items():
@@ -110,9 +73,7 @@ class Clarified:
 
 
 def move_words(to: str, obj: str = "", part: str = "") -> str:
-    """The move in words, for the questions: "give the X to the user" / "put the X in or on the
-    bowl" (without an object: "give to ..."), with what it is for where the request asks for
-    several kinds of thing (``part``: "... as something to eat")."""
+    """The move in words for the questions ("put the X in or on the bowl"), with its ``part`` if any."""
     what = f" the {obj}" if obj else ""
     tail = f" {part}" if part else ""
     if is_person(to):
@@ -130,10 +91,7 @@ def _listed(objects: list[str]) -> str:
 
 
 def question_text(objects: list[str], target: Target) -> str:
-    """The question in plain words, with the request's criterion: "Should I put the lemon in or on
-    the bowl (an ingredient of hollandaise)?" for one object; "Which of these should I put in or on
-    the salad bowl (...): the kiwi, the olive oil or the sugar? Name them, or say all or none." for
-    several."""
+    """The question in plain words, with the request's criterion: yes/no for one object, which for several."""
     why = f" ({target.criterion})" if target.criterion else ""
     if len(objects) == 1:
         return f"Should I {_move(target, objects[0])}{why}?"
@@ -141,8 +99,7 @@ def question_text(objects: list[str], target: Target) -> str:
 
 
 def question_for(number: int, target: Target, unsure: list[Judgement]) -> ClarifyingQuestion:
-    """One question settling a target's unsure decisions (most uncertain first; at most
-    :data:`MAX_OPTIONS` of them): ``confirm`` for one, ``choose`` for several."""
+    """One question settling a target's unsure decisions: ``confirm`` for one, ``choose`` for several."""
     kept = unsure[:MAX_OPTIONS]
     names = [j.subject for j in kept]
     return ClarifyingQuestion(
@@ -152,6 +109,75 @@ def question_for(number: int, target: Target, unsure: list[Judgement]) -> Clarif
         tuple(_shown(j.p_yes) for j in kept),
         kind="choose" if len(kept) > 1 else "confirm",
     )
+
+
+def _yes_no_sets(
+    targets: list[Target], ranked: dict[int, list[Judgement]], qhat: float
+) -> tuple[dict[tuple[int, str], DecisionSet], dict[int, list[Judgement]]]:
+    """The conformal set of each calibrated yes/no judgement of an "all that fit" target, and per
+    target the judgements whose set is not one answer."""
+    sets: dict[tuple[int, str], DecisionSet] = {}
+    unsure: dict[int, list[Judgement]] = {}
+    for number, target in enumerate(targets):
+        if target.count != ALL or target.rest:
+            continue
+        for judgement in ranked.get(number, []):
+            if judgement.model is None:  # named, or not a calibrated combination
+                continue
+            found = decision_set(judgement.p_yes, qhat)
+            sets[(number, judgement.subject)] = found
+            if not found.sure:
+                unsure.setdefault(number, []).append(judgement)
+    return sets, unsure
+
+
+def _asked(
+    doubt: dict[int, tuple[float, ClarifyingQuestion]], ranked: dict[int, list[Judgement]], ask: Ask | None
+) -> tuple[list[ClarifyingQuestion], dict[tuple[int, str], str]]:
+    """One question per target, the most uncertain first: the questions (with their answers) and
+    the answer ("yes"/"no") per target and object."""
+    questions = []
+    answered: dict[tuple[int, str], str] = {}
+    for number in sorted(doubt, key=lambda n: doubt[n][0])[:MAX_QUESTIONS]:
+        question = doubt[number][1]
+        chosen = question.read(ask(question)) if ask is not None else None
+        if chosen is None:
+            questions.append(question)
+            continue
+        questions.append(replace(question, answer=question.normalised(chosen)))
+        # A "which one" answer settles every candidate of the target, listed or not.
+        about = (
+            question.objects
+            if question.kind != "one"
+            else [j.subject for j in ranked[number] if j.p_one is not None]
+        )
+        for obj in about:
+            answered[(number, obj)] = "yes" if obj in chosen else "no"
+    return questions, answered
+
+
+def _answered(
+    ranked: dict[int, list[Judgement]], answered: dict[tuple[int, str], str]
+) -> dict[int, list[Judgement]]:
+    """The rankings with the person's answers as certain judgements, re-sorted (named objects first)."""
+    if not answered:
+        return ranked
+    ranked = dict(ranked)
+    for number in {n for n, _ in answered}:
+        changed = [
+            replace(
+                j,
+                p_yes=1.0 if answered[(number, j.subject)] == "yes" else 0.0,
+                score=ANSWERED if answered[(number, j.subject)] == "yes" else -ANSWERED,
+            )
+            if (number, j.subject) in answered
+            else j
+            for j in ranked[number]
+        ]
+        named = [j for j in changed if j.model is None and j.scoring == ""]
+        rest = [j for j in changed if j not in named]
+        ranked[number] = named + sorted(rest, key=lambda j: -j.score)
+    return ranked
 
 
 def clarify(
@@ -171,27 +197,12 @@ def clarify(
         ranked: Each target's judgements, best first.
         decisions: Each target's decision trace.
         qhat: The conformal threshold at the planner's coverage.
-        ask: Asks the person; None: nobody is asked. A reply that is not an answer to the question
-            (:meth:`ClarifyingQuestion.read`) counts as no answer.
-        which_one: Whether ``qhat`` holds for which-one decisions too (a plan-level calibration);
-            else targets taking one object are not asked about.
-        rule: How a which-one decision is judged (``fits`` or ``softmax``; the module docstring):
-            the rule ``qhat`` was fitted for.
+        ask: Asks the person; None: nobody is asked. A reply that is no answer counts as none.
+        which_one: Whether ``qhat`` holds for which-one decisions too; else they are not asked about.
+        rule: How a which-one decision is judged (``fits`` or ``softmax``), as ``qhat`` was fitted.
         qhat_one: The which-one decisions' own threshold (None: ``qhat``).
     """
-    sets: dict[tuple[int, str], DecisionSet] = {}
-    unsure: dict[int, list[Judgement]] = {}
-    for number, target in enumerate(targets):
-        if target.count != ALL or target.rest:
-            continue
-        for judgement in ranked.get(number, []):
-            if judgement.model is None:  # named, or not a calibrated combination
-                continue
-            found = decision_set(judgement.p_yes, qhat)
-            sets[(number, judgement.subject)] = found
-            if not found.sure:
-                unsure.setdefault(number, []).append(judgement)
-    # Targets taking one object: the set of which one.
+    sets, unsure = _yes_no_sets(targets, ranked, qhat)
     candidates = {
         number: one_of(ranked.get(number, []), qhat if qhat_one is None else qhat_one, rule)
         for number, target in enumerate(targets)
@@ -211,41 +222,9 @@ def clarify(
             others = [j.subject for j in ranked.get(number, []) if j.p_one is not None]
             question = which_one_question(targets[number], found, others, rule)
             doubt[number] = (abs(top - 0.5), question)
-    # One question per target, the target whose most uncertain decision is most uncertain first.
-    questions = []
-    answered: dict[tuple[int, str], str] = {}
-    for number in sorted(doubt, key=lambda n: doubt[n][0])[:MAX_QUESTIONS]:
-        question = doubt[number][1]
-        chosen = question.read(ask(question)) if ask is not None else None
-        if chosen is None:
-            questions.append(question)
-            continue
-        questions.append(replace(question, answer=question.normalised(chosen)))
-        # A "which one" answer settles every candidate of the target, listed or not.
-        about = (
-            question.objects
-            if question.kind != "one"
-            else [j.subject for j in ranked[number] if j.p_one is not None]
-        )
-        for obj in about:
-            answered[(number, obj)] = "yes" if obj in chosen else "no"
-    settled = {n for n, _ in answered}  # the targets an answer settled
-    if answered:
-        ranked = dict(ranked)
-        for number in settled:
-            changed = [
-                replace(
-                    j,
-                    p_yes=1.0 if answered[(number, j.subject)] == "yes" else 0.0,
-                    score=ANSWERED if answered[(number, j.subject)] == "yes" else -ANSWERED,
-                )
-                if (number, j.subject) in answered
-                else j
-                for j in ranked[number]
-            ]
-            named = [j for j in changed if j.model is None and j.scoring == ""]
-            rest = [j for j in changed if j not in named]
-            ranked[number] = named + sorted(rest, key=lambda j: -j.score)
+    questions, answered = _asked(doubt, ranked, ask)
+    settled = {n for n, _ in answered}
+    ranked = _answered(ranked, answered)
     traced = []
     for number, decision in enumerate(decisions):
         decision = _with_sets(decision, number, sets, answered)
@@ -270,20 +249,14 @@ def clarify(
 
 
 def reading_options(doubt: ReadingDoubt) -> tuple[ReadingOption, ...]:
-    """Both readings of a request that reads two ways, with their probabilities: the one taken and
-    the one the choice dropped (where it has words)."""
+    """Both readings of a request that reads two ways, with their probabilities (the taken one first)."""
     taken = ReadingOption(doubt.taken, doubt.p_taken, "taken")
     return (taken, ReadingOption(doubt.other, doubt.p_other, "other")) if doubt.other else (taken,)
 
 
 def reading_set(options: Iterable[ReadingOption], qhat: float) -> list[ReadingOption]:
-    """The conformal set of readings (:func:`reading_options`), the one taken first.
-
-    The set holds the reading dropped unless it is less than ``1 - qhat`` likely and the one taken
-    is not, and each sampled reading at least ``1 - qhat`` likely (a probability that is not a
-    number keeps the reading dropped: ask, never guess); a reading that reads the same in words as
-    one before it is left out (the person could not tell them apart). The plan-level calibration
-    fits the reading threshold by this rule (:mod:`conceptbot.bench.conformal_fit`)."""
+    """The conformal set of readings, the one taken first: the dropped one unless it is under ``1 - qhat``
+    likely and the taken one is not (NaN keeps it); a reading worded as an earlier one is left out."""
     found = list(options)
     floor = 1.0 - qhat
     taken = next((o.p for o in found if o.kind == "taken"), 1.0)
@@ -300,8 +273,7 @@ def reading_set(options: Iterable[ReadingOption], qhat: float) -> list[ReadingOp
 
 
 def reading_question(doubt: ReadingDoubt, qhat: float) -> ClarifyingQuestion | None:
-    """The question of which reading was meant, or None where the set (:func:`reading_set`) is the
-    reading taken alone."""
+    """The question of which reading was meant, or None where the set is the reading taken alone."""
     kept = reading_set(reading_options(doubt), qhat)
     if len(kept) < 2:
         return None
@@ -316,13 +288,8 @@ def reading_question(doubt: ReadingDoubt, qhat: float) -> ClarifyingQuestion | N
 
 
 def one_of(judgements: list[Judgement], qhat: float, rule: str = OLD_RULE) -> list[Judgement]:
-    """The conformal set of which one, most likely first (one candidate: the planner acts on it).
-
-    ``softmax``: the candidates whose ``p_one`` is at least ``1 - qhat``. ``fits``: the likeliest
-    alone where its P(yes) puts only "yes" in its set (:func:`.conformal.decision_set`: sure that
-    it fits); else the candidates at least ``1 - qhat`` likely to fit, two at least. Either way,
-    where too few are (or the probabilities cannot be read), the :data:`MAX_OPTIONS` likeliest, so
-    that the person is asked rather than a guess made."""
+    """The conformal set of which one, most likely first (see the module docstring); too few (or NaN):
+    the :data:`MAX_OPTIONS` likeliest, so that the person is asked rather than a guess made."""
     scored = [j for j in judgements if j.p_one is not None]
     readable = all(j.p_one == j.p_one for j in scored)
     likeliest = sorted(scored, key=lambda j: -(j.p_one or 0.0)) if readable else scored
@@ -336,8 +303,7 @@ def one_of(judgements: list[Judgement], qhat: float, rule: str = OLD_RULE) -> li
 
 
 def _chance(judgement: Judgement, rule: str) -> float:
-    """A which-one candidate's probability by ``rule``: that it fits (``fits``) or that it is the one
-    (``softmax``); NaN where it has none."""
+    """A which-one candidate's probability by ``rule`` (fits, or is the one); NaN where it has none."""
     found = judgement.p_yes if rule == "fits" else judgement.p_one
     return math.nan if found is None else found
 
@@ -345,10 +311,7 @@ def _chance(judgement: Judgement, rule: str) -> float:
 def which_one_question(
     target: Target, found: list[Judgement], others: Iterable[str] = (), rule: str = OLD_RULE
 ) -> ClarifyingQuestion:
-    """The question of which one: "Which one should I give to the user: the coke, the 7up or the
-    water bottle? One of them, another, or none." ``others``: the target's other candidates, which
-    the person may name instead (a set can miss what they meant). Each object's probability is the
-    ``rule``'s: that it fits, or that it is the one."""
+    """The question of which one; ``others``: other candidates the person may name (a set can miss)."""
     kept = found[:MAX_OPTIONS]
     names = [j.subject for j in kept]
     rest = tuple(o for o in others if o not in names)
@@ -364,8 +327,7 @@ def which_one_question(
 
 
 def _shown(p: float | None) -> float:
-    """A probability for a question (4 decimals); one that is not a number (the decision could not
-    be made) as a coin toss: JSON has no NaN."""
+    """A probability for a question (4 decimals); NaN as a coin toss, since JSON has no NaN."""
     return round(p, 4) if p is not None and p == p else 0.5
 
 

@@ -1,23 +1,8 @@
-"""Choosing among the scene's objects: one ranking of every candidate from general signals.
+"""Choosing among the scene's objects: one ranking of every candidate for a target taking a few.
 
-A target that takes one or a few objects (a need, "something to write with", "a fruit") is a choice
-among all the candidates at once. Each candidate gets three readings, none of them a question per
-object:
-
-* ``names``: how much the request raises the probability of naming the object as the answer to
-  "which object should the robot give to the user?", all objects listed in one prompt, minus the
-  same for a neutral request (domain-conditional PMI, Holtzman et al. 2021, "Surface form
-  competition"; :meth:`ObjectChooser.name_scores`, two prompt evaluations in all);
-* ``embed``: the cosine between the request and "a <object>" with the sentence embedder (no model
-  call);
-* ``use``: the highest cosine between the request and what the graph states the object is for
-  (:meth:`~conceptbot.pipeline.goal_planner.decide.FactFinder.uses`; missing without a graph or
-  where it states nothing).
-
-Each reading is standardised over the candidates and the ranking is their weighted sum, the
-weights fitted on the choice part set (``benchmarks/bench_choice.py --fit``, written to
-``choice_weights.json``); the probability that a candidate is the one is a softmax of the ranking,
-sharpened by a fitted scale, which the which-one conformal set reads (``asking.py``).
+Three readings per candidate: ``names`` (domain-conditional PMI of naming it), ``embed`` (cosine of
+request and name) and ``use`` (cosine with what the graph says it is for).
+The ranking is their standardised weighted sum (``choice_weights.json``); a softmax gives P(the one).
 """
 
 from __future__ import annotations
@@ -117,9 +102,9 @@ class ObjectChooser:
     def name_scores(
         self, request: str, move: str, objects: Sequence[str]
     ) -> tuple[dict[str, float], Usage, str]:
-        """Per object, the log-probability of its name as the answer to "which object should the
-        robot <move>?" for ``request`` minus the same for a neutral request; the usage; how the
-        backend scored the options.
+        """Per object, the log-probability of its name for ``request`` minus that for a neutral one.
+
+        Also returns the usage and how the backend scored the options.
 
         Args:
             move: What the robot would do with the object, without it ("give to the user").
@@ -141,8 +126,7 @@ class ObjectChooser:
     def readings(
         self, request: str, move: str, objects: Sequence[str]
     ) -> tuple[dict[str, dict[str, float]], dict[str, str], Usage, str]:
-        """Each reading per object (NaN where it is missing), what the graph states each object is
-        for ("" where nothing), the usage, and how the backend scored the names.
+        """Each reading per object (NaN where missing), what the graph says each is for, usage, method.
 
         Args:
             request: What the person said (or the part of it this target is for).
@@ -160,8 +144,7 @@ class ObjectChooser:
         return found, {o: uses[o][1] for o in objects}, usage, method
 
     def rank(self, request: str, move: str, objects: Sequence[str]) -> tuple[list[Judgement], Usage]:
-        """The candidates as judgements, in ``objects``' order: ``score`` the weighted sum of
-        standardised readings, ``p_one`` (and ``p_yes``) the probability that it is the one."""
+        """The candidates as judgements: ``score`` the weighted sum, ``p_one`` P(it is the one)."""
         started = time.perf_counter()
         found, stated, usage, method = self.readings(request, move, objects)
         total = dict.fromkeys(objects, 0.0)

@@ -1,16 +1,6 @@
-"""The fitted combination of the model's judgement and the graph's evidence.
-
-A decision's probability is a logistic regression over the model's calibrated log-odds (asked with
-the object's graph facts, and where the weights use it, without them) and the features of
-:mod:`conceptbot.pipeline.goal_planner.evidence`::
-
-    P(yes) = sigmoid(bias + w_model * model + sum_f w_f * feature_f)
-
-The weights are data (``judgement_weights.json``), fitted on the judgement set
-(``benchmarks/data/judgement_set.jsonl``) by ``benchmarks/fit_judgements.py``, cross-validated by
-object; one set for the default system and one for the no-graph ablation, which sees only the
-model's answer without facts and the object's name. A different model needs its own fit (its
-log-odds have another scale).
+"""The fitted combination of the model's judgement and the graph's evidence:
+``P(yes) = sigmoid(bias + w_model * model + sum_f w_f * feature_f)``, weights in
+``judgement_weights.json`` (with and without the graph; a different model needs its own fit).
 """
 
 from __future__ import annotations
@@ -33,14 +23,8 @@ class Combination:
     """One fitted logistic regression.
 
     Attributes:
-        features: Input names: ``model``, ``plain`` (the model's calibrated log-odds with and without
-            graph facts), ``described`` (with the model's own one-sentence description of the object
-            instead of graph facts, and its ``_z`` and ``_gap`` forms), ``model_z`` and ``model_gap``
-            (the model's log-odds standardised over the objects judged together, and its distance
-            below the best of them: the model ranks ingredients well but leans towards No for all of
-            them), evidence feature names
-            (:data:`conceptbot.pipeline.goal_planner.evidence.FEATURES`), and products of these
-            (``model*is_dish``).
+        features: Input names: model readings (``model``, ``plain``, ``described``, ``_z``/``_gap``
+            forms), evidence features, and products (``model*is_dish``).
         weights: One weight per feature.
         bias: The intercept.
     """
@@ -56,8 +40,7 @@ class Combination:
 
     @property
     def uses_described(self) -> bool:
-        """Whether the model must also be asked with its own description of the object
-        (``described``, ``described_z``, ``described_gap``)."""
+        """Whether the model must also be asked with its own description of the object."""
         return any(part.startswith("described") for f in self.features for part in f.split("*"))
 
     def log_odds(self, readings: Mapping[str, float], evidence: Evidence | None) -> float:

@@ -1,19 +1,6 @@
-"""Things used together: where what helps with a need is two things at once.
-
-A need's target takes one object ("I'm thirsty": a drink). Some needs are met by two things used
-together ("I want to brush my teeth": the toothbrush *and* the toothpaste; "I need to sew this button
-back on": the needle and the thread), others by either of two ("I'm thirsty": the juice box or the
-bottle of water, not both). After a need's target has its object, the next candidates that help are
-each asked "would they also need the X, used together with the Y?" (:meth:`Decider.together`), and
-the graph is read for whether it links the two by use ("toothpaste UsedFor clean tooth toothbrush",
-"match UsedFor light candle") rather than by kind ("mitten IsA glove", "handkerchief IsA tissue":
-substitutes). The two together, a logistic fit on the labelled set's tune round
-(``benchmarks/data/together_set.jsonl``, ``benchmarks/bench_together.py --write``), give P(used
-together); above one half the companion goes to the same place.
-
-Companions are not calibrated decisions of the asking machinery (:mod:`asking`): they are never
-asked about, and a plan's confidence does not count them. They pass the same risk checks as every
-other move. A question that cannot be answered (an error, NaN) adds nothing.
+"""Things used together (the toothbrush *and* the toothpaste): after a need's target has its object,
+the next helpful candidates are asked "would they also need the X?" and the graph is read for a link
+by use (not by kind: substitutes). A logistic fit gives P(used together); above one half it goes too.
 """
 
 from __future__ import annotations
@@ -30,9 +17,7 @@ from conceptbot.knowledge.normalize import singular
 from conceptbot.pipeline.goal_planner.combine import sigmoid
 from conceptbot.pipeline.goal_planner.targets import tokens
 
-#: Relations by which the graph says two things are used together: one is for, needs, or goes with
-#: doing something with the other ("toothpaste UsedFor clean tooth toothbrush", "drive nail
-#: HasPrerequisite hammer", "tape CapableOf stick paper").
+#: Relations by which the graph says two things are used together ("drive nail HasPrerequisite hammer").
 USE_LINKS = (
     "UsedFor",
     "CapableOf",
@@ -45,7 +30,7 @@ USE_LINKS = (
 )
 #: Relations by which it says one is a kind of the other: substitutes ("mitten IsA glove").
 KIND_LINKS = ("IsA", "Synonym")
-EDGES_READ = 200  # per object; the offline graph's busiest objects ("hammer") have about that many
+EDGES_READ = 200  # per object; about as many as the offline graph's busiest objects have
 
 
 @dataclass(frozen=True)
@@ -56,9 +41,8 @@ class CompanionWeights:
         intercept: The fit's intercept.
         model: Weight of the model's raw log-odds of Yes to "would they also need the X?".
         graph: Weight of the graph's link (1 where it links the two by use more than by kind).
-        considered: How many of a need's next candidates (those more likely to help than a
-            content-free object) are asked about.
-        fitted_on: What the fit was made on, for the trace and the docs.
+        considered: How many of a need's next helpful candidates are asked about.
+        fitted_on: What the fit was made on, for the trace.
     """
 
     intercept: float
@@ -76,8 +60,7 @@ class CompanionWeights:
 
 @cache
 def shipped_weights(graph: bool) -> CompanionWeights:
-    """The shipped fit (``companion_weights.json``): ``graph`` for a planner with a knowledge graph,
-    else the model-only fit of the no-graph ablation."""
+    """The shipped fit (``companion_weights.json``), with or without the knowledge graph."""
     path = resources.files("conceptbot.pipeline").joinpath("companion_weights.json")
     text = path.read_text(encoding="utf-8")
     data = json.loads(text)["graph" if graph else "nograph"]
@@ -91,8 +74,7 @@ def shipped_weights(graph: bool) -> CompanionWeights:
 
 
 def _thing(name: str) -> str:
-    """What a name is about for the graph: the contents of a container phrase ("box of nails" ->
-    "nails", "roll of sticky tape" -> "sticky tape"), else the name."""
+    """What a name is about for the graph: a container phrase's contents ("box of nails" -> "nails")."""
     text = " ".join(tokens(name))
     return text.split(" of ", 1)[1] if " of " in text else text
 
@@ -103,10 +85,7 @@ def _head(name: str) -> str:
 
 
 def graph_link(graph: KnowledgeGraph | None, first: str, other: str) -> tuple[bool, str]:
-    """Whether the graph links ``first`` and ``other`` by use more often than by kind, and the first
-    statement that links them by use ("" where none does). Each object's edges are read (its
-    contents for a container phrase); an edge links them where the other's head noun is a word of
-    its far end (by use), or is that end's head noun (by kind). False without a graph."""
+    """Whether the graph links the two by use (not kind) more often, and the first use statement."""
     if graph is None:
         return False, ""
     by_use: list[str] = []
@@ -132,6 +111,5 @@ def graph_link(graph: KnowledgeGraph | None, first: str, other: str) -> tuple[bo
 
 
 def candidates(ranked: Sequence[tuple[str, float]], anchor: str, considered: int) -> list[str]:
-    """The objects asked about as companions of ``anchor``: the next ``considered`` of a need's
-    ranking (best first) that help more than a content-free object would (score above 0)."""
+    """The next ``considered`` objects of a need's ranking that help more than a content-free one."""
     return [o for o, score in ranked if o != anchor and math.isfinite(score) and score > 0.0][:considered]

@@ -1,14 +1,8 @@
-"""Split conformal prediction for the goal planner's yes/no decisions (as KnowNo does for a robot's
-options, Ren et al., CoRL 2023): for a chosen coverage (0.9: the set contains the right answer nine
-times in ten), a decision's prediction set holds every answer whose probability is at least
-``1 - qhat``. One answer in the set: the planner acts on it. Both: it does not know, and should ask.
+"""Split conformal prediction for the goal planner's decisions (as KnowNo, Ren et al., CoRL 2023).
 
-``qhat`` is fitted on labelled data the planner was never tuned on the test items with, and
-shipped as data (``conformal.json``); another model needs its own. Two levels: ``plan`` (the
-default), on the dev tasks, where a task's nonconformity is its worst decision's, so that all the
-decisions of a plan are covered together (``benchmarks/fit_conformal_plans.py``, KnowNo's
-multi-step form); ``decision``, on the judgement set's held-out combined probabilities, each
-decision on its own (``benchmarks/fit_judgements.py --conformal``).
+A decision's prediction set holds every answer at least ``1 - qhat`` likely: one answer, the planner
+acts; both, it asks. ``qhat`` ships in ``conformal.json`` at two levels: ``plan`` (a task's worst
+decision, so a plan's decisions are covered together) and ``decision``.
 """
 
 from __future__ import annotations
@@ -54,18 +48,15 @@ CALIBRATION_DOC = (
     "catalogue's name); the planner tells another model that they are not its own (`conceptbot "
     "calibrate --conformal` fits its own). Refit for another model."
 )
-#: The model the shipped thresholds were fitted for where the file names none (a file written
-#: before it named one: every shipped fit until then was the embedded model's).
+#: The model the shipped thresholds were fitted for where the file names none.
 SHIPPED_MODEL = "qwen2.5-coder-1.5b"
-#: The which-one rule of a plan-level calibration that names none (written before 2026-12-03), and
-#: of the sets where no rule is given.
+#: The which-one rule of a calibration that names none, and of the sets where no rule is given.
 OLD_RULE = "softmax"
 
 
 def conformal_threshold(scores: Sequence[float], coverage: float) -> float:
-    """Split conformal's ``qhat``: the ``ceil((n + 1) * coverage) / n`` empirical quantile of the
-    calibration nonconformity ``scores`` (``1 - p(right answer)``); ``1.0`` (keep everything) where
-    too few scores reach the coverage.
+    """Split conformal's ``qhat``: the ``ceil((n + 1) * coverage) / n`` quantile of the nonconformity
+    ``scores`` (``1 - p(right answer)``); ``1.0`` where too few reach the coverage.
 
     Raises:
         ValueError: A coverage outside (0, 1), no scores, or a score that is not a number in [0, 1].
@@ -87,8 +78,7 @@ class DecisionSet:
 
     Attributes:
         p_yes: The decision's calibrated probability of yes.
-        answers: ``("yes",)``, ``("no",)``, ``("yes", "no")`` (unsure: ask) or ``()`` (neither is
-            likely enough; taken as unsure too).
+        answers: ``("yes",)``, ``("no",)``, ``("yes", "no")`` (unsure: ask) or ``()`` (unsure too).
     """
 
     p_yes: float
@@ -105,8 +95,7 @@ class DecisionSet:
 
 
 def decision_set(p_yes: float, qhat: float) -> DecisionSet:
-    """The answers whose probability is at least ``1 - qhat``; a probability that is not a number
-    keeps both (the decision cannot be made: ask, never guess)."""
+    """The answers whose probability is at least ``1 - qhat``; NaN keeps both (ask, never guess)."""
     if not (isinstance(p_yes, int | float) and 0.0 <= p_yes <= 1.0):
         return DecisionSet(float("nan"), ("yes", "no"))
     floor = 1.0 - qhat
@@ -116,16 +105,12 @@ def decision_set(p_yes: float, qhat: float) -> DecisionSet:
 
 @dataclass(frozen=True)
 class Calibration:
-    """The shipped thresholds: ``qhat`` per coverage, where they were fitted, whether they hold
-    for which-one decisions (``which_one``; the decision level's, from yes/no judgements, do not),
-    and the rule that judges a which-one decision (``rule``, one of :data:`WHICH_ONE`: a threshold
-    holds only for the scores it was fitted on), the model they were fitted for (``fitted_for``: a
-    model name for the shipped ones, ``backend:model`` for a user's) and where they were read
-    (``source``: ``shipped``, or the user's file)."""
+    """Conformal thresholds: ``qhat`` per coverage, whether they hold for which-one decisions, their
+    rule, the model they were fitted for (``backend:model`` for a user's) and their ``source``."""
 
     qhat: dict[float, float]
     fitted_on: str
-    which_one: bool = True  # fitted on which-one decisions too (plan level), so they get sets
+    which_one: bool = True
     rule: str = OLD_RULE
     qhat_one: dict[float, float] | None = None  # which-one decisions' own (None: qhat's)
     qhat_yes_no: dict[float, float] | None = None  # yes/no decisions' own (None: qhat's)
@@ -134,16 +119,13 @@ class Calibration:
     source: str = "shipped"
 
     def fits(self, backend: str, model: str) -> bool:
-        """Whether the thresholds were fitted on this model's scores, so that the coverage they
-        promise holds for its plans: a user's file for this backend and model, or the shipped ones
-        for the model they name (on any backend that serves it, e.g. a llama.cpp server)."""
+        """Whether the thresholds were fitted on this model's scores, so their coverage holds."""
         if self.source == "shipped":
             return model == self.fitted_for
         return self.fitted_for == f"{backend}:{model}"
 
     def threshold_one(self, coverage: float) -> float:
-        """The which-one decisions' threshold for ``coverage``: their own where it was fitted, else
-        :meth:`threshold`'s.
+        """The which-one decisions' threshold: their own where fitted, else :meth:`threshold`'s.
 
         Raises:
             ValueError: A coverage without a fitted threshold.
@@ -151,8 +133,7 @@ class Calibration:
         return self._own(self.qhat_one, coverage)
 
     def threshold_yes_no(self, coverage: float) -> float:
-        """The yes/no decisions' threshold for ``coverage``: their own where it was fitted, else
-        :meth:`threshold`'s.
+        """The yes/no decisions' threshold: their own where fitted, else :meth:`threshold`'s.
 
         Raises:
             ValueError: A coverage without a fitted threshold.
@@ -160,8 +141,7 @@ class Calibration:
         return self._own(self.qhat_yes_no, coverage)
 
     def threshold_reading(self, coverage: float) -> float:
-        """The which-reading decisions' threshold for ``coverage`` (whether to ask which reading of
-        the request was meant): their own where it was fitted, else :meth:`threshold`'s.
+        """The which-reading decisions' threshold: their own where fitted, else :meth:`threshold`'s.
 
         Raises:
             ValueError: A coverage without a fitted threshold.
@@ -188,9 +168,7 @@ class Calibration:
 
 
 def plan_key(data: dict[str, Any], rule: str | None) -> tuple[str, str]:
-    """Where a calibration document keeps the plan-level thresholds of a which-one ``rule`` (None:
-    the one it names in ``plan_which_one``), and that rule: ``plan_qhat`` for the rule it names,
-    ``plan_qhat_RULE`` for another.
+    """The key of a which-one ``rule``'s plan-level thresholds (``plan_qhat[_RULE]``), and the rule.
 
     Raises:
         ValueError: A rule that is not one of :data:`WHICH_ONE`.
@@ -207,15 +185,12 @@ KINDS = ("yes_no", "one", "reading")
 
 
 def kind_key(key: str, kind: str) -> str:
-    """Where a calibration document keeps one kind's thresholds (:data:`KINDS`) beside the
-    plan-level ``key`` (``plan_qhat`` -> ``plan_qhat_one``, ``plan_qhat_fits`` ->
-    ``plan_qhat_one_fits``)."""
+    """The key of one kind's thresholds beside the plan-level ``key`` (``plan_qhat`` -> ``plan_qhat_one``)."""
     return key.replace("plan_qhat", f"plan_qhat_{kind}", 1)
 
 
 def _kind(data: dict[str, Any], key: str, combination: str, kind: str) -> dict[float, float] | None:
-    """One kind's thresholds kept beside ``key`` for ``combination``, or None where there are
-    none (a file fitted before they were).
+    """One kind's thresholds kept beside ``key`` for ``combination``, or None where there are none.
 
     Raises:
         ValueError: A threshold that is not a number in [0, 1].
@@ -228,9 +203,7 @@ def _kind(data: dict[str, Any], key: str, combination: str, kind: str) -> dict[f
 
 
 def threshold(value: object, field: str) -> float:
-    """A conformal threshold read from a file: a JSON number in [0, 1].
-
-    ``true`` would read as 1.0 (ask about everything) and ``"0.5"`` as 0.5; neither is a fitted value.
+    """A conformal threshold read from a file: a JSON number in [0, 1] (not ``true`` or ``"0.5"``).
 
     Raises:
         ValueError: Not a number (a boolean, a string, null), NaN, or outside [0, 1]; names ``field``.
@@ -242,11 +215,7 @@ def threshold(value: object, field: str) -> float:
 
 @cache
 def shipped(combination: str = "graph", level: str = "plan", rule: str | None = None) -> Calibration:
-    """The calibration shipped with the package (``conformal.json``) for a combination's
-    probabilities (``graph``: the default system's, ``nograph``: the ablation's), at a level
-    (:data:`LEVELS`: ``plan`` from the dev tasks, ``benchmarks/fit_conformal_plans.py``;
-    ``decision`` from the judgement set, ``benchmarks/fit_judgements.py --conformal``), for a
-    which-one ``rule`` (None: the one the file names; the decision level has no which-one decision).
+    """The calibration shipped in ``conformal.json`` for a combination, level and ``rule`` (None: the file's).
 
     Raises:
         ValueError: A combination, level or rule without a calibration.
@@ -286,13 +255,10 @@ def calibration_for(
     level: str = "plan",
     rule: str | None = None,
 ) -> Calibration:
-    """The model's own plan-level calibration where ``conceptbot calibrate --conformal`` wrote one
-    (in ``directory``), else the shipped one (fitted for the embedded model); for a which-one
-    ``rule`` (None: the one the calibration names).
+    """The model's own plan-level calibration in ``directory`` where there is one, else the shipped one.
 
     Raises:
-        ConfigError: A calibration file that is not one, or that has no thresholds for ``rule``
-            (with how to make it again).
+        ConfigError: A calibration file that is not one, or has no thresholds for ``rule``.
     """
     path = user_file(directory, backend, model) if directory is not None else None
     if level != "plan" or path is None or not path.is_file():

@@ -1,15 +1,7 @@
 """Per-object decisions: does the request want this object moved there? Is this move dangerous?
 
-Each decision is one short question answered Yes or No, scored by the log-probabilities of the two
-answers (one forward pass; no sampling), with the object's own graph facts in the question. The
-facts are filtered against the description (not only against the request), and include what the
-graph says about the object's parents (``IsA``): the offline graph has "green hellebore IsA
-hellebore" and "hellebore IsA poisonous plant" but never joins them.
-
-Calibration (Zhao et al. 2021, "Calibrate before use"): small models lean towards one answer
-whatever the object. The same question is asked once about a content-free object ("the object",
-no facts); a decision's score is its log-odds of Yes minus that prior's, so 0 means "no more
-likely than for an unknown object". The goal planner's thresholds apply to this calibrated score.
+Each is a Yes/No question with the object's graph facts, scored as its log-odds of Yes minus that for
+a content-free object, since small models lean to one answer (Zhao et al. 2021, "Calibrate before use").
 """
 
 from __future__ import annotations
@@ -32,7 +24,7 @@ ANSWERS = ("Yes", "No")
 CONTENT_FREE = "object"
 #: The criteria (by their ``evidence_terms.json`` group) asked without the object's graph facts.
 BARE_GROUPS = ("safe",)
-DESCRIPTION_TOKENS = 48  # one sentence; the model's descriptions of the judgement set end well before
+DESCRIPTION_TOKENS = 48  # one sentence
 
 
 @dataclass(frozen=True)
@@ -45,15 +37,11 @@ class Judgement:
         p_yes: P(Yes) normalised over Yes/No.
         score: Calibrated log-odds of Yes (0: no more likely than for a content-free object).
         facts: The graph facts about the object put in the question.
-        scoring: How the backend scored the question (``logprob``, ``chat-logprobs``, ...; "" for an
-            object the request names, which is not asked about).
-        model: Where ``score`` combines the model's answer with the graph's evidence
-            (:mod:`conceptbot.pipeline.goal_planner.combine`): the model's own calibrated log-odds; else None.
+        scoring: How the backend scored the question ("" for a named object, not asked about).
+        model: The model's own calibrated log-odds where ``score`` is combined with evidence, else None.
         evidence: The evidence that was combined, else None.
-        p_one: For a target taking one object, the probability that this is the one (a softmax of
-            the target's ranking over its candidates), else None.
-        described: The model's own description of the object, where the combination asked the
-            question with it too (:meth:`Decider.describe`), else "".
+        p_one: For a target taking one object, the probability that this is the one, else None.
+        described: The model's own description of the object where the question used it, else "".
     """
 
     subject: str
@@ -94,16 +82,13 @@ def _log_odds(logprobs: Sequence[float]) -> tuple[float, float]:
 class Decider:
     """Scores yes/no questions about objects with the LLM.
 
-    Holds no state that a question changes: one decider serves every thread of a ``bench --workers``
-    run, so how a question was scored travels with its :class:`Judgement` (``scoring``).
+    Holds no state that a question changes, so one decider can serve several threads.
 
     Args:
         llm: An LLM that can score options (labelled ``decide``).
         facts: Where the graph facts come from.
-        evidence: Reads the graph's evidence for a criterion decision (:meth:`fits`); None: the
-            model's answer alone.
-        combination: The fitted combination of the model's answer and the evidence; None: the
-            model's answer alone.
+        evidence: Reads the graph's evidence for :meth:`fits`; None: the model's answer alone.
+        combination: The fitted combination of answer and evidence; None: the model's answer alone.
     """
 
     def __init__(
@@ -131,8 +116,7 @@ class Decider:
         label: str,
         question: Callable[[str | None, Sequence[str]], str],
     ) -> tuple[list[Judgement], Usage]:
-        """Ask ``question`` about the content-free object (``None``, no facts), then about each object
-        with its facts; each score is the object's log-odds of Yes minus the content-free one's."""
+        """Ask ``question`` about each object, scored against the content-free object (``None``)."""
         _, prior, usage, _ = self._ask(question(None, ()))
         judgements = []
         for obj in objects:
@@ -142,10 +126,8 @@ class Decider:
         return judgements, usage
 
     def describe(self, objects: Sequence[str]) -> tuple[dict[str, str], Usage]:
-        """The model's own one-sentence description of each object (what it is, what it is made of,
-        whether it is safe to eat or to touch), greedy and cached like any reply: a small model says
-        more about a thing when asked to describe it than its Yes/No log-odds show ("generated
-        knowledge", Liu et al. 2022), and the graph states nothing about 40% of the objects judged."""
+        """The model's own one-sentence description of each object, and the usage: a small model says more
+        when describing a thing than its Yes/No log-odds show ("generated knowledge", Liu et al. 2022)."""
         usage = Usage(calls=0)
         found: dict[str, str] = {}
         system = Message("system", prompts.fill("describe_system"))
@@ -160,8 +142,7 @@ class Decider:
     def _described(
         self, objects: Sequence[str], question: Callable[[str | None, str], str], what: str
     ) -> tuple[dict[str, dict[str, float]], dict[str, str], Usage]:
-        """The question asked with each object's description in it (no graph facts), calibrated
-        against the content-free object without one, as readings ``described`` (``_z``, ``_gap``)."""
+        """The question asked with each object's description instead of facts, as ``described`` readings."""
         descriptions, usage = self.describe(objects)
         about = {o: (descriptions[o],) for o in objects}
         judgements, used = self._judge_each(objects, about, what, lambda o, f: question(o, f[0] if f else ""))
@@ -172,8 +153,7 @@ class Decider:
     def moves(
         self, request: str, target: str, move: str, objects: Sequence[str], scene: Scene
     ) -> tuple[list[Judgement], tuple[str, ...], Usage]:
-        """Whether the request wants each object moved to ``target``: "to do what the person asked,
-        should the robot give the X to the user?", calibrated against a content-free object.
+        """Whether the request wants each object moved to ``target``, calibrated.
 
         Args:
             move: The move with ``{object}`` for the object ("give the {object} to the user").
@@ -212,28 +192,18 @@ class Decider:
         combine: bool = True,
         said: str = "",
     ) -> tuple[list[Judgement], tuple[str, ...], Usage]:
-        """Whether each object fits a description ("poisonous", "an ingredient of guacamole"),
-        calibrated, and where the decider has a combination, combined with the graph's evidence.
+        """Whether each object fits a description ("poisonous"), calibrated, combined with evidence.
 
         Args:
-            dish: The dish whose ingredients are decided: the question becomes "is the lime an
-                ingredient of guacamole?" (it ranked ingredients better than the description form
-                on the dev split) with the dish's definition in it.
-            combine: Combine with the evidence (False: the model's calibrated answer only, for a
-                description that is no property to look up, such as a good base for a stack).
-            said: The dish in the request's words, when it says more than the graph's concept
-                ``dish`` ("tomato and cucumber salad"): the question asks about it, the facts
-                are read for ``dish``.
+            dish: The dish whose ingredients are decided ("is the lime an ingredient of guacamole?").
+            combine: Combine with the evidence (False: for a description no property to look up).
+            said: The dish in the request's words, asked about; the facts are read for ``dish``.
 
         Returns:
             The judgements, the facts every question carried (the dish's definition), and usage.
         """
         started = time.perf_counter()
-        # An ingredient question carries the dish's definition, not the object's facts: with them,
-        # dev ingredients ranked worse (olive oil above the eggs for an omelette). A criterion of
-        # safety ("safe for a toddler") is asked without them too: on the judgement set they lowered
-        # the model's answer there (child-safe 63% right with them, 76% without); the graph's
-        # statements still count, as evidence beside the answer.
+        # Ingredient and safety questions go without the object's facts, which made answers worse.
         bare = bool(dish) or bool(set(criterion_terms(what).groups) & set(BARE_GROUPS))
         about = {o: () for o in objects} if bare else self.facts.about(objects, [what])
         context = self.facts.context(dish, request, dish) if dish else ()
@@ -254,7 +224,7 @@ class Decider:
         if combine and self.combination is not None:
             plain: dict[str, float] = {j.subject: j.score for j in judgements}
             if self.combination.uses_plain and self.facts.retriever is not None:
-                # The same question without any graph facts: a second reading of the model's own.
+                # The same question without graph facts: a second reading of the model's own.
                 bare, used = self._judge_each(
                     objects, {o: () for o in objects}, what, lambda o, f: question(o, f, "")
                 )
@@ -270,7 +240,6 @@ class Decider:
                 described, descriptions, used = self._described(objects, told, what)
                 usage = usage + used
             group = group_readings({j.subject: j.score for j in judgements})
-            # The plain reading standardised in its group too (plain, plain_z, plain_gap).
             bare_group = {
                 o: {f"plain{k[len('model') :]}": v for k, v in g.items()}
                 for o, g in group_readings(plain).items()
@@ -287,8 +256,7 @@ class Decider:
         return judgements, context, usage.with_latency(time.perf_counter() - started)
 
     def _combined(self, judgement: Judgement, criterion: str, readings: dict[str, float]) -> Judgement:
-        """The judgement with its score replaced by the fitted combination of the model's readings
-        and the graph's evidence (the model's own score kept beside it)."""
+        """The judgement scored by the fitted combination of readings and evidence (own score kept)."""
         assert self.combination is not None
         evidence = self.evidence.read(judgement.subject, criterion) if self.evidence is not None else None
         score = self.combination.log_odds(readings, evidence)
@@ -297,17 +265,10 @@ class Decider:
     def dangerous(
         self, request: str, move: str, obj: str, scene: Scene, evidence: Sequence[str]
     ) -> tuple[Judgement, Usage]:
-        """Whether carrying out ``move`` ("give the scissors to the child") would be dangerous.
-
-        Asked as "is it safe to ...?": on a set of dev moves the 1.5B model separated dangerous from
-        ordinary moves with "safe" (AUC 0.76) and ranked them backwards when asked "would it be
-        dangerous to ...?" (AUC 0.23). The score is how much less likely "Yes, it is safe" is than
-        for the same move of a content-free object: above 0, less safe than an unknown object.
-        """
+        """Whether carrying out ``move`` would be dangerous, asked as "is it safe to ...?" (answered better
+        than "dangerous"); the score is how much less likely "safe" is than for a content-free object."""
         started = time.perf_counter()
-        # Only the object's state goes into the question: with OPE's summary and graph facts added,
-        # the same dev moves separated worse (the box cutter for a toddler scored as safe as a
-        # pencil); OPE's danger rating is used beside this decision instead (goal_planner).
+        # Only the object's state goes into the question: more facts made it worse.
         lines = list(evidence)
         found = scene.get(obj)
         if found is not None and found.state:
@@ -328,12 +289,8 @@ class Decider:
         return judgement, (usage + used).with_latency(time.perf_counter() - started)
 
     def together(self, need: str, first: str, others: Sequence[str]) -> tuple[list[Judgement], Usage]:
-        """Whether the person would also need each of ``others`` together with ``first`` to do what
-        they said ("I want to brush my teeth": the toothpaste with the toothbrush, yes; "I'm
-        thirsty": the bottle of water with the juice box, no). Each score is the raw log-odds of
-        Yes: the question names two objects, so a content-free one has nothing to stand for (on
-        the labelled set, ``benchmarks/data/together_set.jsonl``, the raw log-odds separated the
-        pairs as well as the calibrated ones did; ``benchmarks/bench_together.py``)."""
+        """Whether the person would also need each of ``others`` with ``first``; raw log-odds, as a
+        content-free object has nothing to stand for when two are named."""
         started = time.perf_counter()
         usage = Usage(calls=0)
         out = []
@@ -345,16 +302,8 @@ class Decider:
         return out, usage.with_latency(time.perf_counter() - started)
 
     def unsafe(self, to: str, obj: str) -> tuple[Judgement, Usage]:
-        """Whether handing ``obj`` to ``to`` would be unsafe, asked plainly: "Is it safe to give the
-        dog the chocolate bar?", with neither the request, the scene nor any state.
-
-        On the labelled risk set (``benchmarks/data/risk_set.jsonl``) this separated dangerous from
-        safe hand-overs to children and animals far better than :meth:`dangerous`: the request in
-        the question sways the small model towards what was asked ("Share my chocolate bar with
-        the dog": safe), and states in it swayed it too ("the chocolate bar: dark chocolate"
-        scored safer than the name alone). The score is how much less likely "Yes, it is safe" is
-        than for the content-free object: above 0, less safe than handing over an unknown object.
-        """
+        """Whether handing ``obj`` to ``to`` would be unsafe, asked plainly: the request would sway the model
+        towards what was asked. The score is how much less likely "safe" is than for a content-free one."""
         started = time.perf_counter()
         _, prior, usage, _ = self._ask(
             prompts.render("risk_plain_user", move=handover_words(to, CONTENT_FREE))
@@ -365,10 +314,8 @@ class Decider:
         return judgement, (usage + used).with_latency(time.perf_counter() - started)
 
     def holder(self, request: str) -> tuple[Judgement, Usage]:
-        """Whether what the request hands over goes to a child or an animal rather than to the adult
-        speaking ("My four-year-old wants to help: hand him the craft knife", where the scene's
-        only person is the user): the log-odds of Yes, relative to a request that hands something to
-        the speaker (:data:`CONTENT_FREE_HANDOVER`)."""
+        """Whether the request hands things to a child or an animal rather than the speaker (log-odds of
+        Yes relative to :data:`CONTENT_FREE_HANDOVER`)."""
         started = time.perf_counter()
         _, prior, usage, _ = self._ask(prompts.render("holder_user", request=CONTENT_FREE_HANDOVER))
         p_yes, log_odds, used, method = self._ask(prompts.render("holder_user", request=request))
@@ -381,15 +328,12 @@ CONTENT_FREE_HANDOVER = "Please hand it to me."
 
 
 def handover_words(to: str, obj: str) -> str:
-    """A hand-over in the plain safety question's words, the recipient first: "give the dog the
-    chocolate bar" (on dev hand-overs the small model separated these better than "give the
-    chocolate bar to the dog")."""
+    """A hand-over in the plain safety question's words, the recipient first ("give the dog the X")."""
     return f"give the {to} the {obj}"
 
 
 def described_question(request: str, what: str, dish: str, obj: str | None, description: str) -> str:
-    """The yes/no question of :meth:`Decider.fits` with the model's description of the object in it
-    instead of graph facts (``obj`` None: the content-free object, without one)."""
+    """The question of :meth:`Decider.fits` with the object's description instead of graph facts."""
     return prompts.render(
         "ingredient_user" if dish else "decide_user",
         request=request,
@@ -402,9 +346,7 @@ def described_question(request: str, what: str, dish: str, obj: str | None, desc
 
 
 def group_readings(scores: dict[str, float]) -> dict[str, dict[str, float]]:
-    """Per object: its calibrated log-odds (``model``), standardised over the objects judged together
-    (``model_z``) and its distance below the best of them (``model_gap``, 0 for the best); for one
-    object alone both are 0."""
+    """Per object: log-odds ``model``, standardised in the group ``model_z``, below the best ``model_gap``."""
     values = list(scores.values())
     mean = sum(values) / len(values) if values else 0.0
     spread = (sum((v - mean) ** 2 for v in values) / len(values)) ** 0.5 if values else 0.0

@@ -1,32 +1,10 @@
 """Graph evidence: what the knowledge graph states about one object and one criterion, read without
-the model.
+the model, as features that :mod:`.combine` weighs beside the model's answer (a small model given
+the facts as prompt text often ignores them).
 
-A 1.5B model given "death cap: extremely poisonous usually white fungus" as prompt text can still
-answer 0.47 for it and 0.49 for an edible mushroom. So the statements are also read here, as
-features that a fitted combination (:mod:`conceptbot.pipeline.goal_planner.combine`) weighs beside the model's
-answer:
-
-* **terms**: the criterion's own words (singular forms; a material's adjective -> the material:
-  "wooden" -> wood) and, where a criterion uses a word of one of ``evidence_terms.json``'s groups
-  ("poisonous", "safe to eat"), every word of that group; the opposite group's words (edible for
-  poisonous) are evidence against. A criterion about one material counts another material as
-  evidence against. The graph's ``Synonym`` edges of a one-word criterion add terms.
-* **levels**: statements about the object itself (an exact or singular-form match of its name:
-  its WordNet gloss, ``IsA``, ``HasProperty``, ``MadeOf``, ``UsedFor``, ``CapableOf`` edges; a gloss
-  of a word with several WordNet senses counts half, since the first sense may be another thing:
-  "lime: a caustic substance"), statements about its kinds (``IsA`` ancestors up to three steps,
-  their names and glosses; for a name the graph knows only by its head noun, "wool scarf" -> scarf,
-  the head's statements), and the object's own name ("glass jar" names glass: not a graph signal,
-  so it counts in the no-graph ablation too);
-* **negation**: a term after "not", "no", "non", "without" within three words, or with a negating
-  prefix ("inedible", "nontoxic"), is evidence the other way;
-* **dishes**: for "an ingredient of hollandaise", whether the dish's gloss or ``MadeOf`` edges name
-  the object (or its singular form, its head noun, what a container holds, or one of its ``IsA``
-  parents): "hollandaise: eggs and butter with lemon juice" names the egg, the butter and the
-  lemon; "french toast: bread slice dipped in egg and milk" names the milk carton.
-
-Each feature is 0 (silent), 0.5 (an ambiguous gloss) or 1; the statements that set it are kept for
-the trace.
+The criterion's words (and their ``evidence_terms.json`` group; the opposite group counts against)
+are looked for in statements about the object, its ``IsA`` kinds and its name; a negated term counts
+the other way. Each feature is 0, 0.5 (an ambiguous gloss) or 1, with the statements that set it.
 """
 
 from __future__ import annotations
@@ -51,8 +29,7 @@ PER_LEVEL = 12  # parents followed per step, strongest first
 WINDOW = 3  # words before a term that a negation reaches
 AMBIGUOUS = 0.5  # the weight of a gloss of a word with several WordNet senses
 CONTAINER = "container"  # the graph's kind whose members' names say what they hold ("milk carton")
-# Kinds of container whose names say what they are for, not what they hold ("salad bowl", "coffee
-# mug", "frying pan"): the graph places them under these.
+# Kinds of container whose names say what they are for, not what they hold ("salad bowl").
 TABLEWARE = frozenset({"dish", "crockery", "tableware", "cooking utensil", "kitchen utensil", "drink vessel"})
 _INGREDIENT = re.compile(r"^(?:an?\s+)?ingredients?\s+(?:of|for|in)\s+(?:an?\s+|the\s+)?(.+)$")
 
@@ -74,8 +51,7 @@ FEATURES = (
     "is_food",
     "is_safe",
 )
-#: The features that need no graph (the no-graph ablation keeps these): what the object's name states
-#: (``materials_named`` counts only the name's materials there), and what kind of criterion it is.
+#: The features that need no graph (the no-graph ablation keeps these).
 GRAPH_FREE = (
     "name_yes", "name_no", "is_dish", "is_material", "is_several", "materials_named", "is_poison", "is_food",
     "is_safe",
@@ -157,8 +133,7 @@ def criterion_terms(criterion: str, graph: KnowledgeGraph | None = None) -> Term
         yes += sorted(same - set(yes))
         no += [m for m in sorted(materials | set(families)) if m not in same and forms.get(m, m) not in same]
     if graph is not None and len(rest) == 1 and not grouped:
-        # Synonyms of a word with one WordNet sense only: "glass" has several (a drinking glass,
-        # a mirror, ...), and its synonyms would be evidence about other things.
+        # Synonyms of a word with one WordNet sense only: another sense's synonyms are other things.
         found = graph.edges(rest[0], ["Synonym", "DefinedAs"], 40)
         senses = sum(1 for e in found.edges if e.relation == "DefinedAs" and e.head.lower() == rest[0])
         if found.match in _EXACT and senses == 1:
@@ -175,10 +150,8 @@ def _negated(seq: Sequence[str], at: int) -> bool:
 
 
 def stated(text: str, terms: Terms) -> tuple[bool, bool]:
-    """Whether ``text`` states the criterion (yes) and whether it states the contrary (no).
-
-    A negated term counts the other way ("not edible" is against edible; "non-toxic" against toxic).
-    """
+    """Whether ``text`` states the criterion (yes) and the contrary (no); a negated term ("non-toxic")
+    counts the other way."""
     vocab = terms_vocabulary()
     forms = {**vocab["material_forms"], **vocab["spellings"]}
     seq = [forms.get(w, w) for w in words_of(text)]  # "wooden" states wood
@@ -236,8 +209,7 @@ class GraphEvidence:
 
     def __init__(self, graph: KnowledgeGraph | None) -> None:
         self.graph = graph
-        # The graph does not change while a system lives: its answers are kept per concept, and the
-        # terms per criterion (one criterion is read for every object of a target).
+        # The graph does not change while a system lives: answers are cached per concept and criterion.
         self._edges: dict[str, tuple[str, str | None, tuple[Edge, ...]]] = {}
         self._terms: dict[str, Terms] = {}
 
@@ -344,8 +316,7 @@ class GraphEvidence:
         return Evidence(obj, criterion, features, tuple(statements))
 
     def _materials(self, obj: str, features: dict[str, float], statements: list[str]) -> None:
-        """For "made of several materials": how many materials (0-3) the name and the object's own
-        ``MadeOf`` edges and gloss name ("paper cup MadeOf paper", "a disposable cup ... plastic")."""
+        """For "made of several materials": how many materials (0-3) the name, MadeOf and gloss name."""
         vocab = terms_vocabulary()
         known = set(vocab["materials"]) | set(vocab["material_families"])
         forms = {**vocab["material_forms"], **vocab["spellings"]}
@@ -365,22 +336,13 @@ class GraphEvidence:
         features["materials_named"] = float(min(len(found), 3))
 
     def _holds(self, head: str) -> bool:
-        """Whether a name with this head noun says what it holds: a container (packaging: "carton",
-        "jar", "shaker"), not tableware."""
+        """Whether a name with this head noun says what it holds: a container ("carton"), not tableware."""
         kinds = set(self._ancestors(head))
         return CONTAINER in kinds and not kinds & TABLEWARE
 
     def _dish(self, obj: str, dish: str, note: Any) -> None:
-        """Whether the dish's gloss or ``MadeOf`` edges name the object, its head noun, what it holds
-        or a parent.
-
-        A container's name says what it holds: when the graph places the head noun under
-        "container" ("carton", "shaker", "jar") and not under tableware ("salad bowl", "coffee mug"),
-        the words before it are the contents ("milk carton" -> milk: "french toast: bread slice
-        dipped in egg and milk"). A head noun that is the dish's
-        own kind, after a word that makes it another kind of it, is no ingredient ("soy sauce" for "pesto:
-        a sauce typically served with pasta").
-        """
+        """Whether the dish's gloss or MadeOf edges name the object, its head, its contents ("milk carton"
+        -> milk) or a parent; a sibling of the dish ("soy sauce" for a sauce) is no ingredient."""
         if self.graph is None:
             return
         own, _ = self._own(dish)
@@ -389,12 +351,11 @@ class GraphEvidence:
             return
         name = words_of(obj)
         dish_kinds = set(self._ancestors(dish))
-        # "soy sauce" is a sauce of its own, a sibling of the dish; "bag of potatoes" holds potatoes.
         sibling = len(name) > 1 and name[-2] != "of" and name[-1] in dish_kinds
         names = [tuple(name)] + ([(name[-1],)] if name and not sibling else [])
         if len(name) > 1 and "of" not in name and self._holds(name[-1]):
             names.append(tuple(name[:-1]))
-        # A kind the dish shares says nothing ("salad: food mixtures ..." and "sugar" IsA "food").
+        # A kind the dish shares says nothing ("sugar" IsA "food" for a salad).
         parents = [tuple(words_of(p)) for p in self._ancestors(obj)[:PER_LEVEL] if p not in dish_kinds]
         for edge in stating:
             seq = words_of(edge.tail)

@@ -1,8 +1,6 @@
 """What the graph states for the goal planner's decisions (:class:`FactFinder`): an object's facts
-and its ``IsA`` parents' (the offline graph has "green hellebore IsA hellebore" and "hellebore IsA
-poisonous plant" but never joins them), a description's own words, dishes and the places food is
-made in, surfaces, what things are for. :class:`~conceptbot.pipeline.goal_planner.decide.Decider`
-puts them in its questions.
+and its ``IsA`` parents' (the graph does not join such chains itself), a description's words,
+dishes, the places food is made in, and what things are for.
 """
 
 from __future__ import annotations
@@ -54,12 +52,8 @@ class FactFinder:
     per_context: int = 3
 
     def context(self, what: str, request: str, dish: str | None = None) -> tuple[str, ...]:
-        """Facts about the description's words ("hollandaise means eggs and butter with lemon juice").
-
-        The definition of the ``dish`` to prepare and what it is made of come first: they name the
-        ingredients (WordNet glosses), but the cosine filter ranks "hollandaise means eggs and butter
-        with lemon juice" below "hollandaise is a sauce"; then the kept facts, most similar first.
-        """
+        """Facts about the description's words, most similar first; the ``dish``'s definition first, as it
+        names the ingredients but the cosine filter ranks it low."""
         if self.retriever is None:
             return ()
         found_words = list(dict.fromkeys([*([dish] if dish else []), *content_words(what)]))
@@ -80,8 +74,7 @@ class FactFinder:
         return tuple(dict.fromkeys(edge_text(s.edge) for s in [*defining, *kept]))[: self.per_context]
 
     def is_dish(self, phrase: str) -> bool:
-        """Whether the graph places ``phrase`` (or its singular form) under a prepared food
-        (``dish_classes``), up to three IsA steps; False without a graph."""
+        """Whether the graph places ``phrase`` under a prepared food within three IsA steps."""
         if self.retriever is None:
             return False
         classes = set(words()["dish_classes"])
@@ -92,21 +85,14 @@ class FactFinder:
         return any(f and (f in classes or self._is_a(f, classes)) for f in forms)
 
     def dish_concept(self, phrase: str, pickable: Sequence[str] = ()) -> str | None:
-        """The graph's concept for a dish the request names in its own words ("a hollandaise sauce"
-        -> "hollandaise", "Pancakes" -> "pancake"), or None if the graph places none of it under a
-        prepared food.
-
-        Tried in order: the phrase's singular form, the phrase, its word pairs, then its single words, a
-        word of the scene's objects never ("a tomato and cucumber salad" with a tomato in the scene
-        is a salad: "tomato IsA salad" is in the offline graph) and a bare class word ("sauce")
-        after the others, being the least specific."""
+        """The graph's concept for a dish named in the request's words ("Pancakes" -> "pancake"), or None;
+        single words last (never one of the scene's objects; a bare class word such as "sauce" last)."""
         seq = [w for w in tokens(phrase) if w.isalpha() and w not in _STOP]
         if not seq:
             return None
         classes = set(words()["dish_classes"])
         in_scene = {w for name in pickable for w in tokens(name)}
-        # The singular first: the graph's concept is singular, and a dish's definition is found by
-        # an exact match (``context``).
+        # The singular first: a dish's definition is found by an exact match (``context``).
         candidates = [" ".join([*seq[:-1], singular(seq[-1])]), " ".join(seq)]
         candidates += [f"{a} {b}" for a, b in itertools.pairwise(seq)]
         single = [w for w in seq if w not in in_scene and singular(w) not in in_scene]
@@ -114,9 +100,7 @@ class FactFinder:
         return next((c for c in dict.fromkeys(candidates) if self.is_dish(c)), None)
 
     def may_be_dish(self, phrase: str) -> bool:
-        """Whether a wished-for thing may be a dish to make: the graph places it under a prepared
-        food, or knows none of its words (a "PB&J" is not in the offline graph: the parse decides);
-        a thing the graph knows as something else ("a drink") is not."""
+        """Whether a wished-for thing may be a dish: the graph calls it food or knows none of its words."""
         if self.dish_concept(phrase) is not None:
             return True
         assert self.retriever is not None
@@ -125,9 +109,7 @@ class FactFinder:
         return not any(known)
 
     def prep_places(self, destinations: Sequence[str]) -> list[str]:
-        """The destinations food can be prepared in or on: those the graph places under cookware
-        (``cookware_classes``: "frying pan" IsA pan, "mixing bowl" IsA bowl), by their name or its
-        last word ("ceramic bowl" -> bowl), within two IsA steps. Empty without a graph."""
+        """The destinations the graph places under cookware (by name or last word); empty without a graph."""
         if self.retriever is None:
             return []
         classes = set(words()["cookware_classes"])
@@ -154,8 +136,7 @@ class FactFinder:
         level = [concept]
         seen = set(level)
         for _ in range(depth):
-            # Ordered, strongest edges first: the 12 parents followed are the same on every run (a
-            # set's order depends on the hash seed, and so did which parents were kept).
+            # Ordered, not a set, so that the 12 parents followed are the same on every run.
             parents: dict[str, None] = {}
             for node in level:
                 parents.update(dict.fromkeys(self._parents(node)))
@@ -168,11 +149,8 @@ class FactFinder:
         return False
 
     def uses(self, objects: Sequence[str], need: str) -> dict[str, tuple[float, str]]:
-        """Per object, the highest cosine between ``need`` ("I can't make out this tiny print") and
-        what the graph states the object is for, with that statement: its own ``UsedFor`` and
-        ``CapableOf`` edges and its definition ("blanket UsedFor keep warm", "earplug: a plug ...
-        for protection against ... loud noise"), or its head noun's for a name the graph knows by
-        its head ("wool blanket"). NaN and "" where the graph states none (or without a graph)."""
+        """Per object, the best cosine between ``need`` and what the graph says it is for, and the
+        statement (NaN and "" where none)."""
         if self.retriever is None:
             return {o: (math.nan, "") for o in objects}
         found = self.retriever.retrieve_many(objects, [need])

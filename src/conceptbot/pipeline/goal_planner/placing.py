@@ -1,7 +1,4 @@
-"""What the goal planner adds to the moves it decided (a mixin of
-:class:`~conceptbot.pipeline.goal_planner.planner.GoalPlanner`): things used together with what is
-handed over (:mod:`.companions`) and the order of a pile.
-"""
+"""What the goal planner adds to its moves (a mixin of ``GoalPlanner``): companions and piles."""
 
 from __future__ import annotations
 
@@ -35,8 +32,7 @@ if TYPE_CHECKING:
     from conceptbot.pipeline.goal_planner.planner import Thresholds
 
 BASE = "a sturdy object with a flat top that other things can safely be stacked on"
-#: What goes on top of a pile, whatever its size: the graph states it of many things ("egg
-#: HasProperty fragile", "glass HasProperty breakable"), so the combination weighs that evidence.
+#: What goes on top of a pile, whatever its size (the graph states it of many things).
 FRAGILE = "fragile"
 
 
@@ -55,13 +51,8 @@ class Placing:
         decided: dict[int, list[Judgement]],
         observer: Observer,
     ) -> tuple[dict[int, tuple[str, list[str]]], list[CompanionCheck], Usage]:
-        """Per need target taking one object: its likeliest object (``ranked``, after any answer),
-        and the next candidates that help by the decisions before any answer (``decided``;
-        :func:`companions.candidates`) which the person would use together with it, by the model's
-        answer and the graph's link combined (:mod:`companions`). A which-one answer names the one
-        object; what is used with it is another question, so it is still asked. A question that
-        cannot be answered (an error, NaN) adds nothing: a companion is a convenience, not a
-        safety."""
+        """Per need target taking one object: its likeliest object and the candidates used with it (a
+        failed question adds nothing: a companion is a convenience, not a safety)."""
         spent = Usage(calls=0)
         together: dict[int, tuple[str, list[str]]] = {}
         checks: list[CompanionCheck] = []
@@ -106,12 +97,8 @@ class Placing:
         usage: dict[str, Usage],
         asked: list[str],
     ) -> tuple[list[tuple[str, str]], StackTrace | None]:
-        """Bottom-up moves for a pile of the objects that can both be moved and carry another, and
-        the pile's order for the trace (None when there is nothing to pile).
-
-        Fragile things go on top (the model's answer combined with what the graph states); below
-        them the larger footprint lower down where the scene gives sizes, then the better base by
-        the model's judgement."""
+        """Bottom-up moves for a pile (fragile on top, then larger footprint and better base lower), and
+        its order for the trace (None when there is nothing to pile)."""
         named = [o for _, o in mentions(request, scene.pickable)]
         stackable = [o for o in scene.pickable if scene.get(o).destination]  # type: ignore[union-attr]
         items = [o for o in named if o in stackable]

@@ -1,31 +1,7 @@
-"""The goal planner: where the request sends things, which objects go, then the plan.
-
-1. Targets (:mod:`conceptbot.pipeline.goal_planner.targets`): the destinations the request sends
-   things to, how many objects each takes, and the objects the request names for each, from the
-   request's words (scored questions only where it names no destination).
-2. Decisions (:mod:`conceptbot.pipeline.goal_planner.decide`): where a target needs more objects than the
-   request names, the other objects are decided. A target taking one or a few objects (a need,
-   "something to write with") ranks every candidate at once (:mod:`.choice`: the name ranking,
-   the embedder and the graph's statement of use, fitted) and takes the best N above
-   ``one_floor``; one taking all that fit a criterion asks one yes/no question per object ("is
-   the foxglove poisonous?"), combined with the graph's evidence, and takes every object above
-   ``fit``; any other asks "to do what the person asked, should the robot give the sponge to the
-   user?" per object, calibrated against a content-free object. An object two targets want goes
-   where it scored best.
-3. Stacking orders the objects by how good a base each makes (a decision too) and puts each on the
-   one below.
-4. Constraints: each move's affordance (detection confidence) and a risk decision. A move is
-   dropped only for a reason the trace names: a veto (below), or OPE's Risk Index (the paper's 1-5
-   ratings) rating the object 4/5 or more with the destination, or for a child or an animal the
-   object itself. The calibrated question "is it safe to give the scissors to the child?" decides
-   which moves OPE is asked about (besides every hand-over to a child or an animal), not whether a
-   move is dropped: alone it flagged harmless hand-overs (crayons for a toddler). A dropped move's
-   target takes its next best object; when every move is dropped the plan is a refusal. Before
-   any score, a move whose evidence names a hazard for its recipient is vetoed
-   (:mod:`conceptbot.pipeline.hazards`), and a risk decision that cannot be made (a backend error,
-   a non-finite score) drops the move: safety fails closed.
-
-The paper's step-by-step planner stays available (:mod:`conceptbot.pipeline.steps.planner`).
+"""The goal planner: targets (:mod:`.targets`), then which objects go (:mod:`.decide`, :mod:`.choice`),
+then each move's affordance and risk (:mod:`.risk`), then the plan. A move is dropped only for a reason
+the trace names, and its target takes its next best; a risk decision that cannot be made drops the
+move (safety fails closed). Threshold values: see docs/planning.md.
 """
 
 from __future__ import annotations
@@ -52,6 +28,7 @@ from conceptbot.core.trace import (
 from conceptbot.core.usage import Usage
 from conceptbot.pipeline.affordance import Gripper, affordance
 from conceptbot.pipeline.goal_planner.asking import (
+    Clarified,
     clarify,
     move_words,
     reading_options,
@@ -67,7 +44,7 @@ from conceptbot.pipeline.goal_planner.conformal import Calibration, shipped
 from conceptbot.pipeline.goal_planner.decide import Decider, Judgement
 from conceptbot.pipeline.goal_planner.placing import Placing
 from conceptbot.pipeline.goal_planner.risk import RiskChecks
-from conceptbot.pipeline.goal_planner.targets import ALL, Target, TargetsRead
+from conceptbot.pipeline.goal_planner.targets import ALL, ReadingDoubt, Target, TargetsRead
 from conceptbot.pipeline.hazards import HazardCheck
 from conceptbot.pipeline.ope import ObjectProperties, ObjectPropertiesExtractor
 from conceptbot.pipeline.tracing import judgement_trace, target_trace
@@ -94,37 +71,15 @@ class Thresholds:
     Attributes:
         fit: An object goes to an "all that fit" target above this.
         one_floor: A target taking N objects takes its best ones only above this.
-        risk: A move to a person or an animal is unsafe when its calibrated "is it safe?" score is
-            above this.
-        risk_place: The same for a move into or onto a thing: higher, since on the dev split the
-            question flagged ordinary moves ("put the apricot in the kitchen basket": +0.8) far more
-            often there than for hand-overs.
-        rated_danger: OPE's Risk Index rating (1-5) that names a danger: of the object with the
-            destination, for any move; of the object itself, for a child or an animal.
+        risk: A move to a person or an animal is unsafe when its "is it safe?" score is above this.
+        risk_place: The same for a move into or onto a thing (higher: the question over-flags there).
+        rated_danger: OPE's Risk Index rating (1-5) that names a danger.
         replacements: How many objects a target may take in place of ones judged unsafe.
-        ingredients: A dish's ingredients are the objects within this of the best-scored one
-            ("is the kiwi an ingredient of fruit salad?": every answer leans towards No, so a
-            fixed threshold fails, but the ranking is good; 0.6-0.7 on the dev split).
-        one_sharpness: The scale of the which-one softmax (``p_one``) of a ranking that gives no
-            probability of its own: the ranking is unchanged, the shares sharper. Over the 47 dev
-            which-one decisions the mean log-likelihood of drawing an object the gold accepts was
-            -0.345 at 1, -0.335 at 1.5 (the best), -0.372 at 2, -0.616 at 4
-            (``benchmarks/bench_one_sharpness.py``); sharper would claim more than the rankings
-            know.
-        combined: A target that takes every object fitting a criterion, or a dish's ingredients
-            (in a sort, the target an object fits best), takes an object whose combined score
-            (:mod:`conceptbot.pipeline.goal_planner.combine`: a fitted log-odds, so 0 is P = 0.5)
-            is above this; ``fit`` and ``ingredients`` apply where the score is the model's alone.
-        unsafe_vulnerable: A hand-over to a child or an animal is dropped when the plain safety
-            question (:meth:`Decider.unsafe`, "is it safe to give the dog the chocolate bar?")
-            scores it above this, whatever OPE rates (on the labelled risk set,
-            ``benchmarks/data/risk_set.jsonl``, 35 of 40 dangerous hand-overs to children and
-            animals are above it and 2 of 40 safe ones; ``docs/asking.md``).
-        holder: A hand-over to the user is checked as one to a child when "is the robot asked to
-            hand something to a child or an animal?" scores the request above this (log-odds
-            against a hand-over to the speaker): on the 96 labelled requests of
-            ``benchmarks/bench_holder.py`` (AUC 0.97) 93 are right at 0.2, 92 at thresholds chosen
-            leave-one-out.
+        ingredients: A dish's ingredients are the objects within this of the best (answers lean No).
+        one_sharpness: The scale of the which-one softmax of a ranking that gives no probability.
+        combined: The threshold on a combined (fitted log-odds) score; 0 is P = 0.5.
+        unsafe_vulnerable: A hand-over to the vulnerable is dropped when :meth:`Decider.unsafe` is above this.
+        holder: A hand-over to the user is checked as one to a child when :meth:`Decider.holder` is above.
     """
 
     fit: float = -0.5
@@ -142,11 +97,7 @@ class Thresholds:
 
 @dataclass
 class GoalPlanResult:
-    """What the goal planner produced, for :class:`~conceptbot.core.plan.Plan` and the trace.
-
-    ``trace`` holds the goal planner's parts (``goal``, ``decisions``, ``stack``, ``risk``); the
-    system that ran it adds the rest (:class:`~conceptbot.pipeline.conceptbot.ConceptBot`).
-    """
+    """What the goal planner produced, for :class:`~conceptbot.core.plan.Plan` and the trace (its parts)."""
 
     actions: list[Action]
     steps: list[Step]
@@ -165,8 +116,7 @@ def _times(confidence: float | None, meant: float | None) -> float | None:
 
 
 def _softmax(judgements: list[Judgement], order: dict[str, float]) -> list[float]:
-    """P(each judgement's object is the one) from the ranking's values; NaN throughout where a
-    value is not finite (the choice cannot be made: asking.py asks)."""
+    """P(each judgement's object is the one) from the ranking; NaN throughout where one is not finite."""
     values = [order[j.subject] for j in judgements]
     if not all(math.isfinite(v) for v in values):
         return [math.nan] * len(values)
@@ -183,25 +133,64 @@ def _why(check: RiskCheck) -> str:
     return f"{check.move}: {check.why}" + (f", {check.reason}" if check.reason else "")
 
 
+@dataclass(frozen=True)
+class _Chosen:
+    """What the moves are chosen from: the targets, their ranked objects, what goes together with a
+    need's object, whether they make a pile (its moves are fixed) and who holds each hand-over."""
+
+    targets: list[Target]
+    ranked: dict[int, list[Judgement]]
+    together: dict[int, tuple[str, list[str]]]
+    pile: bool
+    holders: dict[str, str]
+
+
+def _goal_trace(read: TargetsRead, doubt: ReadingDoubt | None) -> GoalTrace:
+    """The goal as read, for the trace: the targets, the plain form and the reading in doubt."""
+    return GoalTrace(
+        tuple(target_trace(t) for t in read.targets),
+        read.stack,
+        read.plain,
+        read.reading,
+        read.other,
+        doubt.step if doubt else "",
+        reading_options(doubt) if doubt else (),
+        doubt.preference if doubt else None,
+    )
+
+
+def _candidates(
+    moves: list[tuple[str, str]], targets: list[Target], ranked: dict[int, list[Judgement]]
+) -> dict[tuple[str, str], list[Judgement]]:
+    """Each move's candidates, for the steps: those of the target that took it (two targets may
+    share a place)."""
+    return {
+        (obj, place): next(
+            (
+                ranked[number]
+                for number, target in enumerate(targets)
+                if target.name == place and any(j.subject == obj for j in ranked.get(number, []))
+            ),
+            [],
+        )
+        for obj, place in moves
+    }
+
+
 class GoalPlanner(RiskChecks, Placing):
     """Targets -> decisions -> plan (see the module docstring).
 
     Args:
-        targets: Reads whether the request asks for a pile, and its targets, counts and named
-            objects (:class:`~conceptbot.pipeline.goal.GoalFinder`).
+        targets: Reads the request's targets, or that it asks for a pile.
         decider: Yes/no decisions.
         ope: OPE for the objects a plan moves (evidence for the risk decisions), or None.
         thresholds: Decision thresholds.
         gripper: For the affordance.
-        hazards: Vetoes moves whose evidence names a hazard for the recipient (default: OPE's
-            ratings only, no graph).
-        calibration: The conformal thresholds of the calibrated decisions (default: the shipped
-            ones, :func:`~conceptbot.pipeline.goal_planner.conformal.shipped`).
-        coverage: How often a decision's prediction set must hold the right answer; a set with both
-            answers is a question (:mod:`~conceptbot.pipeline.goal_planner.asking`).
+        hazards: Vetoes moves whose evidence names a hazard for the recipient.
+        calibration: The conformal thresholds (default: the shipped ones).
+        coverage: How often a decision's prediction set must hold the right answer.
         companions: The fitted weights of things used together (default: the shipped ones).
-        chooser: Ranks the candidates of a target taking one or a few objects (default: the
-            shipped weights, the graph's embedder where there is a graph).
+        chooser: Ranks the candidates of a target taking one or a few objects.
     """
 
     def __init__(
@@ -225,7 +214,7 @@ class GoalPlanner(RiskChecks, Placing):
         self.coverage = coverage
         self.gripper = gripper or Gripper()
         self.hazards = hazards if hazards is not None else HazardCheck()
-        # Things used together (companions.py): the no-graph ablation has its own, model-only fit.
+        # The no-graph ablation has its own, model-only companion fit.
         graph = decider.facts.retriever is not None
         self.companions = companions if companions is not None else shipped_weights(graph)
         retriever = decider.facts.retriever
@@ -240,38 +229,17 @@ class GoalPlanner(RiskChecks, Placing):
         observer: Observer = SILENT,
         ask: Ask | None = None,
     ) -> GoalPlanResult:
-        """Plan ``request`` in ``scene``.
-
-        Objects handed to a child or an animal, and moves the risk question flags, are rated with
-        OPE's Risk Index before they are kept; with ``risk`` every move is (``conceptbot plan
-        --risk``), so a move OPE rates dangerous with its destination is dropped even where the
-        question did not flag it. Each rating is a JSON generation of several seconds.
-
-        ``observer`` gets a progress message as each piece of work starts and the events ``goal``,
-        ``decisions``, ``risk`` and one ``step`` per move, in that order, as each part is done."""
+        """Plan ``request`` in ``scene``; with ``risk`` OPE rates every move, not only flagged ones and
+        hand-overs to the vulnerable. ``observer`` gets the events goal, decisions, risk, step."""
         usage: dict[str, Usage] = {}
         observer.progress("Goal: where the request sends things")
-        # A pile has no destination of its own (the objects are the destinations): no targets.
         read = self.targets.read(request, scene)
-        # The reading questions take their own threshold where the calibration has one (fitted on
-        # held-out paraphrases labelled by their plans: on the dev tasks' own requests, which the
-        # reading rules were built on, the dropped reading is never the one meant), else the one
-        # plan-level threshold.
         qhat = self.calibration.threshold_reading(self.coverage)
         doubt = read.doubt
         # Where the request reads two ways, which was meant comes first: it changes the targets.
         read, about_reading, meant = self._reading(read, qhat, ask)
         stack, targets, usage["goal"] = read.stack, read.targets, read.usage
-        goal = GoalTrace(
-            tuple(target_trace(t) for t in targets),
-            stack,
-            read.plain,
-            read.reading,
-            read.other,
-            doubt.step if doubt else "",
-            reading_options(doubt) if doubt else (),
-            doubt.preference if doubt else None,
-        )
+        goal = _goal_trace(read, doubt)
         observer.event("goal", goal)
         if meant is None:
             # The person meant neither reading: nothing is decided or moved (fail closed).
@@ -279,53 +247,110 @@ class GoalPlanner(RiskChecks, Placing):
             why = "the person meant neither reading of the request; say it another way"
             return GoalPlanResult([Done()], [], True, why, trace, usage, {}, about_reading, None)
         ranked, decisions, usage["decide"] = self._decide(request, scene, targets, stack, observer)
-        # How the backend scored this plan's questions, for the steps: kept per plan (the planner
-        # object is shared between threads), the last question's method as before.
+        # How the backend scored this plan's questions, kept per plan (the planner is shared by threads).
         asked = [j.scoring for js in ranked.values() for j in js if j.scoring]
-        # Where a calibrated decision is unsure, a question (asked if someone answers): asking.py.
         decided = ranked  # before any answer: the companions' candidates keep their own scores
         # A which-one question never offers what the veto would not let the recipient have.
         holders, held = self._holders(request, targets)
         ranked = self._unvetoed(targets, ranked, holders)
-        clarified = clarify(
-            targets,
-            ranked,
-            decisions,
-            self.calibration.threshold_yes_no(self.coverage),
-            ask,
-            self.calibration.which_one,
-            self.calibration.rule,
-            self.calibration.threshold_one(self.coverage),
-        )
+        clarified = self._clarify(targets, ranked, decisions, ask)
         ranked, decisions = clarified.ranked, clarified.decisions
         observer.event("decisions", DecisionsEvent(tuple(decisions)))
         pile: StackTrace | None = None
+        moves: list[tuple[str, str]] = []
         if stack:
             moves, pile = self._stack(request, scene, usage, asked)
             ranked = {}
-        # What a need's object is used together with goes too ("the toothpaste with the toothbrush").
         together: dict[int, tuple[str, list[str]]] = {}
         found: list[CompanionCheck] = []
         if not stack:
             together, found, spent = self._companions(request, targets, ranked, decided, observer)
             if found:  # only where something was asked: the usage keys are a contract
                 usage["companions"] = spent
+        usage["ope"] = Usage(calls=0)
+        usage["risk"] = held
+        chosen = _Chosen(targets, ranked, together, stack, holders)
+        moves, checks, blocked, properties = self._checked(
+            request, scene, chosen, moves, risk, usage, observer, asked
+        )
+        risk = tuple(checks.values())
+        vetoes = tuple(c.veto for c in risk if c.veto is not None)
+        companions = tuple(replace(c, used=(c.object, c.place) in moves) for c in found) or None
+        observer.event("risk", RiskEvent(risk))
+        candidates = _candidates(moves, targets, ranked)
+        # Where the confidence is lost: each target's share, from the final moves.
+        factors = clarified.factors(moves)
+        decisions = [
+            replace(d, confidence=round(factors[n], 4)) if n in factors else d
+            for n, d in enumerate(decisions)
+        ]
+        confidence = clarified.confidence(moves)
+        steps = self._steps(moves, candidates, scene, properties, asked[-1] if asked else "")
+        for step in steps:
+            observer.event("step", step)
+        refused = not moves and bool(blocked)
+        reason = "; ".join(_why(c) for c in risk if c.dropped) if refused else None
+        actions: list[Action] = [*(PickAndPlace(o, t) for o, t in moves), Done()]
+        trace = PlanTrace(goal=goal, decisions=tuple(decisions), stack=pile, risk=risk, vetoes=vetoes or None)
+        trace = replace(trace, companions=companions)
+        questions = (*about_reading, *clarified.questions)
+        # The confidence of the final moves, times the odds that the reading acted on is the one meant.
+        return GoalPlanResult(
+            actions, steps, refused, reason, trace, usage, properties, questions, _times(confidence, meant)
+        )
+
+    def _clarify(
+        self,
+        targets: list[Target],
+        ranked: dict[int, list[Judgement]],
+        decisions: list[DecisionTrace],
+        ask: Ask | None,
+    ) -> Clarified:
+        """Where a calibrated decision is unsure, its question (asked where someone answers)."""
+        calibration = self.calibration
+        return clarify(
+            targets,
+            ranked,
+            decisions,
+            calibration.threshold_yes_no(self.coverage),
+            ask,
+            calibration.which_one,
+            calibration.rule,
+            calibration.threshold_one(self.coverage),
+        )
+
+    def _checked(
+        self,
+        request: str,
+        scene: Scene,
+        chosen: _Chosen,
+        pile: list[tuple[str, str]],
+        risk: bool,
+        usage: dict[str, Usage],
+        observer: Observer,
+        asked: list[str],
+    ) -> tuple[
+        list[tuple[str, str]],
+        dict[tuple[str, str], RiskCheck],
+        set[tuple[str, str]],
+        dict[str, ObjectProperties],
+    ]:
+        """Choose the moves, check the new ones, choose again where a check removed one (each round
+        blocks at least one more move, so this ends): the moves, every check, the blocked moves and
+        OPE's properties. A pile's moves (``pile``) keep their order and only lose moves."""
         blocked: set[tuple[str, str]] = set()
         checks: dict[tuple[str, str], RiskCheck] = {}
         properties: dict[str, ObjectProperties] = {}
-        usage["ope"] = Usage(calls=0)
-        usage["risk"] = held
-        # Choose, check the new moves, choose again where a check removed one; each round blocks at
-        # least one more move, so this ends.
+        moves = pile
         while True:
-            if not stack:
-                moves = self._choose(targets, ranked, blocked, scene.pickable, together)
+            if not chosen.pile:
+                moves = self._choose(chosen.targets, chosen.ranked, blocked, scene.pickable, chosen.together)
             fresh = [m for m in moves if m not in checks]
             if not fresh:
                 break
-            # Objects handed to a child or an animal are rated first (the veto reads the ratings);
-            # others only when the risk question flags their move (see _check): each rating is a
-            # JSON generation of several seconds.
+            # Hand-overs to a child or an animal are rated first (the veto reads the ratings);
+            # others only when the risk question flags them, as each rating is slow.
+            holders = chosen.holders
             handed = [o for o, t in fresh if risk or self.hazards.is_vulnerable(holders.get(t, t))]
             self._properties(request, scene, handed, properties, usage, observer, tuple(t for _, t in fresh))
             for obj, target in fresh:
@@ -336,65 +361,15 @@ class GoalPlanner(RiskChecks, Placing):
             if not dropped:
                 break
             blocked |= dropped
-            if stack:
+            if chosen.pile:
                 moves = [m for m in moves if m not in dropped]
-        risk = tuple(checks.values())
-        vetoes = tuple(c.veto for c in risk if c.veto is not None)
-        companions = tuple(replace(c, used=(c.object, c.place) in moves) for c in found) or None
-        observer.event("risk", RiskEvent(risk))
-        # Each move's candidates, for the steps: those of the target that took it (two targets may
-        # share a place: "bring me the chips and something to wipe a spill" are both the user's).
-        candidates: dict[tuple[str, str], list[Judgement]] = {}
-        for obj, place in moves:
-            candidates[(obj, place)] = next(
-                (
-                    ranked[number]
-                    for number, target in enumerate(targets)
-                    if target.name == place and any(j.subject == obj for j in ranked.get(number, []))
-                ),
-                [],
-            )
-        # Where the confidence is lost: each target's share, from the final moves (asking.py).
-        factors = clarified.factors(moves)
-        decisions = tuple(
-            replace(d, confidence=round(factors[n], 4)) if n in factors else d
-            for n, d in enumerate(decisions)
-        )
-        confidence = clarified.confidence(moves)
-        steps = self._steps(moves, candidates, scene, properties, asked[-1] if asked else "")
-        for step in steps:
-            observer.event("step", step)
-        refused = not moves and bool(blocked)
-        reason = "; ".join(_why(c) for c in risk if c.dropped) if refused else None
-        actions: list[Action] = [*(PickAndPlace(o, t) for o, t in moves), Done()]
-        trace = PlanTrace(
-            goal=goal,
-            decisions=decisions,
-            stack=pile,
-            companions=companions,
-            risk=risk,
-            vetoes=vetoes or None,
-        )
-        return GoalPlanResult(
-            actions,
-            steps,
-            refused,
-            reason,
-            trace,
-            usage,
-            properties,
-            (*about_reading, *clarified.questions),
-            # From the final moves: what the plan does after the risk checks (asking.py), and the
-            # odds that the reading acted on is the one meant (1 once the person said so).
-            _times(confidence, meant),
-        )
+        return moves, checks, blocked, properties
 
     def _reading(
         self, read: TargetsRead, qhat: float, ask: Ask | None
     ) -> tuple[TargetsRead, tuple[ClarifyingQuestion, ...], float | None]:
-        """The reading to plan, the question about it (none, or one), and the probability that it
-        is the one meant (None: the person meant neither). Asked only where the calibration holds
-        for more than yes/no decisions (a plan-level one): the decision level's does not cover it."""
+        """The reading to plan, the question about it (only with a plan-level calibration), and P(it is
+        meant) (None: neither was)."""
         doubt = read.doubt
         question = reading_question(doubt, qhat) if doubt and self.calibration.which_one else None
         if question is None:
@@ -413,8 +388,7 @@ class GoalPlanner(RiskChecks, Placing):
     def _decide(
         self, request: str, scene: Scene, targets: list[Target], stack: bool, observer: Observer
     ) -> tuple[dict[int, list[Judgement]], tuple[DecisionTrace, ...], Usage]:
-        """Per target (by its position: two may share a place): the named objects first, then every
-        other object as decided, best first."""
+        """Per target position: the named objects first, then every other object as decided, best first."""
         usage = Usage(calls=0)
         ranked: dict[int, list[Judgement]] = {}
         decisions = []
@@ -429,16 +403,13 @@ class GoalPlanner(RiskChecks, Placing):
             others = [o for o in scene.pickable if o != target.name and o not in named_anywhere]
             observer.progress(f"Decide: which objects go to the {target.name} ({len(others)} objects)")
             if target.criterion:
-                # Sorting by a property: "is the foxglove poisonous?" is a question the model answers
-                # far better than "should the robot put the foxglove on the toxic tray?".
+                # "Is the foxglove poisonous?" is answered far better than the move question.
                 judgements, context, used = self.decider.fits(
                     request, target.criterion, others, scene, dish=target.dish, said=target.dish_said
                 )
             elif target.count != ALL and len(others) > 1:
-                # One or a few objects (a need, "something to write with", "a fruit"): one ranking
-                # of every candidate (choice.py). One of two or more needs is ranked on its own
-                # words: with the whole request, the other need swayed it towards its own objects.
-                pick = move_words(target.name, part=target.part)  # without the object: "give to ..."
+                # One of several needs is ranked on its own words, so the other does not sway it.
+                pick = move_words(target.name, part=target.part)
                 judgements, used = self.chooser.rank(target.need or request, pick, others)
                 context = ()
             else:
@@ -447,9 +418,7 @@ class GoalPlanner(RiskChecks, Placing):
             usage = usage + used
             order = {j.subject: j.score for j in judgements}
             if target.count == 1 and len(others) > 1 and judgements[0].p_one is None:
-                # Which one, where the choice gave no probability: the ranking as a distribution
-                # over the candidates, for the conformal set of which one (asking.py), sharpened
-                # by ``one_sharpness`` (the ranking unchanged).
+                # No probability from the choice: a sharpened softmax of the ranking, for asking.
                 sharp = self.thresholds.one_sharpness
                 chances = _softmax(judgements, {o: sharp * v for o, v in order.items()})
                 judgements = [replace(j, p_one=p) for j, p in zip(judgements, chances, strict=True)]
@@ -475,15 +444,10 @@ class GoalPlanner(RiskChecks, Placing):
         pickable: list[str],
         together: dict[int, tuple[str, list[str]]] | None = None,
     ) -> list[tuple[str, str]]:
-        """The moves: each target's best objects (its count), an object to the target it fits best;
-        a need's target also takes what its object is used together with (``together``: per
-        target, the object asked about and its companions), where it took that object; then a
-        target that takes the rest takes every pickable object left."""
+        """The moves: each target's best objects (and companions), each object to the target it fits
+        best; then a target taking the rest takes every pickable object left."""
         wanted: dict[str, tuple[str, float]] = {}  # object -> (target, score)
-        # A sort (two or more targets each taking all that fit): an object goes to the target it fits
-        # best, where that fit is above the same threshold as for one target; at -5 as before, a
-        # sort's every object went somewhere (blind set 1: 27 of 61 objects right in its
-        # two-place sorts, 52 of 61 at 0; docs/notes/2026-12-06-sorts-and-hand-overs.md).
+        # In a sort, an object goes to the target it fits best, above the same threshold as for one.
         for number, target in enumerate(targets):
             if target.rest:
                 continue
@@ -534,8 +498,7 @@ class GoalPlanner(RiskChecks, Placing):
         properties: dict[str, ObjectProperties],
         scoring: str,
     ) -> list[Step]:
-        """One step per move; its candidates are the best objects of the target that took it (for the
-        CLI and the page); ``scoring`` is how the backend scored the plan's questions."""
+        """One step per move, with the best objects of the target that took it as its candidates."""
         steps = []
         for number, (obj, target) in enumerate(moves, 1):
             chosen = str(PickAndPlace(obj, target))

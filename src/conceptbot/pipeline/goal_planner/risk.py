@@ -1,13 +1,11 @@
-"""The goal planner's risk checks of each move (a mixin of
-:class:`~conceptbot.pipeline.goal_planner.planner.GoalPlanner`): vetoes from the evidence, OPE's
-Risk Index where a move is handed to a child or an animal or the risk question flags it, the plain
-safety question for hand-overs to the vulnerable, and failing closed where a decision cannot be
-made (see the planner's module docstring, point 4).
+"""The goal planner's risk checks of each move (a mixin of ``GoalPlanner``): vetoes, OPE's Risk
+Index, the plain safety question for hand-overs to the vulnerable, and failing closed.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
@@ -63,10 +61,24 @@ def _plainly(judgement: Judgement, limit: float) -> str:
 
 
 def _evidence(props: ObjectProperties, target: str) -> str:
-    """OPE's finding about an object, as evidence for one move: in the Risk Index mode its danger
-    and its interaction score with the move's destination only (the other partners are noise for
-    this question)."""
+    """OPE's finding about an object as evidence for one move (its danger with that destination only)."""
     return props.answer.move_summary(props.name, target)
+
+
+def _answer(
+    question: Callable[[], tuple[Judgement, Usage]], usage: dict[str, Usage], asked: list[str]
+) -> Judgement | str:
+    """A risk question's judgement, or why it could not be made (a backend error, a non-finite
+    score): the caller then drops the move (safety fails closed)."""
+    try:
+        judgement, used = question()
+    except UNANSWERED as exc:
+        return exc.message
+    usage["risk"] = usage["risk"] + used
+    asked.append(judgement.scoring)
+    if not (math.isfinite(judgement.score) and math.isfinite(judgement.p_yes)):
+        return "the backend gave a non-finite score"
+    return judgement
 
 
 class RiskChecks:
@@ -79,10 +91,7 @@ class RiskChecks:
     hazards: HazardCheck
 
     def _holders(self, request: str, targets: list[Target]) -> tuple[dict[str, str], Usage]:
-        """Who holds what goes to a person that is not a child by name (the user): a child, where
-        the request says so ("My four-year-old wants to help: hand him the craft knife"), so that
-        the hand-over is checked as one to a child. One question per plan, only where such a
-        person is a target; a question that cannot be answered counts as a child (fails closed)."""
+        """Who holds what goes to the user: a child where the request says so (or the question fails)."""
         hazards = self.hazards
         people = [t.name for t in targets if hazards.is_person(t.name) and not hazards.is_vulnerable(t.name)]
         if not people:
@@ -104,10 +113,8 @@ class RiskChecks:
         observer: Observer,
         extra: tuple[str, ...] = (),
     ) -> None:
-        """OPE's Risk Index of each of ``objects`` not rated yet, rated with the scene's places and
-        people and ``extra`` (the only partners a veto reads: with every object of a 20-object
-        room, each rating was a generation of 300 tokens). An object whose rating fails stays
-        unrated, and its move is vetoed where it is checked (:meth:`_check`)."""
+        """OPE's Risk Index of each of ``objects`` not rated yet, with only the partners a veto reads (each
+        rating is slow); an object whose rating fails stays unrated, and its move is vetoed."""
         wanted = [o for o in dict.fromkeys(objects) if o not in properties]
         if self.ope is None or not wanted:
             return
@@ -134,14 +141,8 @@ class RiskChecks:
         rate: bool = False,
         who: str | None = None,
     ) -> RiskCheck:
-        """The risk decision and the affordance of one move (``rate``: OPE's Risk Index is asked for
-        it whatever the risk question says; ``who``: who holds it, where not ``target`` itself
-        (:meth:`_holders`), for every check).
-
-        A veto (:mod:`conceptbot.pipeline.hazards`) drops the move before the model is asked; a
-        decision the backend cannot make (an error, a non-finite score) drops it too, and so does a
-        score that compares with nothing (NaN): the move is kept only when its score is known and at
-        or below the threshold."""
+        """The risk decision and the affordance of one move (``rate``: always ask OPE; ``who``: holder);
+        kept only when its score is known and at or below the threshold (fails closed)."""
         who = who or target
         move = move_words(who, obj)
         s_aff, factors = affordance(PickAndPlace(obj, target), scene, properties, [], self.gripper)
@@ -153,35 +154,23 @@ class RiskChecks:
             observer.progress(f"Risk: {move}: vetoed ({veto.statement})")
             return _vetoed(veto, move, ope, s_aff)
         observer.progress(f"Risk: is it safe to {move}?")
-        try:
-            judgement, used = self.decider.dangerous(request, move, obj, scene, ())
-        except UNANSWERED as exc:
-            return _vetoed(_failed(obj, target, exc.message), move, ope, s_aff)
-        usage["risk"] = usage["risk"] + used
-        asked.append(judgement.scoring)
-        if not (math.isfinite(judgement.score) and math.isfinite(judgement.p_yes)):
-            return _vetoed(_failed(obj, target, "the backend gave a non-finite score"), move, ope, s_aff)
+        judgement = _answer(lambda: self.decider.dangerous(request, move, obj, scene, ()), usage, asked)
+        if isinstance(judgement, str):
+            return _vetoed(_failed(obj, target, judgement), move, ope, s_aff)
         limit = self.thresholds.risk if self.hazards.is_person(who) else self.thresholds.risk_place
         flagged = judgement.score > limit
         reason = None
         if flagged or rate or self.hazards.is_vulnerable(who):
-            # A flag from the question alone is no reason to drop a move ("give the crayons to the
-            # toddler" was flagged on dev): OPE's Risk Index of the object is asked, and the move is
-            # dropped for what it names, which the trace shows.
+            # A flag alone drops nothing (it flags harmless moves): OPE is asked, and names the reason.
             self._properties(request, scene, [obj], properties, usage, observer, (target,))
             if self.ope is not None and obj not in properties:
                 return _vetoed(_failed(obj, target, "OPE could not rate it"), move, ope, s_aff)
             reason = self._reason(obj, target, properties, flagged, who)
         if reason is None and self.hazards.is_vulnerable(who):
             # Asked without the request, which sways the small model towards what was asked.
-            try:
-                plain, used = self.decider.unsafe(who, obj)
-            except UNANSWERED as exc:
-                return _vetoed(_failed(obj, target, exc.message), move, ope, s_aff)
-            usage["risk"] = usage["risk"] + used
-            asked.append(plain.scoring)
-            if not (math.isfinite(plain.score) and math.isfinite(plain.p_yes)):
-                return _vetoed(_failed(obj, target, "the backend gave a non-finite score"), move, ope, s_aff)
+            plain = _answer(lambda: self.decider.unsafe(who, obj), usage, asked)
+            if isinstance(plain, str):
+                return _vetoed(_failed(obj, target, plain), move, ope, s_aff)
             if plain.score > self.thresholds.unsafe_vulnerable:
                 reason = _plainly(plain, self.thresholds.unsafe_vulnerable)
         dangerous = reason is not None
@@ -203,9 +192,7 @@ class RiskChecks:
     def _unvetoed(
         self, targets: list[Target], ranked: dict[int, list[Judgement]], holders: dict[str, str]
     ) -> dict[int, list[Judgement]]:
-        """Each target's ranking less the candidates of a which-one decision that the veto drops
-        for that recipient (by the graph's statements: OPE has rated nothing yet); named objects
-        stay, so that their veto is traced where the move is checked."""
+        """Each target's ranking less the which-one candidates the veto drops (named ones stay, traced)."""
         out = dict(ranked)
         for number, judgements in ranked.items():
             to = holders.get(targets[number].name, targets[number].name)
@@ -218,12 +205,8 @@ class RiskChecks:
     def _reason(
         self, obj: str, target: str, properties: dict[str, ObjectProperties], flagged: bool, who: str = ""
     ) -> str | None:
-        """Why a move is dangerous, in OPE's words, or None when nothing names a danger.
-
-        OPE's rating of the object with the destination at ``rated_danger`` or above names a danger
-        for any move; the object's own danger rating does for a hand-over to a child or an animal.
-        Without OPE (an ablation) a flag from the risk question is the reason: the move cannot be
-        cleared, so it is dropped."""
+        """Why a move is dangerous, in OPE's words (a rating at ``rated_danger`` or above), or None;
+        without OPE a flag from the risk question is the reason."""
         found = properties.get(obj)
         if found is None:
             return "the risk question flagged it (no OPE rating to check it)" if flagged else None

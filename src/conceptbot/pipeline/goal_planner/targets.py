@@ -1,13 +1,6 @@
 """The goal planner's targets (:class:`Target`, :class:`TargetsRead`) and the scored questions that
-choose a place the request leaves open (:class:`TargetFinder`).
-
-The targets are read by :class:`~conceptbot.pipeline.goal.GoalFinder` from the request's parse.
-Where the request names no place, each destination is asked "should the robot put things in the
-X?" against a content-free request, never by free generation: a 1.5B model asked to write the goal
-as JSON listed the scene's destinations and objects instead of the request's
-(docs/notes/2026-11-30-planner-redesign.md). The word-rule reader that came before the parse
-(``TargetFinder.find``) was removed on 2026-12-06: it lost to the goal reader on every goal-set
-batch (docs/planning.md, "Reading the goal").
+choose a place the request leaves open (:class:`TargetFinder`), never free generation (a small model
+writing the goal lists the scene instead of the request).
 """
 
 from __future__ import annotations
@@ -49,11 +42,8 @@ def _find(seq: list[str], key: list[str], used: list[bool]) -> int:
 
 
 def mentions(text: str, names: Sequence[str]) -> list[tuple[int, str]]:
-    """``(token position, name)`` for each name the text mentions, in text order.
-
-    Names match as whole words, longest first, each word used once ("non-toxic container" before
-    "toxic container"); a name's plural head noun counts ("bins" for "glass bin").
-    """
+    """``(token position, name)`` for each name the text mentions, in text order (whole words, longest
+    first, each word once; a plural head noun counts)."""
     seq = tokens(text)
     used = [False] * len(seq)
     found: dict[str, int] = {}
@@ -71,8 +61,7 @@ def mentions(text: str, names: Sequence[str]) -> list[tuple[int, str]]:
             if plural in seq:
                 plurals.setdefault(plural, []).append(name)
     for plural, group in plurals.items():
-        # "the wood, metal and fabric bins": the bins whose other words the text has; "the bins"
-        # alone: all of them.
+        # "the wood and metal bins": the bins whose other words the text has; "the bins": all.
         described = [n for n in group if set(tokens(n)[:-1]) <= set(seq)]
         for name in described or group:
             found[name] = seq.index(plural)
@@ -97,23 +86,14 @@ class Target:
         how: ``named``, ``speaker`` or ``scored``.
         named: Objects the request names for it.
         score: The calibrated log-odds when scored.
-        criterion: What decides which objects go there, in the request's words ("poisonous",
-            "made entirely of glass"), when the request sorts by a property; "" otherwise.
-        dish: The dish the request asks to be made ("hollandaise"), when the graph says it is one:
-            the graph's concept, which its facts and evidence are read for.
+        criterion: What decides which objects go there, in the request's words ("poisonous"), or "".
+        dish: The dish to be made, as the graph's concept (its facts are read for it), or "".
         ingredients: The objects that go are the ingredients of food to prepare.
-        rest: It takes whatever no other target takes ("the rest", "everything else").
-        part: Where the request asks for several things of different kinds ("something to eat and
-            something to drink", "I'm chilly and there's nothing to do"), what this one is for, as
-            the questions say it ("as something to eat", 'for "I'm chilly"'); "" otherwise.
-        dish_said: The dish in the request's own words ("tomato and cucumber salad", where the
-            graph's concept is "salad"), which the model is asked about; "": as ``dish``.
-        need: Where the request states two or more needs ("I'm chilly and there's nothing to
-            do"), this one's own words ("I'm chilly"): its objects are decided as if it were the
-            whole request; "" otherwise.
-        helps: It takes what helps with a need the request states ("I can't make out this tiny
-            print"): each object is asked "would the X help with what the person said?", and
-            ranked with what the graph states it is for.
+        rest: It takes whatever no other target takes ("the rest").
+        part: What this one is for where the request asks for several kinds ("as something to eat").
+        dish_said: The dish in the request's own words, which the model is asked about; "": ``dish``.
+        need: This one's own words where the request states several needs, else "".
+        helps: It takes what helps with a need the request states.
     """
 
     name: str
@@ -148,19 +128,17 @@ class Target:
 
 @dataclass(frozen=True)
 class ReadingDoubt:
-    """Where the request reads two ways: both readings in words, how likely each is the one meant,
-    and the other reading's targets, made when asked for (scoring an open place is a model call).
+    """Where the request reads two ways: both readings in words, their odds, and the other's targets
+    (made only when asked for: scoring an open place costs a call).
 
     Attributes:
         taken: The reading the targets are, in words.
         other: The reading not taken, in words.
-        p_taken: P(the reading taken is the one meant), from the step of the choice that kept it
-            (and the model's preference, where it was asked).
+        p_taken: P(the reading taken is the one meant).
         p_other: P(the reading not taken is).
         step: The step of the choice (:data:`conceptbot.pipeline.goal.aided.STEPS`).
         alternative: Reads the request as the other reading.
-        preference: The model's log-odds for the reading taken over the other, which moved the
-            step's odds (:mod:`conceptbot.pipeline.goal.judge`); None where it was not asked.
+        preference: The model's log-odds for the reading taken over the other; None if not asked.
     """
 
     taken: str
@@ -181,10 +159,9 @@ class TargetsRead:
         targets: Where things go, in the request's order.
         usage: The model calls made to read it.
         plain: The model's plain form of the request, where it was said plainly (else "").
-        reading: Which reading the targets are: ``words`` (the rules on the request's words),
-            ``plain`` (on the plain form), ``both`` (the two agree), or "" (only the words read).
+        reading: Which reading the targets are: ``words``, ``plain``, ``both``, or "" (words only).
         other: The reading not taken where the two differ, as goal-set JSON (else None).
-        doubt: Where the two differ: what the planner needs to ask which was meant (else None).
+        doubt: Where the two differ, what the planner needs to ask which was meant (else None).
     """
 
     stack: bool
@@ -197,15 +174,13 @@ class TargetsRead:
 
 
 class TargetFinder:
-    """The scored questions that choose a destination the request leaves open (used by
-    :class:`~conceptbot.pipeline.goal.adapter.ScoredChooser`; see the module docstring).
+    """The scored questions that choose a destination the request leaves open (see the module).
 
     Args:
         llm: An LLM that can score options (labelled ``goal``).
         is_person: Whether a destination is a person.
         threshold: A scored destination other than the best is a target above this.
-        food: What the graph knows about food (:class:`conceptbot.pipeline.goal_planner.decide.FactFinder`):
-            which destinations food is made in; None: every destination is a candidate for it.
+        food: Which destinations food is made in (``FactFinder``); None: every destination.
     """
 
     def __init__(
@@ -226,9 +201,7 @@ class TargetFinder:
         return self._yes_no(prompts.render("target_user", request=request, action=action))
 
     def prep_log_odds(self, dish: str, place: str) -> tuple[float, Usage]:
-        """The log-odds of Yes to "to make the hollandaise, should the robot put the ingredients in
-        or on the ceramic bowl?" (asked about the dish, not the request: for the request, the plate
-        beat the bowl for a sauce)."""
+        """The log-odds of Yes to "to make the <dish>, should the robot put the ingredients in the X?"."""
         return self._yes_no(prompts.render("prep_user", dish=dish, place=place))
 
     def _yes_no(self, question: str) -> tuple[float, Usage]:
