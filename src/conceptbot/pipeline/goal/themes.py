@@ -275,20 +275,15 @@ def extend_with_conjuncts(doc: Doc, theme: Sequence[int], allowed: set[int]) -> 
     return tuple(sorted(inside | extra))
 
 
-def _standing_in(
-    doc: Doc, part: Sequence[int], first: Sequence[int], reading: Reading, listed: str | None = None
-) -> Reading:
-    """A conjunct led by "one"/"another" with the first conjunct's (or ``listed``) noun, counted as one."""
-    if _lower(doc[part[0]]) not in STANDS_IN or reading.takes != "criterion":
+def _standing_in(doc: Doc, part: Sequence[int], first: Sequence[int], reading: Reading) -> Reading:
+    """A conjunct led by "one"/"another" with the first conjunct's noun, counted as one."""
+    if _lower(doc[part[0]]) not in STANDS_IN or reading.takes != "criterion" or part == first:
         return reading
-    if listed is None and part == first:
-        return reading
-    head = _head(doc, first) if listed is None else None
-    noun = listed if listed is not None else (head.text if head is not None else None)
-    if noun is None:
+    head = _head(doc, first)
+    if head is None:
         return reading
     rest = "".join(doc[i].text_with_ws for i in part[1:]).strip()
-    return Reading("criterion", (), f"{noun} {rest}".strip(), 1)
+    return Reading("criterion", (), f"{head.text} {rest}".strip(), 1)
 
 
 def read_themes(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> list[Reading]:
@@ -307,7 +302,7 @@ def read_themes(doc: Doc, run: Sequence[int], mentions: Sequence[Mention]) -> li
         )
         for p in parts
     ]
-    readings = [_standing_in(doc, p, parts[0], read_theme(doc, p, mentions), None) for p in parts]
+    readings = [_standing_in(doc, p, parts[0], read_theme(doc, p, mentions)) for p in parts]
     if any(r.takes not in ("named", "criterion") for r in readings):
         return [read_theme(doc, run, mentions)]
     criteria = [r for r in readings if r.takes == "criterion"]

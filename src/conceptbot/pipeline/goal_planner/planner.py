@@ -7,6 +7,7 @@ move (safety fails closed). Threshold values: see docs/planning.md.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Protocol
 
@@ -177,6 +178,13 @@ def _candidates(
     }
 
 
+def _shares(decisions: Sequence[DecisionTrace], factors: dict[int, float]) -> list[DecisionTrace]:
+    """Each decision with its target's share of the plan's confidence, where it has one."""
+    return [
+        replace(d, confidence=round(factors[n], 4)) if n in factors else d for n, d in enumerate(decisions)
+    ]
+
+
 class GoalPlanner(RiskChecks, Placing):
     """Targets -> decisions -> plan (see the module docstring).
 
@@ -279,11 +287,7 @@ class GoalPlanner(RiskChecks, Placing):
         observer.event("risk", RiskEvent(risk))
         candidates = _candidates(moves, targets, ranked)
         # Where the confidence is lost: each target's share, from the final moves.
-        factors = clarified.factors(moves)
-        decisions = [
-            replace(d, confidence=round(factors[n], 4)) if n in factors else d
-            for n, d in enumerate(decisions)
-        ]
+        decisions = _shares(decisions, clarified.factors(moves))
         confidence = clarified.confidence(moves)
         steps = self._steps(moves, candidates, scene, properties, asked[-1] if asked else "")
         for step in steps:
@@ -291,8 +295,14 @@ class GoalPlanner(RiskChecks, Placing):
         refused = not moves and bool(blocked)
         reason = "; ".join(_why(c) for c in risk if c.dropped) if refused else None
         actions: list[Action] = [*(PickAndPlace(o, t) for o, t in moves), Done()]
-        trace = PlanTrace(goal=goal, decisions=tuple(decisions), stack=pile, risk=risk, vetoes=vetoes or None)
-        trace = replace(trace, companions=companions)
+        trace = PlanTrace(
+            goal=goal,
+            decisions=tuple(decisions),
+            stack=pile,
+            companions=companions,
+            risk=risk,
+            vetoes=vetoes or None,
+        )
         questions = (*about_reading, *clarified.questions)
         # The confidence of the final moves, times the odds that the reading acted on is the one meant.
         return GoalPlanResult(
