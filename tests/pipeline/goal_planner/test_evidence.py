@@ -128,3 +128,11 @@ def test_the_trace_form_lists_only_what_is_set_with_the_statements() -> None:
         "features": {"own_yes": 1.0, "is_poison": 1.0},  # what it states, and the criterion's kind
         "statements": ["own_yes: death cap DefinedAs extremely poisonous white fungus"],
     }
+
+
+def test_whom_a_property_is_about_is_no_statement_of_it() -> None:
+    # "poisonous to dogs": a dog ball's name says nothing about poison; "a fruit" alone is the criterion.
+    assert _features("dog ball", "poisonous to dogs", graph=None) == {}
+    assert ("dog",) not in criterion_terms("poisonous to dogs").yes
+    assert ("fruit",) in criterion_terms("a fruit").yes
+    assert _features("wooden toy", "safe and made of wood", graph=None) == {"name_yes": 1.0}

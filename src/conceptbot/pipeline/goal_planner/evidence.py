@@ -125,8 +125,10 @@ def criterion_terms(criterion: str, graph: KnowledgeGraph | None = None) -> Term
     rest = [w for w, u in zip(seq, used, strict=True) if not u and w not in ignore and len(w) > 2]
     materials = set(vocab["materials"])
     families: dict[str, list[str]] = vocab["material_families"]
-    yes += rest
     named = [w for w in rest if w in materials or w in families]
+    # Beside a property the other words say whom or what it is about ("poisonous to dogs"), so a
+    # "dog ball" is no statement of it; alone they are the criterion ("a fruit").
+    yes += named if grouped else rest
     if named:
         # A family's members state it ("steel" is a metal); a member states itself only.
         same = set(named) | {m for w in named for m in families.get(w, [])}
