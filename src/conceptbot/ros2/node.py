@@ -47,6 +47,7 @@ from conceptbot.core.system import Ask, PlannerSystem
 from conceptbot.core.trace import ClarifyingQuestion
 from conceptbot.core.urls import redact_secrets
 from conceptbot.ros2 import qos
+from conceptbot.ros2.detections import LatestScene
 from conceptbot.ros2.protocol import (
     PlanRequest,
     ProtocolError,
@@ -61,6 +62,16 @@ from conceptbot.ros2.protocol import (
 )
 from conceptbot.scenes import resolve_scene
 from conceptbot.systems import SYSTEMS, build_system
+
+try:  # the action needs the compiled interfaces (scripts/build_interfaces.sh); topics do not
+    from conceptbot_interfaces.msg import Scene as SceneMsg
+
+    from conceptbot.ros2.action import ActionJob, PlanActions, error_result
+except ImportError as exc:
+    ActionJob = PlanActions = SceneMsg = None  # type: ignore[assignment,misc]
+    INTERFACES_MISSING: str | None = str(exc)
+else:
+    INTERFACES_MISSING = None
 
 ACK_WAIT = Duration(seconds=1)
 """How long a result waits for the subscribers to acknowledge its request's progress messages."""
@@ -80,6 +91,9 @@ class NodeConfig:
             for the answer on ``~/answer``; no answer ends the request ``no_answer`` (a refusal,
             never a guess). 0: the node does not ask (the plan acts on the likelier answers and
             lists its questions).
+        detections: A topic of ``conceptbot_interfaces/msg/Scene`` from the robot's detector: goals
+            that give no scene are planned against the latest. Empty: none (the default scene).
+        detections_max_age_s: How old the latest detections may be; older ones refuse the goal.
     """
 
     system: str = "conceptbot"
@@ -88,6 +102,8 @@ class NodeConfig:
     queue_size: int = 4
     plan_timeout_s: float = 0.0
     answer_timeout_s: float = 0.0
+    detections: str = ""
+    detections_max_age_s: float = 5.0
 
 
 _DESCRIPTIONS = {
@@ -97,6 +113,8 @@ _DESCRIPTIONS = {
     "queue_size": "requests that may wait while one is planned (one more is answered busy)",
     "plan_timeout_s": "seconds a plan may take before it is answered timeout (0: no limit)",
     "answer_timeout_s": "seconds to wait for an answer on ~/answer before refusing no_answer (0: never ask)",
+    "detections": "topic of conceptbot_interfaces/msg/Scene from the detector (empty: none)",
+    "detections_max_age_s": "seconds the latest detections stay fresh enough to plan against",
 }
 
 
@@ -176,7 +194,7 @@ class ConceptBotNode(Node):
         except Exception:
             super().destroy_node()
             raise
-        self._queue: queue.Queue[PlanRequest | None] = queue.Queue(maxsize=self.config.queue_size)
+        self._queue: queue.Queue[Any] = queue.Queue(maxsize=self.config.queue_size)
         # Guards _closed, _current and putting into the queue, against destroy_node.
         self._lock = threading.Lock()
         self._closed = False
@@ -188,12 +206,23 @@ class ConceptBotNode(Node):
         self.answer_sub = self.create_subscription(String, "~/answer", self._on_answer, qos.REQUESTS)
         # The answer the request being planned waits for: (its id, the event, the answer).
         self._awaited: tuple[str, ClarifyingQuestion, AnswerSlot] | None = None
+        self.latest: LatestScene | None = None
+        if self.config.detections:
+            clock = self.get_clock()
+            self.latest = LatestScene(
+                self.config.detections_max_age_s, lambda: clock.now().nanoseconds * 1e-9
+            )
+            self.create_subscription(SceneMsg, self.config.detections, self.latest.put, qos.REQUESTS)
+        self.actions = PlanActions(self) if PlanActions is not None else None
+        if self.actions is None:
+            self.get_logger().warning(f"no Plan action (conceptbot_interfaces: {INTERFACES_MISSING})")
         self._worker = threading.Thread(target=self._work, name=f"{name}-planner", daemon=True)
         self._worker.start()
         self.get_logger().info(
             f"ready: {self.config.system} on {redact_secrets(self.config.llm)}, "
             f"default scene {self.default_scene.name}; "
             f"requests on {self.request_sub.topic_name}"
+            + (f", goals on {self.get_fully_qualified_name()}/plan" if self.actions else "")
         )
 
     def _read_parameters(self, defaults: NodeConfig, settings: Settings) -> NodeConfig:
@@ -218,13 +247,24 @@ class ConceptBotNode(Node):
                 f"the ROS parameter 'plan_timeout_s' must be a number of seconds >= 0, got {timeout!r}",
                 hint="0 means no limit",
             )
-        wait = values["answer_timeout_s"]
+        wait, topic, age = values["answer_timeout_s"], values["detections"], values["detections_max_age_s"]
         if isinstance(wait, bool) or not isinstance(wait, int | float) or not wait >= 0:
             raise ConfigError(
                 f"the ROS parameter 'answer_timeout_s' must be a number of seconds >= 0, got {wait!r}",
                 hint="0 means the node does not ask",
             )
-        return NodeConfig(system, llm or settings.llm, scene, queue_size, float(timeout), float(wait))
+        if not isinstance(topic, str):
+            raise ConfigError(f"the ROS parameter 'detections' must be a topic name, got {topic!r}")
+        if isinstance(age, bool) or not isinstance(age, int | float) or not age > 0:
+            raise ConfigError(f"the ROS parameter 'detections_max_age_s' must be seconds > 0, got {age!r}")
+        if topic and INTERFACES_MISSING:
+            raise ConfigError(
+                f"--detections needs conceptbot_interfaces ({INTERFACES_MISSING})",
+                hint="build it with: bash scripts/build_interfaces.sh",
+            )
+        return NodeConfig(
+            system, llm or settings.llm, scene, queue_size, float(timeout), float(wait), topic, float(age)
+        )
 
     def publish(self, publisher: Any, payload: dict[str, Any]) -> None:
         """Publish one payload as a String message; a failure (the node shutting down) is logged.
@@ -265,6 +305,53 @@ class ConceptBotNode(Node):
             "wait for a result before sending the next request, or raise the queue_size parameter",
         )
 
+    def is_full(self) -> bool:
+        """Whether a new request or goal would find no room (or the node is closing)."""
+        with self._lock:
+            return self._closed or self._queue.full()
+
+    def enqueue(self, item: Any) -> bool:
+        """Queue a goal (an action job) for the worker; False when there is no room or the node is
+        closing."""
+        with self._lock:
+            if self._closed:
+                return False
+            try:
+                self._queue.put_nowait(item)
+            except queue.Full:
+                return False
+            return True
+
+    def await_answer(
+        self, request_id: str, question: ClarifyingQuestion | None, slot: AnswerSlot | None
+    ) -> None:
+        """Open (or, with None, close) the one question the running request or goal waits on."""
+        with self._lock:
+            self._awaited = (
+                (request_id, question, slot) if question is not None and slot is not None else None
+            )
+
+    def give_answer(self, request_id: str, answer: str) -> tuple[bool, str, str]:
+        """Answer the open question of ``request_id``: (taken, error code, message). A wrong answer
+        is dropped, not fatal: the question stays open for one that fits it."""
+        with self._lock:
+            awaited = self._awaited
+        if awaited is None or awaited[0] != request_id:
+            return False, "no_question", f"no question of {request_id!r} is open"
+        _, question, slot = awaited
+        chosen = question.read(answer)
+        if chosen is None:
+            how = {
+                "confirm": "yes or no",
+                "choose": f"some of {', '.join(question.options)}, or none",
+                "one": f"one of {', '.join((*question.options, *question.others))}, or none",
+                "reading": f"one of {' / '.join(question.options)}, or none",
+            }[question.kind]
+            return False, "bad_answer", f"{answer!r:.80} is not {how}"
+        if not slot.give(question.normalised(chosen)):
+            return False, "no_question", "its question is answered already"
+        return True, "", "taken"
+
     def _on_answer(self, msg: String) -> None:
         """An answer to the question of the request being planned; others are logged and dropped."""
         try:
@@ -272,25 +359,9 @@ class ConceptBotNode(Node):
         except ProtocolError as exc:
             self.get_logger().warning(f"answer dropped: {exc.message}")
             return
-        with self._lock:
-            awaited = self._awaited
-        if awaited is None or awaited[0] != request_id:
-            self.get_logger().warning(f"answer for {request_id!r} dropped: no question of it is open")
-            return
-        _, question, slot = awaited
-        chosen = question.read(answer)
-        if chosen is None:
-            # Dropped, not fatal: the question stays open for an answer that fits it.
-            how = {
-                "confirm": "yes or no",
-                "choose": f"some of {', '.join(question.options)}, or none",
-                "one": f"one of {', '.join((*question.options, *question.others))}, or none",
-                "reading": f"one of {' / '.join(question.options)}, or none",
-            }[question.kind]
-            self.get_logger().warning(f"answer for {request_id!r} dropped: {answer!r:.80} is not {how}")
-            return
-        if not slot.give(question.normalised(chosen)):
-            self.get_logger().warning(f"answer for {request_id!r} dropped: its question is answered")
+        taken, _, message = self.give_answer(request_id, answer)
+        if not taken:
+            self.get_logger().warning(f"answer for {request_id!r} dropped: {message}")
 
     def _asker(self, running: _Running) -> Ask | None:
         """The planner's ``ask``: publish the question, wait for its answer (None: do not ask)."""
@@ -299,8 +370,7 @@ class ConceptBotNode(Node):
 
         def ask(question: ClarifyingQuestion) -> str:
             slot = AnswerSlot()
-            with self._lock:
-                self._awaited = (running.request.id, question, slot)
+            self.await_answer(running.request.id, question, slot)
             try:
                 self.publish(self.question_pub, question_payload(running.request.id, question))
                 answer = slot.wait(self.config.answer_timeout_s)
@@ -318,8 +388,7 @@ class ConceptBotNode(Node):
                     )
                 return answer
             finally:
-                with self._lock:
-                    self._awaited = None
+                self.await_answer(running.request.id, None, None)
 
         return ask
 
@@ -329,8 +398,11 @@ class ConceptBotNode(Node):
 
     def _work(self) -> None:
         """The worker thread: plan queued requests one at a time until the sentinel None."""
-        while (request := self._queue.get()) is not None:
-            self._plan(request)
+        while (item := self._queue.get()) is not None:
+            if ActionJob is not None and isinstance(item, ActionJob):
+                self.actions.run(item)  # type: ignore[union-attr]
+            else:
+                self._plan(item)
 
     def _plan(self, request: PlanRequest) -> None:
         running = _Running(request, time.monotonic(), threading.Lock())
@@ -428,14 +500,18 @@ class ConceptBotNode(Node):
                     self._answer_error(
                         running.request.id, "planner_error", "the node shut down while planning it"
                     )
-        for request in waiting:
-            if request is not None:
-                self._answer_error(request.id, "planner_error", "the node shut down before planning it")
+        for item in waiting:
+            if ActionJob is not None and isinstance(item, ActionJob):
+                item.end("abort", error_result("planner_error", "the node shut down before planning it"))
+            elif item is not None:
+                self._answer_error(item.id, "planner_error", "the node shut down before planning it")
         self._worker.join(timeout=1.0)
 
     def destroy_node(self) -> None:
         """:meth:`close`, then destroy the node."""
         self.close()
+        if self.actions is not None:
+            self.actions.close()
         super().destroy_node()
 
 
