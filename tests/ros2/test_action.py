@@ -202,3 +202,28 @@ def test_a_malformed_scene_is_one_clear_error_and_the_next_goal_is_served(
         assert result.error_message and "Traceback" not in result.error_message
     status, result = goals.result(goals.send(_goal()))
     assert status == SUCCEEDED and result.ok
+
+
+@pytest.mark.slow
+def test_the_embedded_model_plans_a_goal_and_a_cancel_stops_it(
+    start_node: Callable[..., Running], smollm2_path: Any, tiny_scene_file: Any
+) -> None:
+    # The goal planner without a graph on the real SmolLM2-135M (as the topic test): the plan is the
+    # model's business, the action's contract is ours.
+    config = NodeConfig(system="nokg", llm=f"llamacpp:{smollm2_path}", scene=str(tiny_scene_file))
+    goals = Goals(start_node(config))
+    handle = goals.send(PlanAction.Goal(request="Bring me an apple"))
+    status, result = goals.result(handle, timeout_s=600)
+    assert status == SUCCEEDED and result.ok, result
+    assert {(m.object, m.destination) for m in result.actions} <= {("apple", "user"), ("sponge", "user")}
+    assert json.loads(result.plan_json)["trace"]["planner_kind"] == "goal"
+    stages = [f.stage for f in goals.feedback]
+    assert {"goal", "decisions", "risk"} <= set(stages)
+
+    goals.feedback.clear()
+    handle = goals.send(PlanAction.Goal(request="Bring me the sponge"))
+    assert wait_for(lambda: any(f.stage == "goal" for f in goals.feedback), 600)
+    handle.cancel_goal_async()
+    status, result = goals.result(handle, timeout_s=600)
+    assert status == CANCELED and result.cancelled and not result.actions
+    assert "risk" not in [f.stage for f in goals.feedback]  # nothing after the cancel ran
