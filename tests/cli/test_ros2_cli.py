@@ -148,3 +148,33 @@ def test_the_node_command_plans_for_a_client_and_stops_on_ctrl_c(
     assert node.returncode == 0, err
     assert result["ok"] is True and result["plan"]["plan"] == [move, "done()"]
     assert "ready: paper-nokg on fake:" in err and f"1 action(s): {move}" in err and "Traceback" not in err
+
+
+def test_send_action_prints_feedback_and_the_typed_result(
+    settings: Settings, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    pytest.importorskip("conceptbot_interfaces.action", reason="scripts/build_interfaces.sh not run")
+    isolate_ros(monkeypatch)
+    scene = tmp_path / "tiny.json"
+    scene.write_text(json.dumps(TINY_SCENE))
+    with running_node(settings, NodeConfig(scene="kitchen"), planner=Mover()):
+        ok = CliRunner().invoke(
+            cli, ["ros2", "send", "--action", "Bring me an apple", "--scene", str(scene), "--timeout", "20"]
+        )
+        assert ok.exit_code == 0, ok.output
+        result = json.loads(ok.stdout)
+        assert result["status"] == "succeeded" and result["ok"] is True
+        assert result["actions"] == [{"object": "apple", "destination": "user"}]
+        assert result["plan"]["plan"] == ["pick_and_place(apple, user)", "done()"]
+        assert (
+            "[progress] moving for 'Bring me an apple'" in ok.stderr
+            and "[planner] planner: done" in ok.stderr
+        )
+        failed = CliRunner().invoke(
+            cli, ["ros2", "send", "--action", "Bring me a unicorn", "--scene", "toxic-1"]
+        )
+        assert failed.exit_code == 1
+        assert json.loads(failed.stdout)["error"] == {
+            "code": "planner_error",
+            "message": "no unicorns here (ask for something in the scene)",
+        }

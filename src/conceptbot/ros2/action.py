@@ -48,6 +48,7 @@ if TYPE_CHECKING:
 #: ``answer_timeout_s`` is 0 (the topic requests then never ask).
 DEFAULT_ANSWER_WAIT_S = 120.0
 POLL_S = 0.1  # how often a wait for an answer looks for a cancel
+FEEDBACK_GRACE_S = 0.25  # see PlanActions.run
 
 
 class PlanCancelled(BaseException):
@@ -105,7 +106,6 @@ class _FeedbackObserver:
 
     def __init__(self, job: ActionJob) -> None:
         self.job = job
-        self.stage = "planning"
 
     def _check(self) -> None:
         if self.job.handle.is_cancel_requested:
@@ -114,12 +114,11 @@ class _FeedbackObserver:
     def progress(self, message: str) -> None:
         """A piece of work starts: stop here if cancelled, else say so."""
         self._check()
-        self.job.handle.publish_feedback(Plan.Feedback(stage=self.stage, message=message))
+        self.job.handle.publish_feedback(Plan.Feedback(stage="progress", message=message))
 
     def event(self, name: str, part: EventPart) -> None:
         """A module finished: stop here if cancelled, else say so."""
         self._check()
-        self.stage = name
         self.job.handle.publish_feedback(Plan.Feedback(stage=name, message=f"{name}: done"))
 
 
@@ -150,7 +149,10 @@ class PlanActions:
 
     def _accepted(self, handle: Any) -> None:
         goal_id = bytes(handle.goal_id.uuid).hex()
-        job = ActionJob(handle, goal_id, handle.request)
+        job = ActionJob(handle, goal_id, handle.request, Future(executor=self.node.executor))
+        # The outcome is set by the worker thread: a done callback is scheduled on the executor,
+        # which wakes it so that the execute coroutine awaiting the outcome resumes.
+        job.outcome.add_done_callback(lambda _done: None)
         self._jobs[goal_id] = job
         if not self.node.enqueue(job):  # filled up since it was accepted, or closing
             handle.execute()
@@ -168,7 +170,21 @@ class PlanActions:
         self.node.destroy_service(self.answer_service)
 
     def run(self, job: ActionJob) -> None:
-        """Plan one goal (the worker thread); always ends it."""
+        """Plan one goal (the worker thread); always ends it, and logs how."""
+        started = time.monotonic()
+        state, result = self._outcome(job)
+        # Feedback and result travel apart, and a client drops feedback that comes after the
+        # result: give the last feedback time to arrive first.
+        time.sleep(FEEDBACK_GRACE_S)
+        job.end(state, result)
+        how = result.error_code or f"{len(result.actions)} move(s)" + (" (refused)" if result.refused else "")
+        seconds = time.monotonic() - started
+        self.node.get_logger().info(
+            f"goal {job.goal_id[:8]} {job.goal.request[:60]!r}: {state} {how} ({seconds:.1f} s)"
+        )
+
+    def _outcome(self, job: ActionJob) -> tuple[str, Any]:
+        """Plan the goal: its terminal state and result."""
         job.handle.execute()
         try:
             if job.handle.is_cancel_requested:
@@ -181,19 +197,22 @@ class PlanActions:
                 plan = self.node.planner.plan(request, scene, observer=observer)
             else:
                 plan = self.node.planner.plan(request, scene, observer=observer, ask=ask)
-            job.end("succeed", plan_result(plan))
+            return "succeed", plan_result(plan)
         except PlanCancelled:
-            job.end("canceled", Plan.Result(ok=False, cancelled=True, error_code="cancelled"))
+            said = "cancelled by the client: nothing after the piece of work in flight ran"
+            return "canceled", Plan.Result(
+                ok=False, cancelled=True, error_code="cancelled", error_message=said
+            )
         except _NoAnswerError as exc:
-            job.end("abort", error_result("no_answer", str(exc)))
+            return "abort", error_result("no_answer", str(exc))
         except ConfigError as exc:
-            job.end("abort", error_result("bad_goal", exc.message, exc.hint))
+            return "abort", error_result("bad_goal", exc.message, exc.hint)
         except ConceptBotError as exc:
             message, hint = redact_secrets(exc.message), exc.hint and redact_secrets(exc.hint)
-            job.end("abort", error_result("planner_error", message, hint))
+            return "abort", error_result("planner_error", message, hint)
         except Exception as exc:  # the node stays up; the traceback goes to the log
             self.node.get_logger().error(f"goal {job.goal_id}: planning failed:\n{traceback.format_exc()}")
-            job.end("abort", error_result("planner_error", redact_secrets(f"unexpected error: {exc!r}")))
+            return "abort", error_result("planner_error", redact_secrets(f"unexpected error: {exc!r}"))
 
     def _read(self, goal: Any) -> tuple[str, Scene]:
         """The goal's request and scene (see ``Plan.action``).
