@@ -194,6 +194,12 @@ def check_ros2() -> Check:
             required=False,
         )
     versions = f"rclpy {_version('ros-rclpy')}, Fast DDS {_version('ros-fastdds')}"
+    try:
+        _import_silently("conceptbot_interfaces.action")
+    except ImportError:
+        versions += "; no Plan action (conceptbot_interfaces not built: bash scripts/build_interfaces.sh)"
+    else:
+        versions += ", conceptbot_interfaces (the Plan action)"
     return Check("ROS 2", True, versions, required=False)
 
 
