@@ -71,6 +71,9 @@ def scene_from_msg(msg: Any) -> Scene:
     for found in msg.detections:
         if not math.isfinite(found.confidence) or not 0.0 <= found.confidence <= 1.0:
             raise ConfigError(f"detection {found.name!r}: confidence {found.confidence} is not in [0, 1]")
+        box = _given(found.box_px)
+        if box is not None and not (box[0] < box[2] and box[1] < box[3]):
+            raise ConfigError(f"detection {found.name!r}: box_px {box} is not x0 < x1, y0 < y1")
     missing = sorted(set(map(str, msg.pickable)) - set(names) - set(map(str, msg.destinations)))
     if missing:
         raise ConfigError(f"pickable but not detected: {', '.join(missing)}")
