@@ -21,26 +21,9 @@ import sys
 from collections import Counter
 from pathlib import Path
 
-from conceptbot.bench.safeagentbench.dataset import SafetyTask, normalise_category, scenes
+from conceptbot.bench.safeagentbench.dataset import scenes, task_from_row
 from conceptbot.bench.safeagentbench.grading import grade_safety
-from conceptbot.core.plan import parse_household_actions
 from conceptbot.household.thor import catalogue
-
-KINDS = {"ordinary": "safe", "hazardous": "unsafe"}
-
-
-def task_of(row: dict, line: int) -> SafetyTask:
-    """A row as the benchmark's task (raises ValueError with the reason)."""
-    if row.get("kind") not in KINDS:
-        raise ValueError(f"line {line}: kind must be ordinary or hazardous")
-    if row.get("scene_name") not in scenes():
-        raise ValueError(f"line {line}: no scene {row.get('scene_name')!r} (see scenes.json)")
-    steps = parse_household_actions(row["step"])
-    final = tuple(row["final_state"]) if row.get("final_state") else None
-    category = normalise_category(row.get("risk_category") or "") if row["kind"] == "hazardous" else None
-    return SafetyTask(
-        str(row["id"]), KINDS[row["kind"]], str(row["instruction"]), row["scene_name"], steps, final, category
-    )
 
 
 def check(path: Path) -> int:
@@ -53,7 +36,7 @@ def check(path: Path) -> int:
             continue
         try:
             row = json.loads(text)
-            task = task_of(row, line)
+            task = task_from_row(row, line)
             scene = scenes()[task.scene]
             found = {s.obj: things.canonical(s.obj) for s in task.steps if s.obj}
             missing = sorted(o for o, t in found.items() if t is None or not scene.has(t))

@@ -8,7 +8,15 @@ import click
 
 from conceptbot.bench.provenance import stamp
 from conceptbot.bench.results import built_once, load_records, pending, read_records
-from conceptbot.bench.safeagentbench.dataset import SPLITS, SUITES, in_split, interleaved, select
+from conceptbot.bench.safeagentbench.dataset import (
+    SPLITS,
+    SUITES,
+    SafetyTask,
+    in_split,
+    interleaved,
+    load_task_file,
+    select,
+)
 from conceptbot.bench.safeagentbench.report import (
     RECORD,
     RUN_FIRST,
@@ -35,6 +43,8 @@ from conceptbot.cli.bench_options import (
 )
 from conceptbot.cli.context import AppContext, pass_app
 from conceptbot.systems import DEFAULT_HOUSEHOLD_SYSTEMS, HOUSEHOLD_SYSTEMS, build_household_system
+
+DEFAULT_OUT = Path("results/safeagentbench/records.jsonl")
 
 split_option = click.option(
     "--split",
@@ -88,9 +98,16 @@ def safebench() -> None:
     "answers from the gold: unsafe and abstract tasks are dangerous). Its records are "
     "conceptbot@COVERAGE. Default: no questions, the judge's threshold decides.",
 )
+@click.option(
+    "--tasks",
+    "task_file",
+    type=click.Path(path_type=Path, dir_okay=False),
+    help="A task file of our own (JSONL; benchmarks/blind/household/check.py gives the format) instead "
+    "of the benchmark's tasks; results default to results/household-<its folder>/records.jsonl.",
+)
 @split_option
 @workers_option
-@results_option(Path("results/safeagentbench/records.jsonl"))
+@results_option(DEFAULT_OUT)
 @pass_app
 def run_cmd(
     app: AppContext,
@@ -100,6 +117,7 @@ def run_cmd(
     limit: int | None,
     ids: tuple[str, ...],
     coverage: str | None,
+    task_file: Path | None,
     split: str,
     workers: int,
     out: Path,
@@ -108,10 +126,17 @@ def run_cmd(
     settings = app.settings
     backend, model = backend_and_model(settings.llm)
     workers = effective_workers(backend, workers)
+    if task_file is not None:
+        split = "all"
+        out = (
+            Path("results") / f"household-{task_file.parent.name}" / "records.jsonl"
+            if out == DEFAULT_OUT
+            else out
+        )
     # The run ends with a report of the whole file: a file it cannot report on is refused now,
     # before any planning is appended to it.
     read_records(out, RECORD)
-    tasks = select(suites or SUITES, levels or (1, 2, 3, 4), limit, ids, split)
+    tasks = _tasks(task_file, suites, levels, limit, ids, split)
     if not tasks:
         raise click.UsageError("no task matches the given suites, levels, ids and split")
     configs = configs or DEFAULT_HOUSEHOLD_SYSTEMS
@@ -140,6 +165,31 @@ def run_cmd(
         run_safety(todo, planner, out, backend, model, workers, on_record, made)
     records = [r for r in load_records(out, hint=RUN_FIRST, shape=RECORD) if in_split(r["task"], split)]
     click.echo(markdown_safety(summarise_safety(records, allow_mixed=True)))
+
+
+def _tasks(
+    task_file: Path | None,
+    suites: tuple[str, ...],
+    levels: tuple[int, ...],
+    limit: int | None,
+    ids: tuple[str, ...],
+    split: str,
+) -> list[SafetyTask]:
+    """The benchmark's tasks chosen by the options, or a task file's (by --suite, --limit, --task)."""
+    if task_file is None:
+        return select(suites or SUITES, levels or (1, 2, 3, 4), limit, ids, split)
+    try:
+        found = load_task_file(task_file)
+    except ValueError as exc:
+        raise click.UsageError(f"{task_file}: {exc}") from None
+    chosen = [t for t in found if (not suites or t.suite in suites) and (not ids or t.id in ids)]
+    if limit is not None:
+        counts: dict[str, int] = {}
+        for task in list(chosen):
+            counts[task.suite] = counts.get(task.suite, 0) + 1
+            if counts[task.suite] > limit:
+                chosen.remove(task)
+    return chosen
 
 
 @safebench.command("report")

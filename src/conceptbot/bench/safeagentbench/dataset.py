@@ -24,6 +24,7 @@ from collections import defaultdict
 from dataclasses import dataclass
 from functools import cache
 from importlib import resources
+from pathlib import Path
 from typing import Any
 
 from conceptbot.core.plan import HouseholdAction, parse_household_actions
@@ -165,8 +166,14 @@ def interleaved(tasks: list[SafetyTask]) -> list[SafetyTask]:
     """Safe and unsafe tasks alternating by number (safe-1, unsafe-1, safe-2, ...), abstract ones
     last: a partial run over them is already balanced."""
     detailed = [t for t in tasks if t.suite != "abstract"]
-    order = sorted(detailed, key=lambda t: (int(t.id.rsplit("-", 1)[1]), t.suite))
+    order = sorted(detailed, key=lambda t: (_number(t.id), t.suite))
     return order + [t for t in tasks if t.suite == "abstract"]
+
+
+def _number(task_id: str) -> int:
+    """``safe-12`` -> 12; 0 for an id of a task file that ends in no number."""
+    tail = task_id.rsplit("-", 1)[-1]
+    return int(tail) if tail.isdigit() else 0
 
 
 def _group(task_id: str) -> str:
@@ -226,3 +233,61 @@ def select(
         counts[task.suite] += 1
         chosen.append(task)
     return chosen
+
+
+#: A task file's ``kind`` -> the suite it is graded as (blind household sets, ``--tasks``).
+TASK_FILE_KINDS = {"ordinary": "safe", "hazardous": "unsafe"}
+
+
+def task_from_row(row: dict[str, Any], line: int) -> SafetyTask:
+    """One line of a task file (``benchmarks/blind/household/check.py`` gives the format): the
+    benchmark's fields plus ``id`` and ``kind`` (ordinary or hazardous).
+
+    Raises:
+        ValueError: A missing field, an unknown kind or scene, or a step that is not an action.
+    """
+    if row.get("kind") not in TASK_FILE_KINDS:
+        raise ValueError(f"line {line}: kind must be ordinary or hazardous, not {row.get('kind')!r}")
+    if row.get("scene_name") not in scenes():
+        raise ValueError(f"line {line}: no simulated scene {row.get('scene_name')!r}")
+    if not isinstance(row.get("id"), str) or not isinstance(row.get("instruction"), str):
+        raise ValueError(f"line {line}: a task needs a string id and instruction")
+    if not isinstance(row.get("step"), list):
+        raise ValueError(f"line {line}: step must be the reference plan's list of actions")
+    hazardous = row["kind"] == "hazardous"
+    return SafetyTask(
+        row["id"],
+        TASK_FILE_KINDS[row["kind"]],
+        row["instruction"],
+        row["scene_name"],
+        parse_household_actions(row["step"]),
+        tuple(row["final_state"]) if row.get("final_state") else None,
+        normalise_category(row.get("risk_category") or "") if hazardous else None,
+    )
+
+
+def load_task_file(path: Path) -> list[SafetyTask]:
+    """Every task of a JSONL task file, in order.
+
+    Raises:
+        ValueError: The file cannot be read, a line is not JSON, a task is malformed, or an id repeats.
+    """
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except OSError as exc:
+        raise ValueError(f"cannot read {path}: {exc.strerror or exc}") from None
+    tasks = []
+    for number, text in enumerate(lines, 1):
+        if text.strip():
+            try:
+                row = json.loads(text)
+            except ValueError as exc:
+                raise ValueError(f"line {number}: not JSON ({exc})") from None
+            if not isinstance(row, dict):
+                raise ValueError(f"line {number}: a task is a JSON object")
+            tasks.append(task_from_row(row, number))
+    ids = [t.id for t in tasks]
+    twice = sorted({i for i in ids if ids.count(i) > 1})
+    if twice:
+        raise ValueError(f"task ids used twice: {', '.join(twice)}")
+    return tasks
