@@ -156,3 +156,18 @@ def test_an_instruction_that_asks_to_throw_is_refused_before_any_model_call() ->
     ]
     assert plan.reason == "Carrying it out would be dangerous: 'Throw the Statue' throws the Statue."
     assert planner_llm.requests == [] and judge_llm.requests == [] and seen.names() == []
+
+
+def test_the_outcome_judge_reads_what_a_plan_leaves_against_a_result_where_nothing_changed() -> None:
+    from conceptbot.household.judge import OutcomeJudge
+
+    llm = FakeLLM(scores=[_odds(0.5), _odds(0.9), _odds(0.2)])
+    judge = OutcomeJudge(llm)
+    fire, _ = judge.reading(
+        KITCHEN, ["the Candle is in or on the Microwave", "the Microwave is left switched on"]
+    )
+    assert fire == pytest.approx(math.log(9))  # 0.9 against the content-free 0.5
+    tidy, _ = judge.reading(KITCHEN, ["the Mug is in or on the Microwave"])
+    assert tidy == pytest.approx(math.log(0.25))
+    assert judge.reading(KITCHEN, [])[0] == 0.0  # nothing changed: nothing to judge
+    assert "- the Microwave is left switched on" in llm.score_requests[1].messages[1].content

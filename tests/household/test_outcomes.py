@@ -75,3 +75,22 @@ def test_an_instruction_that_pours_onto_what_neither_holds_nor_drains_liquid_is_
         "Put the apple on the counter top.",
     ):
         assert requested_outcomes(fine) == [], fine
+
+
+def test_what_a_plan_leaves_behind_is_said_from_the_simulated_state_not_the_words() -> None:
+    from conceptbot.household.outcomes import plan_effects
+
+    kitchen = house_scene("FloorPlan1", ["DishSponge", "Toaster", "Newspaper", "GarbageCan", "Vase"])
+    toast = acts(["find DishSponge", "pick DishSponge", "find Toaster", "put Toaster", "turn_on Toaster"])
+    assert plan_effects(kitchen, toast) == [
+        "the DishSponge is in or on the Toaster",
+        "the Toaster is left switched on",
+        "the Toaster is on with the DishSponge in or on it",
+    ]
+    # "throw ... in the bin" is putting rubbish away; throwing a vase breaks it
+    binned = acts(["find Newspaper", "pick Newspaper", "find GarbageCan", "put GarbageCan"])
+    assert plan_effects(kitchen, binned) == ["the Newspaper is in or on the GarbageCan"]
+    thrown = plan_effects(kitchen, acts(["find Vase", "pick Vase", "throw"]))
+    assert "the Vase is broken" in thrown and "the Vase is thrown" in thrown
+    assert plan_effects(LIVING, POUR_ON_TV)[-1] == "liquid is poured onto the Television"
+    assert plan_effects(kitchen, acts(["find Unicorn", "pick Unicorn"])) == []  # failed steps change nothing

@@ -152,3 +152,47 @@ class HarmJudge:
                 usage = usage + used
             readings[question.name] = by_prompt[asked]
         return HarmVerdict(sum(readings.values()), self.threshold, readings), usage
+
+
+#: The calibration outcome of :class:`OutcomeJudge`: a result with nothing in it to judge.
+CONTENT_FREE_OUTCOME = ("nothing has changed",)
+
+
+class OutcomeJudge:
+    """Asks the LLM whether the state a plan leaves behind is dangerous or damaging, read from the
+    simulated plan (:func:`~conceptbot.household.outcomes.plan_effects`) rather than from the
+    request's words: "throw the newspaper in the bin" and "throw the vase" differ in what they
+    leave, not in their verb.
+
+    The reading is the log-odds of Yes minus that for a result where nothing changed, since a small
+    model leans to one answer (Zhao et al. 2021, "Calibrate before use").
+
+    Args:
+        llm: An LLM that can score options.
+    """
+
+    def __init__(self, llm: LLM) -> None:
+        self.llm = llm
+        self._prior: dict[str, float] = {}
+
+    def _ask(self, room: str, effects: Sequence[str]) -> tuple[float, Usage]:
+        system = prompts.render("household_outcome_system", PROMPTS)
+        user = prompts.render(
+            "household_outcome_user", PROMPTS, room=room, effects="\n".join(f"- {e}" for e in effects)
+        )
+        scored = self.llm.score(
+            ScoreRequest(options=ANSWERS, messages=(Message("system", system), Message("user", user)))
+        )
+        yes, no = scored.logprobs
+        return yes - no, scored.usage
+
+    def reading(self, scene: HouseScene, effects: Sequence[str]) -> tuple[float, Usage]:
+        """Calibrated log-odds that leaving ``effects`` behind in ``scene`` is dangerous; a plan that
+        changes nothing reads 0."""
+        usage = Usage(calls=0)
+        if scene.room not in self._prior:
+            self._prior[scene.room], usage = self._ask(scene.room, CONTENT_FREE_OUTCOME)
+        if not effects:
+            return 0.0, usage
+        log_odds, used = self._ask(scene.room, effects)
+        return log_odds - self._prior[scene.room], usage + used

@@ -142,3 +142,50 @@ def _object_after(
         if hit:
             return hit[0]
     return ""
+
+
+#: How each change of an object's state reads in words (the state the plan leaves it in).
+_CHANGED = {
+    ("isToggled", True): "left switched on",
+    ("isToggled", False): "switched off",
+    ("isOpen", True): "left open",
+    ("isOpen", False): "closed",
+    ("isBroken", True): "broken",
+    ("isFilledWithLiquid", True): "filled with {liquid}",
+    ("isFilledWithLiquid", False): "emptied",
+    ("isDirty", True): "made dirty",
+    ("isDirty", False): "cleaned",
+    ("isCooked", True): "cooked",
+    ("isSliced", True): "sliced",
+}
+
+
+def plan_effects(scene: HouseScene, steps: Sequence[HouseholdAction]) -> list[str]:
+    """What carrying out ``steps`` would leave behind, in plain words, for a judgement of the
+    outcome rather than of the request's words: every state the plan changes, where it moves things
+    (and what is inside an appliance left on), and what it spills or throws.
+
+    Failed steps change nothing, as in the executor. The sentences follow the object-type table's
+    names ("the Sponge is in the Toaster", "the Toaster is left switched on").
+    """
+    executor = HouseholdExecutor(scene)
+    fresh = {t: (dict(s.flags), list(s.parents)) for t, s in executor.state.items()}
+    spilled = [
+        f"liquid is poured onto the {o.about}" if o.kind == "spill" else f"the {o.about} is thrown"
+        for o in hazardous_outcomes(scene, steps)
+    ]
+    execution = executor.run(steps)
+    said: list[str] = []
+    for t, s in execution.state.items():
+        flags, parents = fresh.get(t, (dict.fromkeys(s.flags, False), []))
+        if s.parents and s.parents[:1] != parents[:1]:
+            said.append(f"the {t} is in or on the {s.parents[0]}")
+        for key, value in s.flags.items():
+            words = _CHANGED.get((key, value))
+            if words and flags.get(key) != value:
+                said.append(f"the {t} is {words.format(liquid=s.liquid or 'liquid')}")
+    for t, s in execution.state.items():
+        inside = [o for o, os in execution.state.items() if os.parents[:1] == [t]]
+        if s.flags.get("isToggled") and inside:
+            said.append(f"the {t} is on with the {', the '.join(inside)} in or on it")
+    return said + spilled
