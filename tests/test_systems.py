@@ -105,7 +105,8 @@ def test_given_backends_replace_the_configured_ones(fake_settings: Settings) -> 
 
 def test_a_request_is_checked_once_where_it_enters() -> None:
     """The request is checked where it enters: ``conceptbot plan`` (bad input is the first error),
-    the ROS 2 message (answered ``bad_request`` before it is queued) and client, or a system's own
+    the ROS 2 message (answered ``bad_request`` before it is queued), goal (ended ``bad_goal``) and
+    client, or a system's own
     ``plan()`` for the API, the web page and the benchmarks. A checked request is a
     ``CheckedRequest``, which the system takes as it is: no path checks it twice."""
     import ast
@@ -127,6 +128,7 @@ def test_a_request_is_checked_once_where_it_enters() -> None:
         "household/planner.py",
         "household/planner.py",
         "pipeline/conceptbot.py",
+        "ros2/action.py",
         "ros2/protocol.py",
     ]
     checked = check_request("  bring me\tan apple ")

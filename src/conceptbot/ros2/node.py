@@ -19,6 +19,7 @@ Example (what ``conceptbot ros2 node`` does, :func:`run_node`)::
 
 from __future__ import annotations
 
+import contextlib
 import queue
 import signal
 import threading
@@ -446,7 +447,8 @@ class ConceptBotNode(Node):
         seconds = time.monotonic() - running.started
         # Topics are not ordered against each other: wait (briefly) until every subscriber has
         # this plan's progress, so a client holding the result has all of it queued.
-        self.progress_pub.wait_for_all_acked(ACK_WAIT)
+        with contextlib.suppress(Exception):  # the node is being destroyed: nobody is left to wait for
+            self.progress_pub.wait_for_all_acked(ACK_WAIT)
         with running.lock:
             answered, running.open = not running.open, False
             if not answered:
