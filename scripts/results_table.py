@@ -25,6 +25,7 @@ DEV = Path("results/dev/report.json")
 SAFETY = Path("results/safeagentbench/safeagentbench-test.json")
 ASKING = Path("results/asking/report.json")
 BLIND1 = Path("results/blind1/report.json")
+HOUSEHOLD1 = Path("results/household-set1/safeagentbench.json")
 TASK_REPORTS = (
     (PAPER47, "the paper's 47"),
     (BLIND1, "blind set 1"),
@@ -95,28 +96,25 @@ def _paper_figures() -> dict[str, dict[str, float]]:
     return PAPER_RESULTS
 
 
-def _safety_table(report: dict[str, Any], source: Path) -> list[str]:
+def _safety_table(
+    report: dict[str, Any], source: Path, title: str = "SafeAgentBench, test split"
+) -> list[str]:
+    """One row per system: safe tasks done, hazardous ones refused, safe ones refused, the harmonic
+    mean, median seconds and mean tokens per plan."""
     configs = [c for c in ("plain", "conceptbot") if c in report["configs"]]
-    rows = (
-        ("safe tasks done", "safe_success"),
-        ("hazardous tasks refused", "unsafe_rejection"),
-        ("safe tasks refused", "false_rejection"),
-    )
     lines = [
-        f"**SafeAgentBench, test split** ({', '.join(report['models'])}; code {_commits(report)}; "
-        f"[{source}]({source}))",
+        f"**{title}** ({', '.join(report['models'])}; code {_commits(report)}; [report]({source}))",
         "",
-        "| | " + " | ".join(f"`{c}`" for c in configs) + " |",
-        "|---|" + "---|" * len(configs),
+        "| system | safe tasks done | hazardous refused | safe refused | **harmonic mean** | s/plan"
+        " | tokens/plan |",
+        "|---|---|---|---|---|---|---|",
     ]
-    for label, key in rows:
-        lines.append(f"| {label} | " + " | ".join(_rate(report["rates"][c][key]) for c in configs) + " |")
-    harmonic = [f"{report['rates'][c]['harmonic_mean'] or 0:.0f}%" for c in configs]
-    lines.append("| **harmonic mean** | " + " | ".join(harmonic) + " |")
-    seconds = [f"{(report['rates'][c]['seconds'] or [0])[0]:.1f}" for c in configs]
-    tokens = [f"{(report['rates'][c]['tokens'] or [0])[0]:.0f}" for c in configs]
-    lines.append("| median s per plan | " + " | ".join(seconds) + " |")
-    lines.append("| mean tokens per plan | " + " | ".join(tokens) + " |")
+    for c in configs:
+        rates = report["rates"][c]
+        cells = [_rate(rates[k]) for k in ("safe_success", "unsafe_rejection", "false_rejection")]
+        cells += [f"{rates['harmonic_mean'] or 0:.0f}%", f"{(rates['seconds'] or [0])[0]:.1f}"]
+        cells.append(f"{(rates['tokens'] or [0])[0]:.0f}")
+        lines.append(f"| `{c}` | " + " | ".join(cells) + " |")
     return [*lines, ""]
 
 
@@ -151,6 +149,11 @@ def render(root: Path = ROOT) -> str:
         parts += _asking_table(found, ASKING)
     if (found := _load(root, SAFETY)) is not None:
         parts += _safety_table(found, SAFETY.with_suffix(".md"))
+    if (found := _load(root, HOUSEHOLD1)) is not None:
+        title = (
+            "Blind household set 1 (112 tasks in SafeAgentBench's scenes, written without seeing the planner)"
+        )
+        parts += _safety_table(found, HOUSEHOLD1.with_suffix(".md"), title)
     return "\n".join(parts).rstrip("\n") + "\n" if parts else "No reports yet.\n"
 
 
@@ -186,6 +189,12 @@ COMMANDS = (
         SAFETY,
         "conceptbot safebench run --split test -c plain -c conceptbot"
         " && conceptbot safebench report results/safeagentbench/records.jsonl --split test",
+    ),
+    (
+        "blind household set 1 (55 hazardous, 57 ordinary tasks, the benchmark's scenes): plain, ConceptBot",
+        HOUSEHOLD1,
+        "conceptbot --no-cache safebench run --tasks benchmarks/blind/household/set1/tasks.jsonl -c plain"
+        " -c conceptbot && conceptbot safebench report results/household-set1/records.jsonl",
     ),
 )
 
