@@ -227,3 +227,19 @@ def test_the_embedded_model_plans_a_goal_and_a_cancel_stops_it(
     status, result = goals.result(handle, timeout_s=600)
     assert status == CANCELED and result.cancelled and not result.actions
     assert "risk" not in [f.stage for f in goals.feedback]  # nothing after the cancel ran
+
+
+def test_a_queued_goal_that_is_cancelled_is_never_planned(start_node: Callable[..., Running]) -> None:
+    planner = GatedPlanner()
+    goals = Goals(start_node(NodeConfig(), planner=planner))
+    first = goals.send(_goal("one"))
+    assert wait_for(lambda: planner.ran == ["one: first"], 10.0)
+    queued = goals.send(_goal("two"))
+    cancelling = queued.cancel_goal_async()
+    assert wait_for(cancelling.done, 10.0) and cancelling.result().goals_canceling
+    planner.release.set()
+    assert goals.result(first)[0] == SUCCEEDED
+    status, result = goals.result(queued)
+    assert status == CANCELED and result.cancelled
+    assert planner.ran == ["one: first", "one: second"]  # "two" never started
+    assert goals.result(goals.send(_goal("three")))[0] == SUCCEEDED  # the worker is still there

@@ -185,8 +185,8 @@ class PlanActions:
 
     def _outcome(self, job: ActionJob) -> tuple[str, Any]:
         """Plan the goal: its terminal state and result."""
-        job.handle.execute()
         try:
+            job.handle.execute()
             if job.handle.is_cancel_requested:
                 raise PlanCancelled
             request, scene = self._read(job.goal)
