@@ -9,7 +9,6 @@ client (a behaviour tree's action node does the same through its own library)::
 from __future__ import annotations
 
 import json
-import time
 import uuid
 from collections.abc import Callable
 from typing import Any
@@ -23,7 +22,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.signals import SignalHandlerOptions
 
 from conceptbot.core.errors import ConceptBotError
-from conceptbot.ros2.client import DRAIN_S, topic_base
+from conceptbot.ros2.client import DRAIN_S, spin_until, topic_base
 
 STATUS = {4: "succeeded", 5: "canceled", 6: "aborted"}  # action_msgs/GoalStatus
 CANCEL_WAIT_S = 60.0  # a cancel lets the model call in flight finish
@@ -82,7 +81,7 @@ def send_goal(
         executor = SingleThreadedExecutor(context=context)
         executor.add_node(node)
         try:
-            if not _spin_until(executor, client.server_is_ready, discovery_s):
+            if not spin_until(executor, client.server_is_ready, discovery_s):
                 raise ConceptBotError(
                     f"no ConceptBot Plan action at {base}/plan",
                     hint="start one with `conceptbot ros2 node` (same ROS_DOMAIN_ID, same --name)",
@@ -99,7 +98,7 @@ def send_goal(
                 request=request, scene_name=scene_name, scene_json=scene_json, ask=answer is not None
             )
             sent = client.send_goal_async(goal, feedback_callback=feedback)
-            _spin_until(executor, sent.done, discovery_s)
+            spin_until(executor, sent.done, discovery_s)
             handle = sent.result() if sent.done() else None
             if handle is None or not handle.accepted:
                 raise ConceptBotError("the node rejected the goal", hint="its queue is full: try again later")
@@ -114,29 +113,19 @@ def send_goal(
                 return got.done()
 
             try:
-                finished = _spin_until(executor, done, timeout_s)
+                finished = spin_until(executor, done, timeout_s)
             except KeyboardInterrupt:
                 handle.cancel_goal_async()
-                finished = _spin_until(executor, got.done, CANCEL_WAIT_S)
+                finished = spin_until(executor, got.done, CANCEL_WAIT_S)
             if not finished:
                 raise ConceptBotError(
                     f"no result for the goal within {timeout_s:g} s", hint="raise --timeout; the goal runs on"
                 )
             # Feedback and result travel apart: take the feedback already on its way.
-            _spin_until(executor, lambda: False, DRAIN_S)
+            spin_until(executor, lambda: False, DRAIN_S)
             return result_dict(got.result().status, got.result().result)
         finally:
             executor.shutdown()
             node.destroy_node()
     finally:
         context.try_shutdown()
-
-
-def _spin_until(executor: SingleThreadedExecutor, done: Callable[[], bool], timeout_s: float) -> bool:
-    """Spin until ``done()`` or ``timeout_s`` passes; whether it got done."""
-    deadline = time.monotonic() + timeout_s
-    while not done():
-        if time.monotonic() >= deadline:
-            return False
-        executor.spin_once(timeout_sec=0.05)
-    return True

@@ -80,7 +80,7 @@ def send_request(
         executor = SingleThreadedExecutor(context=context)
         executor.add_node(node)
         try:
-            found = _spin_until(
+            found = spin_until(
                 executor,
                 lambda: (
                     publisher.get_subscription_count() > 0
@@ -95,13 +95,13 @@ def send_request(
                     hint="start one with `conceptbot ros2 node` (same ROS_DOMAIN_ID, same --name)",
                 )
             publisher.publish(String(data=encode(payload)))
-            if not _spin_until(executor, lambda: bool(results), timeout_s):
+            if not spin_until(executor, lambda: bool(results), timeout_s):
                 raise ConceptBotError(
                     f"no result for request {payload['id']} within {timeout_s:g} s",
                     hint="the node may be busy with a long plan; raise --timeout",
                 )
             # The node publishes a result once its progress is acknowledged: it is queued here.
-            _spin_until(executor, lambda: False, DRAIN_S)
+            spin_until(executor, lambda: False, DRAIN_S)
             return results[0]
         finally:
             executor.shutdown()
@@ -141,8 +141,8 @@ def _decode(msg: String) -> dict[str, Any]:
     return data if isinstance(data, dict) else {}
 
 
-def _spin_until(executor: SingleThreadedExecutor, done: Callable[[], bool], timeout_s: float) -> bool:
-    """Spin until ``done()`` or ``timeout_s`` passes; whether it got done."""
+def spin_until(executor: SingleThreadedExecutor, done: Callable[[], bool], timeout_s: float) -> bool:
+    """Spin until ``done()`` or ``timeout_s`` passes; whether it got done (the action client too)."""
     deadline = time.monotonic() + timeout_s
     while not done():
         if time.monotonic() >= deadline:
