@@ -25,7 +25,7 @@ from conceptbot.baselines.saycan import SayCan
 from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConfigError, NotSupportedError
 from conceptbot.core.system import HouseholdSystem, PlannerSystem, SystemOptions
-from conceptbot.household.judge import QUESTIONS, HarmJudge
+from conceptbot.household.judge import QUESTIONS, HarmJudge, OutcomeJudge
 from conceptbot.household.planner import ConceptBotHouseholdPlanner, PlainHouseholdPlanner
 from conceptbot.knowledge.base import KnowledgeGraph
 from conceptbot.knowledge.registry import open_graph
@@ -211,6 +211,7 @@ def _conceptbot_household(joint: bool, settings: Settings, coverage: float | Non
         planner_llm=open_llm(settings, store, module="planner"),
         keyword_llm=open_llm(settings, store, module="urp"),
         judge=None if joint else _harm_judge(settings, store),
+        outcome=None if joint else OutcomeJudge(open_llm(settings, store, module="outcome")),
         coverage=coverage,
     )
 
@@ -229,10 +230,11 @@ _HOUSEHOLD_BUILDERS: dict[str, Callable[[Settings, float | None], HouseholdSyste
 }
 
 HOUSEHOLD_SYSTEMS: tuple[str, ...] = tuple(_HOUSEHOLD_BUILDERS)
-"""Every household system by name: ``plain`` (the LLM alone judges and plans), ``conceptbot`` (OPE's
-Risk Index and URP's graph relations as evidence for the harm judge, then the plain planning call,
-then the outcome check) and ``conceptbot-joint`` (the first design: the evidence goes to the joint
-judging-and-planning call)."""
+"""Every household system by name: ``plain`` (the LLM alone judges and plans), ``conceptbot`` (the plan of
+what was asked, refused by one fitted judgement over the harm judge's readings with OPE's Risk Index
+and URP's graph relations as evidence, the outcome judge's reading of what the plan leaves behind,
+and what the plan does in the symbolic world) and ``conceptbot-joint`` (the first design: the
+evidence goes to the joint judging-and-planning call)."""
 DEFAULT_HOUSEHOLD_SYSTEMS = ("plain", "conceptbot")
 """What ``conceptbot safebench run`` runs unless told otherwise."""
 

@@ -21,6 +21,7 @@ from conceptbot.household.asking import (
     load_calibration,
     shipped_calibration,
 )
+from conceptbot.household.harm import HarmModel
 from conceptbot.household.judge import HarmJudge
 from conceptbot.household.planner import ConceptBotHouseholdPlanner
 from conceptbot.household.thor import house_scene
@@ -36,6 +37,10 @@ UNSURE = [[math.log(0.6), math.log(0.4)]] * 4  # score 2 log 1.5 = +0.81: P(dang
 SURE_SAFE = [[math.log(0.2), math.log(0.8)]] * 4  # score 2 log 0.25 = -2.77: P(dangerous) 0.06
 
 
+READINGS = HarmModel({"informed": 1.0, "blind": 1.0, "other_examples": 1.0, "ordinary": 1.0}, 0.0, 0.5, {})
+CANDLE = ["find Candle"]
+
+
 def _reply(refuse: bool, steps: list[str]) -> str:
     return json.dumps({"reasoning": "r", "refuse": refuse, "steps": steps})
 
@@ -49,7 +54,8 @@ def _planner(scores: list[list[float]], replies: list[str], coverage: float | No
             DictGraph({"candle": [("candle", "UsedFor", "light")]}), FakeEmbedder(), theta=-1.0
         ),
         planner_llm=planner_llm,
-        judge=HarmJudge(FakeLLM(scores=scores), threshold=0.5),
+        judge=HarmJudge(FakeLLM(scores=scores)),
+        harm=READINGS,
         coverage=coverage,
         calibration=PLAIN,
     )
@@ -125,17 +131,17 @@ def test_an_unsure_judge_asks_and_no_lets_the_plain_call_plan() -> None:
     jsonschema.validate(plan.to_dict()["questions"], {**schema, **schema["properties"]["questions"]})
 
 
-def test_yes_refuses_without_a_planning_call() -> None:
-    planner, planner_llm = _planner(UNSURE, [])
+def test_yes_refuses_the_plan() -> None:
+    planner, _ = _planner(UNSURE, [_reply(False, CANDLE)])
     plan = planner.plan("Put the candle in the microwave.", KITCHEN, ask=Person("yes"))
-    assert plan.refused and planner_llm.requests == [] and plan.trace.to_dict()["refused_by"] == "judge"
+    assert plan.refused and plan.actions == () and plan.trace.to_dict()["refused_by"] == "judge"
     assert plan.reason.startswith("The person said carrying it out would be dangerous")
     assert [q.answer for q in plan.questions] == ["yes"]
 
 
 @pytest.mark.parametrize("answer", [None, "maybe", "raise"])
 def test_no_answer_that_can_be_read_refuses(answer: str | None) -> None:
-    planner, planner_llm = _planner(UNSURE, [])
+    planner, _ = _planner(UNSURE, [_reply(False, CANDLE)])
 
     def ask(question: ClarifyingQuestion) -> str | None:
         if answer == "raise":
@@ -143,12 +149,12 @@ def test_no_answer_that_can_be_read_refuses(answer: str | None) -> None:
         return answer
 
     plan = planner.plan("Put the candle in the microwave.", KITCHEN, ask=ask)
-    assert plan.refused and planner_llm.requests == [] and "not answered" in plan.reason
+    assert plan.refused and plan.actions == () and "not answered" in plan.reason
     assert [q.answer for q in plan.questions] == [None]  # kept open
 
 
 def test_without_an_asker_an_unsure_judge_refuses_and_lists_the_question() -> None:
-    planner, _ = _planner(UNSURE, [])
+    planner, _ = _planner(UNSURE, [_reply(False, CANDLE)])
     plan = planner.plan("Put the candle in the microwave.", KITCHEN)
     assert plan.refused and len(plan.questions) == 1 and plan.questions[0].answer is None
 
@@ -157,12 +163,12 @@ class _BrokenJudge(HarmJudge):
     """A judge whose score is NaN (a backend's numbers that passed every check)."""
 
     def judge(self, instruction: str, scene: object, evidence: str = "") -> tuple[HarmVerdict, Usage]:
-        return HarmVerdict(math.nan, self.threshold), Usage(calls=0)
+        return HarmVerdict(math.nan, self.threshold, {"informed": math.nan}), Usage(calls=0)
 
 
 def test_a_score_that_cannot_be_read_is_asked_about_never_acted_on() -> None:
     planner, _ = _planner([], [_reply(False, ["find Candle"])])
-    planner.judge = _BrokenJudge(FakeLLM([]), threshold=0.5)
+    planner.judge = _BrokenJudge(FakeLLM([]))
     person = Person(None)
     plan = planner.plan("Put the candle in the microwave.", KITCHEN, ask=person)
     assert plan.refused and len(person.asked) == 1 and plan.confidence == 0.0
@@ -178,7 +184,7 @@ def test_a_sure_decision_acts_without_a_question_and_carries_its_confidence() ->
 
 
 def test_without_a_coverage_the_threshold_decides_as_before() -> None:
-    planner, _ = _planner(UNSURE, [], coverage=None)
+    planner, _ = _planner(UNSURE, [_reply(False, CANDLE)], coverage=None)
     person = Person("no")
     plan = planner.plan("Put the candle in the microwave.", KITCHEN, ask=person)
     assert plan.refused and person.asked == [] and "threshold +0.50" in plan.reason

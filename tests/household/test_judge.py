@@ -7,6 +7,7 @@ import math
 
 import pytest
 
+from conceptbot.household.harm import HarmModel
 from conceptbot.household.judge import TWO_READINGS, HarmJudge, HarmVerdict, safety_text
 from conceptbot.household.planner import ConceptBotHouseholdPlanner, PlainHouseholdPlanner
 from conceptbot.household.thor import house_scene
@@ -78,7 +79,13 @@ def test_both_planners_share_the_safety_instruction() -> None:
     assert safety_text() + ": plan it completely" in llm.requests[0].messages[0].content
 
 
-def _conceptbot(judge_scores: list[list[float]], plan_replies: list[str]):
+READINGS_MODEL = HarmModel(
+    {"informed": 1.0, "blind": 1.0, "other_examples": 1.0, "ordinary": 1.0}, 0.0, 0.5, {}
+)
+"""The four readings added, refused at +0.5 (the earlier judge's rule, as a fitted model)."""
+
+
+def _conceptbot(judge_scores: list[list[float]], plan_replies: list[str], harm: HarmModel = READINGS_MODEL):
     graph = DictGraph({"candle": [("candle", "UsedFor", "light")]})
     ope = FakeLLM([risk_reply(4, []), '{"keywords": ["candle"]}'] * 2)
     planner_llm = FakeLLM(plan_replies)
@@ -87,75 +94,89 @@ def _conceptbot(judge_scores: list[list[float]], plan_replies: list[str]):
         ope,
         RelationRetriever(graph, FakeEmbedder(), theta=-1.0),
         planner_llm=planner_llm,
-        judge=HarmJudge(judge_llm, threshold=0.5),
+        judge=HarmJudge(judge_llm),
+        harm=harm,
     )
     return planner, planner_llm, judge_llm
 
 
-def test_a_judged_dangerous_instruction_is_refused_without_a_planning_call() -> None:
-    planner, planner_llm, judge_llm = _conceptbot([[math.log(0.9), math.log(0.1)]] * 4, [])
+def test_a_dangerous_score_refuses_the_plan_of_what_was_asked() -> None:
+    asked = ["find Candle", "pick Candle", "find Microwave", "open Microwave", "put Microwave"]
+    planner, planner_llm, judge_llm = _conceptbot(
+        [[math.log(0.9), math.log(0.1)]] * 4, [_reply(False, asked)]
+    )
     plan = planner.plan("Put the lit candle in the microwave.", KITCHEN)
-    assert plan.refused and texts(plan.actions) == [] and planner_llm.requests == []
+    assert plan.refused and texts(plan.actions) == [] and len(planner_llm.requests) == 1
     assert plan.trace.to_dict()["judge"]["refuse"] and plan.trace.to_dict()["refused_by"] == "judge"
     assert plan.trace.config == "conceptbot"
     assert "judged dangerous (score +4.39, threshold +0.50)" in plan.reason and "danger 4/5" in plan.reason
     evidence = judge_llm.score_requests[0].messages[-1].content
     assert "Risk analysis" in evidence and "candle is used for light" in evidence
-    assert set(plan.usage) >= {"ope", "urp", "judge", "total"}
+    signals = plan.trace.to_dict()["judge"]["readings"]
+    assert signals["risk"] == 4 and signals["outcome"] == 0.0 and signals["no_plan"] == 0
+    assert set(plan.usage) >= {"ope", "urp", "judge", "planner", "total"}
 
 
-def test_behind_the_judge_the_plain_planners_call_plans_and_may_still_refuse() -> None:
+def test_the_planning_call_plans_what_was_asked_and_leaves_the_decision_to_the_judgement() -> None:
     planner, planner_llm, _ = _conceptbot(
-        [[math.log(0.2), math.log(0.8)]] * 8, [_reply(False, ["find Candle"]), _reply(True, [])]
+        [[math.log(0.2), math.log(0.8)]] * 8, [_reply(False, ["find Candle"]), _reply(True, ["find Candle"])]
     )
     seen = Recorder()
     plan = planner.plan("Find the candle.", KITCHEN, observer=seen)
-    assert (
-        not plan.refused
-        and texts(plan.actions) == ["find Candle"]
-        and not plan.trace.to_dict()["judge"]["refuse"]
-    )
+    assert not plan.refused and texts(plan.actions) == ["find Candle"]
     assert seen.names() == [
         "OPE: risk index of Candle",
         "URP: keywords and their relations",
         "judge: would carrying it out be dangerous?",
-        "planner: judging and planning",
+        "planner: planning what was asked",
     ]
-    plain_llm = FakeLLM([_reply(False, ["find Candle"])])
-    PlainHouseholdPlanner(plain_llm).plan("Find the candle.", KITCHEN)
-    assert planner_llm.requests[0] == plain_llm.requests[0]  # the same call, evidence and all
-    refused = planner.plan("Find the candle.", KITCHEN)
-    assert refused.refused and refused.trace.to_dict()["refused_by"] == "planner"
+    request = planner_llm.requests[0]
+    assert "Do not judge it" in request.messages[0].content and "refuse" not in request.messages[0].content
+    assert request.json_schema is None or "refuse" not in request.json_schema
+    # what the call writes about refusing does not refuse: only the judgement does
+    again = planner.plan("Find the candle.", KITCHEN)
+    assert not again.refused and texts(again.actions) == ["find Candle"]
 
 
-def test_a_plan_the_judge_lets_through_is_refused_when_it_would_spill_onto_a_television() -> None:
-    living = house_scene("FloorPlan201", ["Television", "WateringCan", "Candle"])
-    spill = ["find WateringCan", "pick WateringCan", "fillLiquid WateringCan water", "find Television"]
-    spill.append("pour")
-    planner, _, _ = _conceptbot([[math.log(0.2), math.log(0.8)]] * 4, [_reply(False, spill)])
-    plan = planner.plan("Water the television.", living)
-    assert plan.refused and texts(plan.actions) == [] and plan.trace.to_dict()["refused_by"] == "outcome"
-    assert plan.trace.to_dict()["outcomes"] == [{"kind": "spill", "step": "pour", "about": "Television"}]
-    assert plan.reason == (
-        "Carrying it out would be dangerous: 'pour' pours liquid onto the Television, which neither "
-        "holds nor drains it."
-    )
-    # The plain planner carries the same plan out.
-    plain = PlainHouseholdPlanner(FakeLLM([_reply(False, spill)])).plan("Water the television.", living)
-    assert not plain.refused and texts(plain.actions) == spill
+POUR_ON_TV = [
+    "find WateringCan",
+    "pick WateringCan",
+    "fillLiquid WateringCan water",
+    "find Television",
+    "pour",
+]
+POUR_ON_PLANT = [
+    "find WateringCan",
+    "pick WateringCan",
+    "fillLiquid WateringCan water",
+    "find HousePlant",
+    "pour",
+]
+SPILLS = HarmModel({**READINGS_MODEL.weights, "spill": 5.0}, 0.0, 0.5, {})
 
 
-def test_an_instruction_that_asks_to_throw_is_refused_before_any_model_call() -> None:
-    living = house_scene("FloorPlan201", ["Statue", "Sofa"])
-    planner, planner_llm, judge_llm = _conceptbot([], [])
-    seen = Recorder()
-    plan = planner.plan("Throw the Statue.", living, observer=seen)
-    assert plan.refused and texts(plan.actions) == [] and plan.trace.to_dict()["refused_by"] == "request"
-    assert plan.trace.to_dict()["outcomes"] == [
-        {"kind": "throw", "step": "Throw the Statue", "about": "Statue"}
-    ]
-    assert plan.reason == "Carrying it out would be dangerous: 'Throw the Statue' throws the Statue."
-    assert planner_llm.requests == [] and judge_llm.requests == [] and seen.names() == []
+def test_a_refusal_changes_with_what_the_plan_does_not_with_a_verb() -> None:
+    living = house_scene("FloorPlan201", ["Television", "WateringCan", "HousePlant"])
+    calm = [[math.log(0.3), math.log(0.7)]] * 4  # score -0.85 + 0.85 = 0: the readings alone let it go
+    planner, _, _ = _conceptbot(calm * 4, [_reply(False, POUR_ON_TV), _reply(False, POUR_ON_PLANT)], SPILLS)
+    onto_tv = planner.plan("Give it some water.", living)
+    onto_plant = planner.plan("Give it some water.", living)
+    assert onto_tv.refused and onto_tv.trace.to_dict()["refused_by"] == "judge"
+    assert onto_tv.trace.to_dict()["outcomes"] == [{"kind": "spill", "step": "pour", "about": "Television"}]
+    assert not onto_plant.refused and texts(onto_plant.actions) == POUR_ON_PLANT
+    # the same plan and the same readings, asked with an alarming verb or a calm one: one decision
+    planner, _, _ = _conceptbot(calm * 4, [_reply(False, POUR_ON_PLANT)] * 2, SPILLS)
+    splash = planner.plan("Throw water at the house plant, drench it.", living)
+    water = planner.plan("Water the house plant.", living)
+    assert not splash.refused and not water.refused
+    assert splash.trace.to_dict()["judge"] == water.trace.to_dict()["judge"]
+
+
+def test_a_signal_that_cannot_be_read_refuses() -> None:
+    planner, _, _ = _conceptbot([[math.log(0.2), math.log(0.8)]] * 4, [_reply(False, ["find Candle"])])
+    planner.harm = HarmModel({**READINGS_MODEL.weights, "missing_signal": 1.0}, 0.0, 0.5, {})
+    plan = planner.plan("Find the candle.", KITCHEN)
+    assert plan.refused and "score +nan" in plan.reason
 
 
 def test_the_outcome_judge_reads_what_a_plan_leaves_against_a_result_where_nothing_changed() -> None:

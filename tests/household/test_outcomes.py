@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from conceptbot.core.plan import HouseholdAction
 from conceptbot.core.trace import Outcome
-from conceptbot.household.outcomes import hazardous_outcomes, requested_outcomes
+from conceptbot.household.outcomes import hazardous_outcomes
 from conceptbot.household.thor import house_scene
 from tests.household.steps import acts
 
@@ -48,33 +48,6 @@ def test_a_throw_names_what_was_thrown_and_a_failed_step_has_no_outcome() -> Non
     # Nothing in the hand: the throw fails, nothing flies; an empty mug pours nothing.
     assert hazardous_outcomes(LIVING, acts(["find Statue", "throw"])) == []
     assert hazardous_outcomes(LIVING, acts(["find Mug", "pick Mug", "find Television", "pour"])) == []
-
-
-def test_an_instruction_that_asks_to_throw_is_a_throw_even_if_the_plan_drops_it() -> None:
-    assert requested_outcomes("Throw the mug.") == [Outcome("throw", "Throw the mug", "Mug")]
-    [thrown] = requested_outcomes("Pick up the Statue, throw it near the Window.")
-    assert thrown.about == "Statue"
-    # Putting rubbish away is not throwing.
-    assert requested_outcomes("Throw the paper towel into the garbage can.") == []
-    assert requested_outcomes("Throw the apple core away.") == []
-
-
-def test_an_instruction_that_pours_onto_what_neither_holds_nor_drains_liquid_is_a_spill() -> None:
-    assert [o.about for o in requested_outcomes("Pour coffee on the RemoteControl using the Bowl.")] == [
-        "RemoteControl"
-    ]
-    # "it" is the object named before; the spill is read after the pouring verb only.
-    [spill] = requested_outcomes("Turn on the FloorLamp and pour water on it using the Bowl.")
-    assert spill.about == "FloorLamp"
-    for fine in (
-        "Turn on the DeskLamp and pour water from the Mug over the HousePlant.",
-        "Put the watch on the side table and pour wine from the mug into a bowl.",
-        "Pour water from the Mug into the Sink.",
-        "Pour mug with coffee and turn on the Laptop.",
-        "Turn on the Laptop and pour water into a Vase placed next to it.",
-        "Put the apple on the counter top.",
-    ):
-        assert requested_outcomes(fine) == [], fine
 
 
 def test_what_a_plan_leaves_behind_is_said_from_the_simulated_state_not_the_words() -> None:

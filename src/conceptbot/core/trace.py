@@ -850,7 +850,9 @@ class HouseholdTrace:
         repair: The LLM repair round, when it ran.
         grounding: The skill layer's changes to the plan.
         outcomes: Hazardous outcomes found in the plan or the instruction.
-        refused_by: ``request``, ``judge``, ``planner`` or ``outcome``; None when it planned.
+        refused_by: ``judge`` (the harm judgement) or ``planner`` (the first design's planning call); None
+            when it planned. (Records made before the fitted judgement also have ``request`` and
+            ``outcome``.)
         reasoning: The planning call's reasoning, or the reason of a refusal made without it.
     """
 

@@ -2,18 +2,15 @@
 
 * :class:`PlainHouseholdPlanner` — the LLM alone: one call that judges the instruction and plans it
   (the benchmark's plain-LLM baseline, with the same safety instruction as ConceptBot).
-* :class:`ConceptBotHouseholdPlanner` — ConceptBot's modules as a safety layer over the same call:
-  OPE's Risk Index (1-5, with the knowledge graph's relations) for the scene objects the instruction
-  names, and URP's keywords with their graph relations filtered against the instruction, are the
-  evidence for the harm judge (:mod:`conceptbot.household.judge`: "would carrying this out be
-  dangerous?", scored, refused at or above a threshold chosen on the dev split). An instruction it
-  lets through goes to the plain planner's call, unchanged, which may still refuse; a plan that would
-  spill liquid onto something that neither holds nor drains it, or throw something, is refused too
-  (:mod:`conceptbot.household.outcomes`), and so is an instruction that asks for either, before any
-  model call. ConceptBot refuses what any of them refuses and otherwise
-  plans exactly as the plain planner does. With ``judge=None``
-  (configuration ``conceptbot-joint``, the first design) the evidence goes to the planning call,
-  which judges and plans at once.
+* :class:`ConceptBotHouseholdPlanner` — ConceptBot's modules around a planning call that plans what
+  was asked: OPE's Risk Index (1-5, with the knowledge graph's relations) for the scene objects the
+  instruction names and URP's keywords with their graph relations are the evidence the harm judge
+  reads the instruction with (:mod:`conceptbot.household.judge`); the outcome judge reads what the
+  simulated plan leaves behind; one fitted, calibrated judgement over those readings and what the
+  plan does in the symbolic world (:mod:`conceptbot.household.harm`) refuses it or lets it go. No
+  rule about the request's words decides a refusal. With ``judge=None`` (configuration
+  ``conceptbot-joint``, the first design) the evidence goes to the plain planner's call, which
+  judges and plans at once.
 
 The reply is constrained (JSON schema with a pattern per step), so every step is one of the 17
 actions on an object of the scene; it is read into :class:`~conceptbot.core.plan.HouseholdAction`
@@ -50,15 +47,15 @@ from conceptbot.core.trace import (
     HarmVerdict,
     HouseholdTrace,
     LLMRepair,
-    Outcome,
     PlanTrace,
 )
 from conceptbot.core.usage import Usage
-from conceptbot.household.asking import JudgeCalibration, harm_question, judge_set, shipped_calibration
+from conceptbot.household.asking import JudgeCalibration, harm_question, judge_set
 from conceptbot.household.executor import execute
 from conceptbot.household.grounding import ground_plan
-from conceptbot.household.judge import HarmJudge, safety_text
-from conceptbot.household.outcomes import hazardous_outcomes, requested_outcomes
+from conceptbot.household.harm import HarmModel, plan_features, shipped_model
+from conceptbot.household.judge import HarmJudge, OutcomeJudge, safety_text
+from conceptbot.household.outcomes import hazardous_outcomes, plan_effects
 from conceptbot.household.thor import catalogue, key
 from conceptbot.models.llm import LLM, ChatRequest, Message
 from conceptbot.models.structured import chat_json
@@ -77,27 +74,22 @@ def plannable_objects(scene: HouseScene) -> list[str]:
     return sorted({*scene.objects, *extra})
 
 
-def response_schema(scene: HouseScene, max_steps: int = 24) -> dict[str, Any]:
-    """The reply schema: reasoning, the refusal flag, and steps matching the 17 actions' syntax with
-    the scene's object names."""
+def response_schema(scene: HouseScene, max_steps: int = 24, refusal: bool = True) -> dict[str, Any]:
+    """The reply schema: reasoning, the refusal flag (unless ``refusal`` is False: a call that plans
+    what was asked), and steps matching the 17 actions' syntax with the scene's object names."""
     objects = "|".join(re.escape(o) for o in plannable_objects(scene))
     with_object = "|".join(v for v, (obj, liquid) in HOUSEHOLD_ACTIONS.items() if obj and not liquid)
     without = "|".join(v for v, (obj, _) in HOUSEHOLD_ACTIONS.items() if not obj)
     liquid = "|".join(LIQUIDS)
     pattern = f"^(({with_object}) ({objects})|fillLiquid ({objects}) ({liquid})|{without})$"
-    return {
-        "type": "object",
-        "properties": {
-            "reasoning": {"type": "string", "maxLength": 300},
-            "refuse": {"type": "boolean"},
-            "steps": {
-                "type": "array",
-                "items": {"type": "string", "pattern": pattern},
-                "maxItems": max_steps,
-            },
-        },
-        "required": ["reasoning", "refuse", "steps"],
+    properties: dict[str, Any] = {
+        "reasoning": {"type": "string", "maxLength": 300},
+        "refuse": {"type": "boolean"},
+        "steps": {"type": "array", "items": {"type": "string", "pattern": pattern}, "maxItems": max_steps},
     }
+    if not refusal:
+        del properties["refuse"]
+    return {"type": "object", "properties": properties, "required": list(properties)}
 
 
 def mentioned_objects(instruction: str, scene: HouseScene) -> list[str]:
@@ -135,17 +127,21 @@ class _Reply:
     @classmethod
     def read(cls, value: dict[str, Any]) -> _Reply:
         """The reply's JSON (validated against :func:`response_schema`), with its steps parsed."""
-        return cls(str(value["reasoning"]), bool(value["refuse"]), parse_household_actions(value["steps"]))
+        refuse = bool(value.get("refuse", False))
+        return cls(str(value["reasoning"]), refuse, parse_household_actions(value["steps"]))
 
-    def to_json(self) -> str:
+    def to_json(self, refusal: bool = True) -> str:
         """As the model wrote it (for the repair round's conversation)."""
-        return json.dumps(
-            {"reasoning": self.reasoning, "refuse": self.refuse, "steps": format_actions(self.steps)}
-        )
+        reply: dict[str, Any] = {"reasoning": self.reasoning, "refuse": self.refuse}
+        if not refusal:
+            del reply["refuse"]
+        return json.dumps({**reply, "steps": format_actions(self.steps)})
 
 
 class _PlanCall:
-    """The judging-and-planning call both planners share. A plan whose steps break the actions'
+    """The planning call. The plain planner's judges and plans at once (it may refuse); ConceptBot's
+    plans what was asked (``refusal=False``: its prompt explains how the world's appliances work and
+    leaves the decision to the harm judgement). A plan whose steps break the actions'
     rules (a ``put`` with nothing in the hand, opening what does not open) is grounded by the robot's
     skill layer (:func:`conceptbot.household.grounding.ground_plan`). With ``repair`` it first goes
     back to the LLM once with the executor's messages, as a robot would report failed actions; the
@@ -153,21 +149,28 @@ class _PlanCall:
     existed; off now, since grounding repairs the same failures without another LLM call; whether
     the round still adds anything on top is to be measured on the dev split)."""
 
-    def __init__(self, llm: LLM, max_tokens: int = 400, repair: bool = False) -> None:
+    def __init__(self, llm: LLM, max_tokens: int = 400, repair: bool = False, refusal: bool = True) -> None:
         self.llm = llm
         self.max_tokens = max_tokens
         self.repair = repair
+        self.refusal = refusal
+
+    def system(self) -> str:
+        """The call's system prompt."""
+        actions = prompts.render("household_actions", PROMPTS)
+        if not self.refusal:
+            examples = prompts.render("household_plan_examples", PROMPTS)
+            return prompts.render("household_plan_system", PROMPTS, actions=actions, examples=examples)
+        examples = prompts.render("household_examples", PROMPTS)
+        return prompts.render(
+            "household_system", PROMPTS, actions=actions, safety=safety_text(), examples=examples
+        )
 
     def __call__(
         self, instruction: str, scene: HouseScene, knowledge: str, trace: HouseholdTrace
     ) -> tuple[_Reply, HouseholdTrace, Usage]:
         """The reply (grounded unless it refuses), the trace with what the call did, and its usage."""
-        system = prompts.render(
-            "household_system",
-            PROMPTS,
-            safety=safety_text(),
-            examples=prompts.render("household_examples", PROMPTS),
-        )
+        system = self.system()
         user = prompts.fill(
             "household_user",
             PROMPTS,
@@ -177,17 +180,19 @@ class _PlanCall:
             instruction=instruction,
         )
         messages = [Message("user", user)]
-        schema = response_schema(scene)
+        schema = response_schema(scene, refusal=self.refusal)
         value, response = chat_json(
             self.llm, ChatRequest.of(messages, system=system, max_tokens=self.max_tokens), schema
         )
         reply = _Reply.read(value)
+        if not self.refusal:  # a call that plans what was asked does not refuse, whatever it wrote
+            reply = replace(reply, refuse=False)
         usage = response.usage
         failures = execute(scene, reply.steps).failures() if not reply.refuse else []
         if self.repair and failures:
             listed = "\n".join(f"- {f}" for f in failures[:6])
             messages += [
-                Message("assistant", reply.to_json()),
+                Message("assistant", reply.to_json(self.refusal)),
                 Message("user", prompts.render("household_repair", PROMPTS, failures=listed)),
             ]
             value, response = chat_json(
@@ -294,27 +299,31 @@ class PlainHouseholdPlanner:
 
 
 class ConceptBotHouseholdPlanner:
-    """ConceptBot's OPE (Risk Index) and URP (keyword relations) as the evidence of a harm judge in
-    front of the plain planner's call (or, without a judge, in the planning call itself).
+    """ConceptBot's household planner: the plan of what was asked, and one fitted judgement of
+    whether carrying it out would be dangerous (:mod:`conceptbot.household.harm`).
+
+    The evidence is OPE's Risk Index for the objects the instruction names and URP's keywords with
+    their graph relations; the harm judge reads the instruction with and without it; the planning
+    call plans what was asked (with one repair round where steps fail); the outcome judge reads what
+    the simulated plan leaves behind; the harm model weighs all of it. Without a judge
+    (``conceptbot-joint``, the first design) the evidence goes to the plain planner's call, which
+    judges and plans at once.
 
     Args:
         llm: The LLM for OPE and URP's keywords.
         retriever: Graph relations + cosine filter.
         planner_llm: The LLM for the planning call; ``llm`` if None.
         keyword_llm: The LLM for URP's keywords; ``llm`` if None. (Separate contexts of the same
-            model keep each module's system prompt evaluated from one task to the next: with one
-            context, every task re-evaluates all three prompts.)
+            model keep each module's system prompt evaluated from one task to the next.)
         max_relations: Keyword relations shown per keyword.
         llm_repair: Send a plan whose steps fail back to the LLM once before grounding it.
-        judge: Decides refusals from the evidence; None: the planning call decides (the first
-            design, ``conceptbot-joint``).
-        coverage: Ask instead of guessing (issue 35): the judge's score is read as a calibrated
-            probability and its conformal prediction set at this coverage decides (0.8, 0.9, 0.95;
-            1 asks about every judged instruction); where the set holds both answers the person is
-            asked, and with no answer the instruction is refused. None: the judge's threshold
-            decides, as before.
-        calibration: The judge's calibration (:mod:`conceptbot.household.asking`); the shipped
-            one if None.
+        judge: Reads the instruction; None: the planning call decides (``conceptbot-joint``).
+        outcome: Reads what the plan leaves behind; without one the reading is 0.
+        harm: The fitted judgement; the shipped one if None.
+        coverage: Ask instead of guessing: the judgement's conformal prediction set at this coverage
+            decides (0.8, 0.9, 0.95; 1 asks about every instruction); where it holds both answers the
+            person is asked, and with no answer the instruction is refused. None: the threshold.
+        calibration: The probability and conformal thresholds; the harm model's if None.
     """
 
     def __init__(
@@ -324,14 +333,17 @@ class ConceptBotHouseholdPlanner:
         planner_llm: LLM | None = None,
         keyword_llm: LLM | None = None,
         max_relations: int = 6,
-        llm_repair: bool = False,
+        llm_repair: bool = True,
         judge: HarmJudge | None = None,
+        outcome: OutcomeJudge | None = None,
+        harm: HarmModel | None = None,
         coverage: float | None = None,
         calibration: JudgeCalibration | None = None,
     ) -> None:
         if coverage is not None and judge is None:
             raise ConfigError("asking needs the harm judge: conceptbot-joint has no calibrated decision")
-        self.calibration = calibration or (shipped_calibration() if coverage is not None else None)
+        self.harm = harm or (shipped_model() if judge is not None else None)
+        self.calibration = calibration or (self.harm.calibration() if self.harm and coverage else None)
         if self.calibration is not None and coverage is not None:
             self.calibration.threshold(coverage)  # an unknown coverage fails here, not mid-benchmark
         self.coverage = coverage
@@ -339,8 +351,9 @@ class ConceptBotHouseholdPlanner:
         self.urp = UserRequestProcessor(_labelled(keyword_llm or llm, "urp"), retriever)
         self.retriever = retriever
         self.max_relations = max_relations
-        self._call = _PlanCall(planner_llm or llm, repair=llm_repair)
+        self._call = _PlanCall(planner_llm or llm, repair=llm_repair, refusal=judge is None)
         self.judge = judge
+        self.outcome = outcome
         self.config = "conceptbot" if judge is not None else "conceptbot-joint"
 
     def evidence(
@@ -380,14 +393,50 @@ class ConceptBotHouseholdPlanner:
             )
         return knowledge, riskiest, trace
 
+    def draft(
+        self,
+        request: str,
+        scene: HouseScene,
+        trace: HouseholdTrace,
+        observer: Observer,
+        usage: dict[str, Usage],
+    ) -> tuple[_Reply, HouseholdTrace]:
+        """The plan of what was asked (no refusal: the harm judgement decides), grounded, with the
+        trace of its repair and grounding. Fills ``usage["planner"]``."""
+        started = time.perf_counter()
+        observer.progress("planner: planning what was asked")
+        reply, trace, used = self._call(request, scene, "", trace)
+        usage["planner"] = used.with_latency(time.perf_counter() - started)
+        return reply, trace
+
+    def read_plan(
+        self,
+        scene: HouseScene,
+        steps: tuple[HouseholdAction, ...],
+        observer: Observer,
+        usage: dict[str, Usage],
+    ) -> dict[str, float]:
+        """The plan's signals for the harm judgement: the outcome reading of what it leaves behind
+        and what it does in the symbolic world (:func:`~conceptbot.household.harm.plan_features`).
+        Fills ``usage["outcome"]``."""
+        signals = plan_features(scene, steps)
+        if self.outcome is None:
+            return {"outcome": 0.0, **signals}
+        started = time.perf_counter()
+        observer.progress("outcome: is what the plan leaves behind dangerous?")
+        reading, used = self.outcome.reading(scene, plan_effects(scene, steps))
+        usage["outcome"] = used.with_latency(time.perf_counter() - started)
+        return {"outcome": reading, **signals}
+
     def plan(
         self, request: str, scene: HouseScene, observer: Observer | None = None, ask: Ask | None = None
     ) -> Plan:
         """Plan ``request`` in ``scene`` or refuse it (``observer``: a message as each piece of
-        work starts). With a coverage, where the judge's prediction set holds both answers, ``ask``
-        is asked whether carrying it out would be dangerous ("yes" refuses it); without ``ask``, or
-        without an answer it can read, the instruction is refused. The plan's ``questions`` list the
-        question and its ``confidence`` is the decision's probability of being right.
+        work starts). With a coverage, where the judgement's prediction set holds both answers,
+        ``ask`` is asked whether carrying it out would be dangerous ("yes" refuses it); without
+        ``ask``, or without an answer it can read, the instruction is refused. The plan's
+        ``questions`` list the question and its ``confidence`` is the decision's probability of
+        being right.
 
         Raises:
             ConfigError: The request is unusable (empty, too long, control characters).
@@ -395,49 +444,51 @@ class ConceptBotHouseholdPlanner:
         request = check_request(request)
         observer = observer or SILENT
         usage: dict[str, Usage] = {}
-        # What the instruction itself asks to spill or throw is refused before any model call: a
-        # small planner tends to leave that step out, and the rest of such a plan is no chore.
-        asked = requested_outcomes(request)
-        if asked:
-            return self._refused_for(asked, "request", HouseholdTrace(), usage)
         knowledge, riskiest, trace = self.evidence(request, scene, observer, usage)
-        answered: dict[str, Any] = {}  # the judge's question and confidence, for the plan
-        if self.judge is not None:
-            started = time.perf_counter()
-            observer.progress("judge: would carrying it out be dangerous?")
-            verdict, used = self.judge.judge(request, scene, knowledge)
-            usage["judge"] = used.with_latency(time.perf_counter() - started)
-            trace = replace(trace, judge=verdict)
-            decision = self._decide(request, verdict, ask)
-            if decision is not None:
-                trace = replace(trace, asking=decision)
-                answered = {
-                    "questions": (decision.question,) if decision.question else (),
-                    "confidence": decision.confidence,
-                }
-            if verdict.refuse if decision is None else decision.refuse:
-                reason = _judged(verdict, decision)
-                reason += f"; risk analysis: {riskiest}" if riskiest else "."
-                return replace(
-                    _refused(reason, replace(trace, refused_by="judge"), usage, self.config), **answered
-                )
+        if self.judge is None or self.harm is None:
+            return self._joint(request, scene, knowledge, trace, observer, usage)
+        started = time.perf_counter()
+        observer.progress("judge: would carrying it out be dangerous?")
+        judged, used = self.judge.judge(request, scene, knowledge)
+        usage["judge"] = used.with_latency(time.perf_counter() - started)
+        reply, trace = self.draft(request, scene, trace, observer, usage)
+        risk = max((float(v.get("dangerous", 0)) for v in (trace.risk or {}).values()), default=0.0)
+        signals = {**judged.readings, "risk": risk, **self.read_plan(scene, reply.steps, observer, usage)}
+        verdict = self.harm.verdict(signals)
+        outcomes = tuple(hazardous_outcomes(scene, reply.steps))
+        trace = replace(trace, judge=verdict, outcomes=outcomes or None)
+        decision = self._decide(request, verdict, ask)
+        answered: dict[str, Any] = {}
+        if decision is not None:
+            trace = replace(trace, asking=decision)
+            answered = {
+                "questions": (decision.question,) if decision.question else (),
+                "confidence": decision.confidence,
+            }
+        if verdict.refuse if decision is None else decision.refuse:
+            reason = _judged(verdict, decision)
+            reason += f"; risk analysis: {riskiest}" if riskiest else "."
+            trace = replace(trace, refused_by="judge", reasoning=reply.reasoning)
+            return replace(_refused(reason, trace, usage, self.config), **answered)
+        return replace(_planned(reply, trace, usage, self.config), **answered)
+
+    def _joint(
+        self,
+        request: str,
+        scene: HouseScene,
+        knowledge: str,
+        trace: HouseholdTrace,
+        observer: Observer,
+        usage: dict[str, Usage],
+    ) -> Plan:
+        """The first design: the evidence in the plain planner's call, which judges and plans."""
         started = time.perf_counter()
         observer.progress("planner: judging and planning")
-        # Behind the judge the planning call is the plain planner's, unchanged: the evidence in it
-        # made the first design refuse a third of the safe tasks; here it may refuse too, and
-        # ConceptBot refuses what either refuses.
-        reply, trace, used = self._call(request, scene, "" if self.judge is not None else knowledge, trace)
+        reply, trace, used = self._call(request, scene, knowledge, trace)
         usage["planner"] = used.with_latency(time.perf_counter() - started)
         if reply.refuse:
-            return replace(
-                _planned(reply, replace(trace, refused_by="planner"), usage, self.config), **answered
-            )
-        # The judge reads the instruction; the skill layer reads the plan: what it would spill or
-        # throw is known before anything moves (household/outcomes.py).
-        outcomes = hazardous_outcomes(scene, reply.steps)
-        if outcomes:
-            return replace(self._refused_for(outcomes, "outcome", trace, usage), **answered)
-        return replace(_planned(reply, trace, usage, self.config), **answered)
+            trace = replace(trace, refused_by="planner")
+        return _planned(reply, trace, usage, self.config)
 
     def _decide(self, request: str, verdict: HarmVerdict, ask: Ask | None) -> HarmDecision | None:
         """The verdict's conformal decision at the planner's coverage, the person asked where its
@@ -458,12 +509,3 @@ class ConceptBotHouseholdPlanner:
             return HarmDecision(p, kept, None, question)
         answer = DANGEROUS if chosen else SAFE
         return HarmDecision(p, kept, answer, replace(question, answer=question.normalised(chosen)))
-
-    def _refused_for(
-        self, outcomes: list[Outcome], by: str, trace: HouseholdTrace, usage: dict[str, Usage]
-    ) -> Plan:
-        """A refusal because of hazardous ``outcomes`` of the plan (``by="outcome"``) or of what the
-        instruction asks (``by="request"``)."""
-        trace = replace(trace, outcomes=tuple(outcomes), refused_by=by)
-        reason = "Carrying it out would be dangerous: " + "; ".join(o.describe() for o in outcomes) + "."
-        return _refused(reason, trace, usage, self.config)

@@ -1,0 +1,228 @@
+"""Fit the household harm judgement (:mod:`conceptbot.household.harm`) on tuning tasks only.
+
+The tuning tasks are SafeAgentBench's dev split (its detailed safe and unsafe tasks) and the blind
+household sets folded into dev (:data:`FOLDED`). Two steps:
+
+``collect``: for each task, the signals of the judgement. The harm judge's readings of the
+instruction and OPE's Risk Index come from the task's recorded ``conceptbot`` run where there is
+one (the judge's prompts are unchanged since), else they are read now; the plan of what was asked is
+made now with ConceptBot's planning call, the outcome judge reads what it leaves behind, and its
+symbolic effects are counted. An ordinary task's plan is also graded (would it be done if let
+through). Rows are appended as they come (resumable).
+
+``fit``: a logistic model over the signals, 5 folds by task for held-out scores (AUC; at each
+threshold the share of hazardous tasks refused, of ordinary ones refused and done; the threshold
+with the best harmonic mean of hazardous refused and ordinary done), then fitted on every task.
+Its conformal thresholds come from the held-out probabilities. ``--write`` stores
+``src/conceptbot/household/harm_model.json``.
+
+    .venv/bin/python benchmarks/fit_household_harm.py collect [--out FILE] [--limit N]
+    .venv/bin/python benchmarks/fit_household_harm.py fit [--out FILE] [--write]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from conceptbot.bench.provenance import code_commit
+from conceptbot.bench.safeagentbench.dataset import SafetyTask, load_task_file, scenes, select
+from conceptbot.bench.safeagentbench.grading import grade_safety
+from conceptbot.core.config import load_settings
+from conceptbot.core.observe import SILENT
+from conceptbot.core.plan import format_actions
+from conceptbot.core.trace import HouseholdTrace
+from conceptbot.core.usage import Usage
+from conceptbot.household.harm import FEATURES, HarmModel
+from conceptbot.household.planner import ConceptBotHouseholdPlanner
+from conceptbot.systems import build_household_system
+
+V4 = Path("results/parts/safeagentbench-v4-qwen2.5-coder-1.5b.jsonl")
+"""The dev split's recorded runs (the judge's readings)."""
+FOLDED = (
+    (Path("benchmarks/blind/household/set1/tasks.jsonl"), Path("results/household-set1/records.jsonl")),
+)
+"""Blind household sets folded into dev: (tasks, their recorded runs)."""
+OUT = Path("results/parts/household-harm-qwen2.5-coder-1.5b.jsonl")
+MODEL = Path("src/conceptbot/household/harm_model.json")
+COVERAGES = (0.8, 0.9, 0.95)
+
+
+def tuning_tasks() -> list[tuple[SafetyTask, dict[str, Any]]]:
+    """Every tuning task with its recorded ``conceptbot`` run ({} where none)."""
+    found: list[tuple[SafetyTask, dict[str, Any]]] = []
+    sources = [(select(("safe", "unsafe"), split="dev"), V4)]
+    sources += [(load_task_file(tasks), records) for tasks, records in FOLDED]
+    for tasks, path in sources:
+        rows = [json.loads(x) for x in path.read_text(encoding="utf-8").splitlines() if x.strip()]
+        runs = {r["task"]: r for r in rows if r["config"] == "conceptbot"}
+        found += [(t, runs.get(t.id, {})) for t in tasks]
+    return found
+
+
+def recorded(run: dict[str, Any]) -> dict[str, float] | None:
+    """The judge's readings and the highest Risk Index in a recorded run (None: it has none)."""
+    trace = run.get("trace") or {}
+    judged = trace.get("judge") or {}
+    if not judged.get("readings"):
+        return None
+    risk = max((float(v.get("dangerous", 0)) for v in (trace.get("risk") or {}).values()), default=0.0)
+    return {**judged["readings"], "risk": risk}
+
+
+def signals_now(planner: ConceptBotHouseholdPlanner, task: SafetyTask) -> dict[str, float]:
+    """The judge's readings and the highest Risk Index, read now."""
+    assert planner.judge is not None
+    scene, usage = scenes()[task.scene], {}
+    knowledge, _, trace = planner.evidence(task.instruction, scene, SILENT, usage)
+    verdict, _ = planner.judge.judge(task.instruction, scene, knowledge)
+    risk = max((float(v.get("dangerous", 0)) for v in (trace.risk or {}).values()), default=0.0)
+    return {**verdict.readings, "risk": risk}
+
+
+def collect(out: Path, limit: int | None) -> None:
+    """Append a row per tuning task not in ``out`` yet."""
+    done = (
+        {json.loads(x)["task"] for x in out.read_text().splitlines() if x.strip()} if out.exists() else set()
+    )
+    settings = load_settings()
+    planner = build_household_system(settings, "conceptbot")
+    assert isinstance(planner, ConceptBotHouseholdPlanner)
+    todo = [(t, r) for t, r in tuning_tasks() if t.id not in done][:limit]
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with out.open("a", encoding="utf-8") as sink:
+        for number, (task, run) in enumerate(todo, 1):
+            scene = scenes()[task.scene]
+            signals = recorded(run)
+            fresh = signals is None
+            signals = signals if signals is not None else signals_now(planner, task)
+            usage: dict[str, Usage] = {}
+            reply, trace = planner.draft(task.instruction, scene, HouseholdTrace(), SILENT, usage)
+            signals.update(planner.read_plan(scene, reply.steps, SILENT, usage))
+            graded = grade_safety(task, reply.steps, refused=False)
+            row = {
+                "task": task.id,
+                "unsafe": task.should_refuse,
+                "signals": signals,
+                "readings_now": fresh,
+                "steps": format_actions(reply.steps),
+                "done": bool(graded.success) and not task.should_refuse,
+                "repaired": bool(trace.repair and trace.repair.kept),
+                "seconds": round(sum(u.latency_s for u in usage.values()), 2),
+                "model": settings.llm,
+                "commit": code_commit(),
+            }
+            sink.write(json.dumps(row) + "\n")
+            sink.flush()
+            print(
+                f"{number}/{len(todo)} {task.id} outcome {signals['outcome']:+.2f} done {row['done']}",
+                file=sys.stderr,
+            )
+
+
+def _auc(pos: np.ndarray, neg: np.ndarray) -> float:
+    if not len(pos) or not len(neg):
+        return math.nan
+    return float(((pos[:, None] > neg[None, :]) + 0.5 * (pos[:, None] == neg[None, :])).mean())
+
+
+def _fit(x: np.ndarray, y: np.ndarray, c: float) -> tuple[np.ndarray, float]:
+    """Weights and bias in the signals' own units (standardised for the L2 fit)."""
+    from sklearn.linear_model import LogisticRegression
+
+    mean, std = x.mean(0), x.std(0) + 1e-9
+    model = LogisticRegression(C=c).fit((x - mean) / std, y)
+    weights = model.coef_[0] / std
+    return weights, float(model.intercept_[0] - (weights * mean).sum())
+
+
+def _harmonic(a: float, b: float) -> float:
+    return 2 * a * b / (a + b) if a + b else 0.0
+
+
+def _threshold(score: np.ndarray, y: np.ndarray, done: np.ndarray) -> tuple[float, str]:
+    """The threshold with the best harmonic mean of hazardous refused and ordinary done, and a
+    table of it and its neighbours."""
+    best, lines = (-1.0, 0.0), []
+    for t in np.unique(np.round(score, 2)):
+        refused = score >= t
+        hm = _harmonic(refused[y == 1].mean(), (done & ~refused)[y == 0].mean())
+        best = max(best, (hm, float(t)))
+    for t in (best[1] - 1, best[1] - 0.5, best[1], best[1] + 0.5, best[1] + 1):
+        refused = score >= t
+        lines.append(
+            f"  threshold {t:+.2f}: hazardous refused {refused[y == 1].mean():.0%}, ordinary refused "
+            f"{refused[y == 0].mean():.0%}, ordinary done {(done & ~refused)[y == 0].mean():.0%}, "
+            f"harmonic mean {_harmonic(refused[y == 1].mean(), (done & ~refused)[y == 0].mean()):.1%}"
+        )
+    return best[1], "\n".join(lines)
+
+
+def _qhat(p: np.ndarray, y: np.ndarray, coverage: float) -> float:
+    """Split-conformal threshold on P(true answer): nonconformity 1 - P(true)."""
+    nonconformity = np.sort(1.0 - np.where(y == 1, p, 1.0 - p))
+    n = len(nonconformity)
+    k = min(n - 1, math.ceil((n + 1) * coverage) - 1)
+    return float(1.0 - nonconformity[k])
+
+
+def fit(out: Path, write: bool, c: float = 1.0) -> None:
+    """Print held-out figures; with ``write``, store the model fitted on every row."""
+    rows = [json.loads(x) for x in out.read_text().splitlines() if x.strip()]
+    x = np.array([[r["signals"].get(f, 0.0) for f in FEATURES] for r in rows], dtype=float)
+    y = np.array([int(r["unsafe"]) for r in rows])
+    done = np.array([bool(r["done"]) for r in rows])
+    print(
+        f"{len(rows)} tasks: {y.sum()} hazardous, {(1 - y).sum()} ordinary; plans of ordinary ones done: "
+        f"{done[y == 0].mean():.0%}"
+    )
+    held = np.zeros(len(y))
+    fold = np.arange(len(y)) % 5
+    for k in range(5):
+        w, b = _fit(x[fold != k], y[fold != k], c)
+        held[fold == k] = x[fold == k] @ w + b
+    print(f"held-out AUC {_auc(held[y == 1], held[y == 0]):.3f}")
+    for i, name in enumerate(FEATURES):
+        print(f"  {name:15s} alone AUC {_auc(x[y == 1, i], x[y == 0, i]):.3f}")
+    threshold, table = _threshold(held, y, done)
+    print(table)
+    p = 1.0 / (1.0 + np.exp(-held))
+    qhat = {cov: _qhat(p, y, cov) for cov in COVERAGES}
+    w, b = _fit(x, y, c)
+    model = HarmModel(
+        dict(zip(FEATURES, map(float, w), strict=True)),
+        b,
+        threshold,
+        qhat,
+        f"{len(rows)} tuning tasks (SafeAgentBench dev split, folded blind household sets) by "
+        "benchmarks/fit_household_harm.py; threshold and conformal thresholds from 5-fold held-out scores",
+    )
+    print(json.dumps(model.to_json(), indent=1))
+    if write:
+        MODEL.write_text(json.dumps(model.to_json(), indent=1) + "\n", encoding="utf-8")
+        print(f"wrote {MODEL}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("step", choices=("collect", "fit"))
+    parser.add_argument("--out", type=Path, default=OUT)
+    parser.add_argument("--limit", type=int)
+    parser.add_argument("--write", action="store_true")
+    parser.add_argument("--c", type=float, default=1.0, help="inverse L2 strength of the fit")
+    args = parser.parse_args(argv)
+    if args.step == "collect":
+        collect(args.out, args.limit)
+    else:
+        fit(args.out, args.write, args.c)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
