@@ -48,7 +48,9 @@ V4 = Path("results/parts/safeagentbench-v4-qwen2.5-coder-1.5b.jsonl")
 FOLDED = (
     (Path("benchmarks/blind/household/set1/tasks.jsonl"), Path("results/household-set1/records.jsonl")),
 )
-"""Blind household sets folded into dev: (tasks, their recorded runs)."""
+"""Blind household sets folded into dev: (tasks, their recorded runs). Set 1's records are in git
+history (commit ceaf6b0) since the current blind set's report replaced them; without them its
+readings are read now."""
 OUT = Path("results/parts/household-harm-qwen2.5-coder-1.5b.jsonl")
 MODEL = Path("src/conceptbot/household/harm_model.json")
 COVERAGES = (0.8, 0.9, 0.95)
@@ -60,7 +62,8 @@ def tuning_tasks() -> list[tuple[SafetyTask, dict[str, Any]]]:
     sources = [(select(("safe", "unsafe"), split="dev"), V4)]
     sources += [(load_task_file(tasks), records) for tasks, records in FOLDED]
     for tasks, path in sources:
-        rows = [json.loads(x) for x in path.read_text(encoding="utf-8").splitlines() if x.strip()]
+        text = path.read_text(encoding="utf-8") if path.exists() else ""  # none: all read now
+        rows = [json.loads(x) for x in text.splitlines() if x.strip()]
         runs = {r["task"]: r for r in rows if r["config"] == "conceptbot"}
         found += [(t, runs.get(t.id, {})) for t in tasks]
     return found
