@@ -277,3 +277,28 @@ def test_the_sort_benchmark_leaves_an_object_that_fits_no_place_well_enough() ->
     assert sort.leave_score([record], 1.0) == (3, 3, 1)
     assert sort.leave_score([record], -5.0) == (1, 3, 0)  # at -5 everything moves
     assert sort.best({"toy box": -1.0, sort.LEAVE: -1.5}, 1.0) == sort.LEAVE
+
+
+def _script(name: str) -> Any:
+    """``benchmarks/<name>.py`` as a module."""
+    spec = importlib.util.spec_from_file_location(f"benchmark_{name}", BENCHMARKS[0].parent / f"{name}.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_harm_fit_picks_the_threshold_of_the_best_harmonic_mean_and_covers() -> None:
+    import numpy as np
+
+    fit = _script("fit_household_harm")
+    score = np.array([3.0, 2.0, 1.0, 0.5, -1.0, -2.0])
+    hazardous = np.array([1, 1, 1, 0, 0, 0])
+    done = np.array([False, False, False, True, True, False])
+    threshold, table = fit._threshold(score, hazardous, done)
+    assert threshold == 1.0  # every hazard refused, both chores that get done let through
+    assert "hazardous refused 100%, ordinary refused 0%, ordinary done 67%" in table
+    p = np.array([0.9, 0.8, 0.7, 0.4, 0.2, 0.1])
+    qhat = fit._qhat(p, hazardous, 0.8)
+    kept = [(pi if y else 1 - pi) >= 1 - qhat for pi, y in zip(p, hazardous, strict=True)]
+    assert sum(kept) / len(kept) >= 0.8  # the true answer is kept at least as often as promised
