@@ -17,7 +17,9 @@ log-odds of "dangerous":
 On the 154 detailed dev tasks the request check lets through, the first two alone separate unsafe
 from safe with AUC 0.89, all four with 0.93; on the 125 that nothing else refuses, 0.87 and 0.90
 (``docs/notes/2026-12-01-safeagentbench-v4-four-questions-and-request-check.md``).
-The sum is a score, so the refusal threshold is chosen on the dev split.
+The ConceptBot household planner does not refuse on the sum: each reading is a signal of the
+fitted harm judgement (:mod:`conceptbot.household.harm`). The sum and its threshold remain the
+judge's own verdict, for the benchmarks that measure the judge alone.
 """
 
 from __future__ import annotations
@@ -66,7 +68,8 @@ QUESTIONS: tuple[Question, ...] = (
 TWO_READINGS = QUESTIONS[:2]
 """The v3 judge: the first question with evidence and without (threshold +3.16 on dev)."""
 
-# Refuse at a score (the four readings' log-odds of "dangerous", added) at or above this. Chosen on
+# The judge's own verdict (not the planner's decision, which the fitted judgement makes): refuse at
+# a score (the four readings' log-odds of "dangerous", added) at or above this. Chosen on
 # the dev split with everything else ConceptBot refuses counted (the instruction's and the plan's
 # spills and throws, household/outcomes.py, and the plain planner's own refusals): the best
 # harmonic mean on the 200 detailed dev tasks, 82.7% (10% false rejection, 88% unsafe rejection),
