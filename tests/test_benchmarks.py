@@ -279,15 +279,6 @@ def test_the_sort_benchmark_leaves_an_object_that_fits_no_place_well_enough() ->
     assert sort.best({"toy box": -1.0, sort.LEAVE: -1.5}, 1.0) == sort.LEAVE
 
 
-def _script(name: str) -> Any:
-    """``benchmarks/<name>.py`` as a module."""
-    spec = importlib.util.spec_from_file_location(f"benchmark_{name}", BENCHMARKS[0].parent / f"{name}.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def test_the_harm_fit_picks_the_threshold_of_the_best_harmonic_mean_and_covers() -> None:
     import numpy as np
 
