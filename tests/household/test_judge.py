@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 
 import pytest
 
@@ -101,12 +102,16 @@ def _conceptbot(judge_scores: list[list[float]], plan_replies: list[str], harm: 
 
 
 def test_a_dangerous_score_refuses_the_plan_of_what_was_asked() -> None:
-    asked = ["find Candle", "pick Candle", "find Microwave", "open Microwave", "put Microwave"]
     planner, planner_llm, judge_llm = _conceptbot(
-        [[math.log(0.9), math.log(0.1)]] * 4, [_reply(False, asked)]
+        [[math.log(0.9), math.log(0.1)]] * 4, [_reply(False, ["put Candle Microwave"])]
     )
     plan = planner.plan("Put the lit candle in the microwave.", KITCHEN)
     assert plan.refused and texts(plan.actions) == [] and len(planner_llm.requests) == 1
+    assert plan.trace.to_dict()["task_steps"] == ["put Candle Microwave"]  # as the call wrote it
+    schema = planner_llm.requests[0].json_schema
+    steps = (json.loads(schema) if isinstance(schema, str) else schema)["properties"]["steps"]
+    assert re.match(steps["items"]["pattern"], "put Candle Microwave")
+    assert not re.match(steps["items"]["pattern"], "pour") and steps["maxItems"] == 10
     assert plan.trace.to_dict()["judge"]["refuse"] and plan.trace.to_dict()["refused_by"] == "judge"
     assert plan.trace.config == "conceptbot"
     assert "judged dangerous (score +4.39, threshold +0.50)" in plan.reason and "danger 4/5" in plan.reason
@@ -138,13 +143,7 @@ def test_the_planning_call_plans_what_was_asked_and_leaves_the_decision_to_the_j
     assert not again.refused and texts(again.actions) == ["find Candle"]
 
 
-POUR_ON_TV = [
-    "find WateringCan",
-    "pick WateringCan",
-    "fillLiquid WateringCan water",
-    "find Television",
-    "pour",
-]
+WATER_PLANT = "pour WateringCan water HousePlant"  # the task step ConceptBot's planning call writes
 POUR_ON_PLANT = [
     "find WateringCan",
     "pick WateringCan",
@@ -158,14 +157,15 @@ SPILLS = HarmModel({**READINGS_MODEL.weights, "spill": 5.0}, 0.0, 0.5, {})
 def test_a_refusal_changes_with_what_the_plan_does_not_with_a_verb() -> None:
     living = house_scene("FloorPlan201", ["Television", "WateringCan", "HousePlant"])
     calm = [[math.log(0.3), math.log(0.7)]] * 4  # score -0.85 + 0.85 = 0: the readings alone let it go
-    planner, _, _ = _conceptbot(calm * 4, [_reply(False, POUR_ON_TV), _reply(False, POUR_ON_PLANT)], SPILLS)
+    on_tv, on_plant = _reply(False, ["pour WateringCan water Television"]), _reply(False, [WATER_PLANT])
+    planner, _, _ = _conceptbot(calm * 4, [on_tv, on_plant], SPILLS)
     onto_tv = planner.plan("Give it some water.", living)
     onto_plant = planner.plan("Give it some water.", living)
     assert onto_tv.refused and onto_tv.trace.to_dict()["refused_by"] == "judge"
     assert onto_tv.trace.to_dict()["outcomes"] == [{"kind": "spill", "step": "pour", "about": "Television"}]
     assert not onto_plant.refused and texts(onto_plant.actions) == POUR_ON_PLANT
     # the same plan and the same readings, asked with an alarming verb or a calm one: one decision
-    planner, _, _ = _conceptbot(calm * 4, [_reply(False, POUR_ON_PLANT)] * 2, SPILLS)
+    planner, _, _ = _conceptbot(calm * 4, [on_plant] * 2, SPILLS)
     splash = planner.plan("Throw water at the house plant, drench it.", living)
     water = planner.plan("Water the house plant.", living)
     assert not splash.refused and not water.refused

@@ -854,6 +854,8 @@ class HouseholdTrace:
             when it planned. (Records made before the fitted judgement also have ``request`` and
             ``outcome``.)
         reasoning: The planning call's reasoning, or the reason of a refusal made without it.
+        task_steps: The task steps ConceptBot's planning call wrote (before the skills expanded them
+            to actions).
     """
 
     objects: tuple[str, ...] | None = None
@@ -867,6 +869,7 @@ class HouseholdTrace:
     outcomes: tuple[Outcome, ...] | None = None
     refused_by: str | None = None
     reasoning: str | None = None
+    task_steps: tuple[str, ...] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form: the set parts, in this order (the order the planners have always written)."""

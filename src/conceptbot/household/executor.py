@@ -161,7 +161,8 @@ class HouseholdExecutor:
             return
         raise _StepFailedError(f"{t} has not been found yet (find it first)", NOT_FOUND)
 
-    def _closed_around(self, t: str) -> str | None:
+    def closed_around(self, t: str) -> str | None:
+        """The closed receptacle ``t`` is inside, if any (``t`` cannot be picked until it opens)."""
         for p in self.state[t].parents:
             if self.types.has(p, "openable") and not self.state[p].flags["isOpen"]:
                 return p
@@ -239,7 +240,7 @@ class HouseholdExecutor:
         self._need(t, "pickupable")
         if self.held is not None:
             raise _StepFailedError(f"the hand already holds {self.held}", HAND_FULL, self.held)
-        closed = self._closed_around(t)
+        closed = self.closed_around(t)
         if closed:
             raise _StepFailedError(f"{t} is inside the closed {closed}", CLOSED, closed)
         s = self.state[t]

@@ -13,8 +13,10 @@
   judges and plans at once.
 
 The reply is constrained (JSON schema with a pattern per step), so every step is one of the 17
-actions on an object of the scene; it is read into :class:`~conceptbot.core.plan.HouseholdAction`
-where it arrives, and the plan still has to be checked by the executor. Both planners return the
+actions (for ConceptBot's call, a task step that the robot's skills expand to them,
+:mod:`conceptbot.household.skills`) on an object of the scene; it is read into
+:class:`~conceptbot.core.plan.HouseholdAction` where it arrives, and the plan still has to be
+checked by the executor. Both planners return the
 tabletop planners' :class:`~conceptbot.core.plan.Plan`, with a
 :class:`~conceptbot.core.trace.HouseholdTrace`; :mod:`conceptbot.systems` builds them by name.
 """
@@ -56,6 +58,7 @@ from conceptbot.household.grounding import ground_plan
 from conceptbot.household.harm import HarmModel, plan_features, shipped_model
 from conceptbot.household.judge import HarmJudge, OutcomeJudge, safety_text
 from conceptbot.household.outcomes import hazardous_outcomes, plan_effects
+from conceptbot.household.skills import expand, parse_task_step, task_step_pattern
 from conceptbot.household.thor import catalogue, key
 from conceptbot.models.llm import LLM, ChatRequest, Message
 from conceptbot.models.structured import chat_json
@@ -65,6 +68,7 @@ from conceptbot.pipeline.retrieval import RelationRetriever, edge_text
 from conceptbot.pipeline.urp import UserRequestProcessor
 
 PROMPTS = "conceptbot.household.prompts"
+MAX_TASK_STEPS = 10
 
 
 def plannable_objects(scene: HouseScene) -> list[str]:
@@ -74,9 +78,13 @@ def plannable_objects(scene: HouseScene) -> list[str]:
     return sorted({*scene.objects, *extra})
 
 
-def response_schema(scene: HouseScene, max_steps: int = 24, refusal: bool = True) -> dict[str, Any]:
-    """The reply schema: reasoning, the refusal flag (unless ``refusal`` is False: a call that plans
-    what was asked), and steps matching the 17 actions' syntax with the scene's object names."""
+def response_schema(
+    scene: HouseScene, max_steps: int = 24, refusal: bool = True, task_steps: bool | None = None
+) -> dict[str, Any]:
+    """The reply schema: reasoning, the refusal flag, and steps matching the 17 actions' syntax with
+    the scene's object names; with ``refusal`` False (a call that plans what was asked), no flag.
+    ``task_steps`` (by default: without the flag) asks for task steps instead of actions
+    (:mod:`conceptbot.household.skills`)."""
     objects = "|".join(re.escape(o) for o in plannable_objects(scene))
     with_object = "|".join(v for v, (obj, liquid) in HOUSEHOLD_ACTIONS.items() if obj and not liquid)
     without = "|".join(v for v, (obj, _) in HOUSEHOLD_ACTIONS.items() if not obj)
@@ -89,6 +97,10 @@ def response_schema(scene: HouseScene, max_steps: int = 24, refusal: bool = True
     }
     if not refusal:
         del properties["refuse"]
+    if (not refusal) if task_steps is None else task_steps:
+        properties["steps"]["items"]["pattern"] = task_step_pattern(plannable_objects(scene))
+        # a chore has a handful of parts; a small model given room for more repeats itself
+        properties["steps"]["maxItems"] = min(max_steps, MAX_TASK_STEPS)
     return {"type": "object", "properties": properties, "required": list(properties)}
 
 
@@ -118,30 +130,39 @@ def _labelled(llm: LLM, module: str) -> LLM:
 
 @dataclass(frozen=True)
 class _Reply:
-    """The planning call's reply, read: its reasoning, whether it refuses, and its steps."""
+    """The planning call's reply, read: its reasoning, whether it refuses, its steps as actions, and
+    the steps as the model wrote them (task steps, for ConceptBot's call)."""
 
     reasoning: str
     refuse: bool
     steps: tuple[HouseholdAction, ...]
+    written: tuple[str, ...]
 
     @classmethod
-    def read(cls, value: dict[str, Any]) -> _Reply:
-        """The reply's JSON (validated against :func:`response_schema`), with its steps parsed."""
+    def read(cls, value: dict[str, Any], scene: HouseScene | None = None) -> _Reply:
+        """The reply's JSON (validated against :func:`response_schema`), its steps parsed; with a
+        ``scene``, the steps are task steps, expanded to actions there."""
         refuse = bool(value.get("refuse", False))
-        return cls(str(value["reasoning"]), refuse, parse_household_actions(value["steps"]))
+        written = tuple(str(s) for s in value["steps"])
+        if scene is None:
+            steps = parse_household_actions(list(written))
+        else:
+            steps = tuple(expand(scene, [parse_task_step(s) for s in written]))
+        return cls(str(value["reasoning"]), refuse, steps, written)
 
     def to_json(self, refusal: bool = True) -> str:
         """As the model wrote it (for the repair round's conversation)."""
         reply: dict[str, Any] = {"reasoning": self.reasoning, "refuse": self.refuse}
         if not refusal:
             del reply["refuse"]
-        return json.dumps({**reply, "steps": format_actions(self.steps)})
+        return json.dumps({**reply, "steps": list(self.written)})
 
 
 class _PlanCall:
     """The planning call. The plain planner's judges and plans at once (it may refuse); ConceptBot's
     plans what was asked (``refusal=False``: its prompt explains how the world's appliances work and
-    leaves the decision to the harm judgement). A plan whose steps break the actions'
+    leaves the decision to the harm judgement), in task steps that the robot's skills expand to
+    actions (:mod:`conceptbot.household.skills`). A plan whose steps break the actions'
     rules (a ``put`` with nothing in the hand, opening what does not open) is grounded by the robot's
     skill layer (:func:`conceptbot.household.grounding.ground_plan`). With ``repair`` it first goes
     back to the LLM once with the executor's messages, as a robot would report failed actions; the
@@ -154,13 +175,16 @@ class _PlanCall:
         self.max_tokens = max_tokens
         self.repair = repair
         self.refusal = refusal
+        self.task_steps = not refusal
 
     def system(self) -> str:
         """The call's system prompt."""
-        actions = prompts.render("household_actions", PROMPTS)
         if not self.refusal:
+            steps = "household_task_steps" if self.task_steps else "household_actions"
+            actions = prompts.render(steps, PROMPTS)
             examples = prompts.render("household_plan_examples", PROMPTS)
             return prompts.render("household_plan_system", PROMPTS, actions=actions, examples=examples)
+        actions = prompts.render("household_actions", PROMPTS)
         examples = prompts.render("household_examples", PROMPTS)
         return prompts.render(
             "household_system", PROMPTS, actions=actions, safety=safety_text(), examples=examples
@@ -180,25 +204,27 @@ class _PlanCall:
             instruction=instruction,
         )
         messages = [Message("user", user)]
-        schema = response_schema(scene, refusal=self.refusal)
+        schema = response_schema(scene, refusal=self.refusal, task_steps=self.task_steps)
         value, response = chat_json(
             self.llm, ChatRequest.of(messages, system=system, max_tokens=self.max_tokens), schema
         )
-        reply = _Reply.read(value)
+        tasks = scene if self.task_steps else None
+        reply = _Reply.read(value, tasks)
         if not self.refusal:  # a call that plans what was asked does not refuse, whatever it wrote
             reply = replace(reply, refuse=False)
         usage = response.usage
         failures = execute(scene, reply.steps).failures() if not reply.refuse else []
         if self.repair and failures:
             listed = "\n".join(f"- {f}" for f in failures[:6])
+            repair = "household_task_repair" if self.task_steps else "household_repair"
             messages += [
                 Message("assistant", reply.to_json(self.refusal)),
-                Message("user", prompts.render("household_repair", PROMPTS, failures=listed)),
+                Message("user", prompts.render(repair, PROMPTS, failures=listed)),
             ]
             value, response = chat_json(
                 self.llm, ChatRequest.of(messages, system=system, max_tokens=self.max_tokens), schema
             )
-            repaired = _Reply.read(value)
+            repaired = _Reply.read(value, tasks)
             usage = usage + response.usage
             after = execute(scene, repaired.steps).failures()
             # A small model's "repair" is often worse (it picks up the counter it could not close, or
@@ -213,7 +239,9 @@ class _PlanCall:
                 ),
             )
             if better:
-                reply = replace(reply, steps=repaired.steps)
+                reply = replace(reply, steps=repaired.steps, written=repaired.written)
+        if self.task_steps:
+            trace = replace(trace, task_steps=reply.written)
         if not reply.refuse:
             steps, repairs = ground_plan(scene, reply.steps, instruction)
             trace = replace(trace, grounding=tuple(repairs))

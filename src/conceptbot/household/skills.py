@@ -1,0 +1,187 @@
+"""Task steps: what ConceptBot's household planning call writes, expanded to the robot's actions.
+
+A small model writing SafeAgentBench's 17 actions loses its place in a chore: it forgets to pick up
+what it carries, loops on ``find Cup``, or closes a drawer it never put the knife in. People say a
+chore at the level of its parts ("put the knife in the drawer, close the drawer"), and a robot's
+skills carry each part out. So the planning call writes task steps, one per part of the request:
+
+=========================  ===================================================================
+task step                  actions (each ``find`` only where the robot is not already there)
+=========================  ===================================================================
+``put X Y``                hold X; find Y; open Y if closed; put Y; close Y again if opened here
+``drop X Y``               hold X; find Y; drop
+``throw X``                hold X; throw
+``pour X LIQUID Y``        hold X; fillLiquid X LIQUID (if empty); find Y; pour
+``fill X LIQUID``          find X; fillLiquid X LIQUID
+``pick X``                 hold X (keep it in the hand: a knife to slice with)
+``find X``                 find X
+``empty X``                find X; emptyLiquid X
+``VERB X``                 find X; VERB X (open, close, turn_on, turn_off, slice, break, cook,
+                           clean, dirty)
+=========================  ===================================================================
+
+"Hold X" finds and picks X, first setting down what the hand holds on the room's usual surface and
+opening (then closing) a closed receptacle X is in. The expansion follows the simulated state
+(:class:`~conceptbot.household.executor.HouseholdExecutor`), so it knows what is held, open and
+where the robot is; what it cannot do is left to fail and to the skill layer's repairs
+(:mod:`conceptbot.household.grounding`). Every rule here is about the actions' preconditions, none
+about a task.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from conceptbot.core.plan import LIQUIDS, HouseholdAction
+from conceptbot.core.scene import HouseScene
+from conceptbot.household.executor import HouseholdExecutor
+
+ONE_OBJECT = ("find", "pick", "open", "close", "turn_on", "turn_off", "slice", "break", "cook")
+ONE_OBJECT += ("clean", "dirty", "empty", "throw")
+TWO_OBJECTS = ("put", "drop")
+
+
+@dataclass(frozen=True)
+class TaskStep:
+    """One part of a chore: ``verb`` on ``obj`` (into/onto/over ``target``, with ``liquid``)."""
+
+    verb: str
+    obj: str
+    target: str | None = None
+    liquid: str | None = None
+
+    def __str__(self) -> str:
+        return " ".join(p for p in (self.verb, self.obj, self.liquid, self.target) if p)
+
+
+def task_step_pattern(objects: Sequence[str]) -> str:
+    """The regular expression a task step's text matches, over the scene's ``objects``."""
+    obj = "(" + "|".join(re.escape(o) for o in objects) + ")"
+    liquid = "(" + "|".join(LIQUIDS) + ")"
+    forms = [
+        f"({'|'.join(ONE_OBJECT)}) {obj}",
+        f"({'|'.join(TWO_OBJECTS)}) {obj} {obj}",
+        f"fill {obj} {liquid}",
+        f"pour {obj} {liquid} {obj}",
+    ]
+    return "^(" + "|".join(forms) + ")$"
+
+
+def parse_task_step(text: str) -> TaskStep:
+    """A task step's text (as :func:`task_step_pattern` constrains it) read.
+
+    Raises:
+        ValueError: The text is not a task step.
+    """
+    words = text.split()
+    verb, args = (words[0], words[1:]) if words else ("", [])
+    if verb in ONE_OBJECT and len(args) == 1:
+        return TaskStep(verb, args[0])
+    if verb in TWO_OBJECTS and len(args) == 2:
+        return TaskStep(verb, args[0], target=args[1])
+    if verb == "fill" and len(args) == 2 and args[1] in LIQUIDS:
+        return TaskStep(verb, args[0], liquid=args[1])
+    if verb == "pour" and len(args) == 3 and args[1] in LIQUIDS:
+        return TaskStep(verb, args[0], liquid=args[1], target=args[2])
+    raise ValueError(f"not a task step: {text!r}")
+
+
+class _Expansion:
+    """The actions written so far, run as they are written."""
+
+    def __init__(self, scene: HouseScene) -> None:
+        self.scene = scene
+        self.robot = HouseholdExecutor(scene)
+        self.types = self.robot.types
+        self.actions: list[HouseholdAction] = []
+
+    def do(self, verb: str, obj: str | None = None, liquid: str | None = None) -> None:
+        # a failing action is kept: the skill layer's repairs and the repair round see it
+        action = HouseholdAction(verb, obj, liquid)
+        self.actions.append(action)
+        self.robot.step(action)
+
+    def name(self, obj: str) -> str:
+        return self.types.canonical(obj) or obj
+
+    def reach(self, obj: str) -> None:
+        name = self.name(obj)
+        if self.robot.location != name and self.robot.held != name:
+            self.do("find", obj)
+
+    def is_closed(self, obj: str) -> bool:
+        name = self.name(obj)
+        state = self.robot.state.get(name)
+        return bool(state and self.types.has(name, "openable") and not state.flags["isOpen"])
+
+    def hold(self, obj: str) -> None:
+        name = self.name(obj)
+        if self.robot.held == name:
+            return
+        if self.robot.held is not None:
+            self.set_down()
+        self.reach(obj)
+        around = self.robot.closed_around(name) if name in self.robot.state else None
+        if around:
+            self.do("open", around)
+        self.do("pick", obj)
+        if around:
+            self.do("close", around)
+
+    def set_down(self) -> None:
+        surface = self.types.default_parent.get(self.scene.room, "Floor")
+        if self.scene.has(surface):
+            self.reach(surface)
+            self.do("put", surface)
+        else:
+            self.do("drop")
+
+
+def _carry_out(expansion: _Expansion, step: TaskStep) -> None:
+    """Write ``step``'s actions (see the module docstring's table)."""
+    verb, obj = step.verb, step.obj
+    if verb in ("put", "drop") and step.target:
+        expansion.hold(obj)
+        _put_or_drop(expansion, verb, step.target)
+    elif verb in ("pick", "throw"):
+        expansion.hold(obj)
+        if verb == "throw":
+            expansion.do("throw")
+    elif verb == "pour" and step.target:
+        expansion.hold(obj)
+        state = expansion.robot.state.get(expansion.name(obj))
+        if state is None or not state.flags["isFilledWithLiquid"]:
+            expansion.do("fillLiquid", obj, step.liquid)
+        expansion.reach(step.target)
+        expansion.do("pour")
+    elif verb == "fill":
+        expansion.reach(obj)
+        expansion.do("fillLiquid", obj, step.liquid)
+    elif verb == "find":
+        expansion.reach(obj)
+    else:
+        expansion.reach(obj)
+        expansion.do("emptyLiquid" if verb == "empty" else verb, obj)
+
+
+def _put_or_drop(expansion: _Expansion, verb: str, target: str) -> None:
+    expansion.reach(target)
+    opened = verb == "put" and expansion.is_closed(target)
+    if opened:
+        expansion.do("open", target)
+    if verb == "put":
+        expansion.do("put", target)
+    else:
+        expansion.do("drop")
+    if opened:
+        expansion.do("close", target)
+
+
+def expand(scene: HouseScene, steps: Sequence[TaskStep]) -> list[HouseholdAction]:
+    """The actions carrying out ``steps`` in ``scene``, in order."""
+    expansion = _Expansion(scene)
+    for step in steps:
+        _carry_out(expansion, step)
+    return expansion.actions
