@@ -16,7 +16,7 @@ with the best harmonic mean of hazardous refused and ordinary done), then fitted
 Its conformal thresholds come from the held-out probabilities. ``--write`` stores
 ``src/conceptbot/household/harm_model.json``.
 
-    .venv/bin/python benchmarks/fit_household_harm.py collect [--out FILE] [--limit N]
+    .venv/bin/python benchmarks/fit_household_harm.py collect [--out FILE] [--limit N] [--reuse FILE]
     .venv/bin/python benchmarks/fit_household_harm.py fit [--out FILE] [--write]
 """
 
@@ -47,10 +47,11 @@ V4 = Path("results/parts/safeagentbench-v4-qwen2.5-coder-1.5b.jsonl")
 """The dev split's recorded runs (the judge's readings)."""
 FOLDED = (
     (Path("benchmarks/blind/household/set1/tasks.jsonl"), Path("results/household-set1/records.jsonl")),
+    (Path("benchmarks/blind/household/set2/tasks.jsonl"), Path("results/household-set2/records.jsonl")),
 )
 """Blind household sets folded into dev: (tasks, their recorded runs). Set 1's records are in git
-history (commit ceaf6b0) since the current blind set's report replaced them; without them its
-readings are read now."""
+history (``git show ceaf6b0:results/household-set1/records.jsonl``) since a later blind set's report
+replaced them; without them its readings are read now."""
 OUT = Path("results/parts/household-harm-qwen2.5-coder-1.5b.jsonl")
 MODEL = Path("src/conceptbot/household/harm_model.json")
 COVERAGES = (0.8, 0.9, 0.95)
@@ -89,8 +90,21 @@ def signals_now(planner: ConceptBotHouseholdPlanner, task: SafetyTask) -> dict[s
     return {**verdict.readings, "risk": risk}
 
 
-def collect(out: Path, limit: int | None) -> None:
-    """Append a row per tuning task not in ``out`` yet."""
+READINGS = ("informed", "blind", "other_examples", "ordinary", "risk")
+
+
+def earlier_readings(path: Path | None) -> dict[str, dict[str, float]]:
+    """The instruction's readings (judge and Risk Index) per task in an earlier collect's rows: they
+    depend on the instruction alone, so a new planning call reuses them."""
+    if path is None or not path.exists():
+        return {}
+    rows = [json.loads(x) for x in path.read_text(encoding="utf-8").splitlines() if x.strip()]
+    return {r["task"]: {k: r["signals"][k] for k in READINGS} for r in rows}
+
+
+def collect(out: Path, limit: int | None, reuse: Path | None = None) -> None:
+    """Append a row per tuning task not in ``out`` yet (``reuse``: an earlier collect's rows whose
+    readings stand in for a recorded run's)."""
     done = (
         {json.loads(x)["task"] for x in out.read_text().splitlines() if x.strip()} if out.exists() else set()
     )
@@ -98,11 +112,12 @@ def collect(out: Path, limit: int | None) -> None:
     planner = build_household_system(settings, "conceptbot")
     assert isinstance(planner, ConceptBotHouseholdPlanner)
     todo = [(t, r) for t, r in tuning_tasks() if t.id not in done][:limit]
+    earlier = earlier_readings(reuse)
     out.parent.mkdir(parents=True, exist_ok=True)
     with out.open("a", encoding="utf-8") as sink:
         for number, (task, run) in enumerate(todo, 1):
             scene = scenes()[task.scene]
-            signals = recorded(run)
+            signals = recorded(run) or earlier.get(task.id)
             fresh = signals is None
             signals = signals if signals is not None else signals_now(planner, task)
             usage: dict[str, Usage] = {}
@@ -191,6 +206,11 @@ def fit(out: Path, write: bool, c: float = 1.0) -> None:
         w, b = _fit(x[fold != k], y[fold != k], c)
         held[fold == k] = x[fold == k] @ w + b
     print(f"held-out AUC {_auc(held[y == 1], held[y == 0]):.3f}")
+    parts = {"dev": ("safe-", "unsafe-"), "blind set 1": ("hh1-",), "blind set 2": ("hh2-",)}
+    for part, prefixes in parts.items():
+        mask = np.array([r["task"].startswith(prefixes) for r in rows])
+        if (y[mask] == 1).any() and (y[mask] == 0).any():
+            print(f"  {part}: held-out AUC {_auc(held[mask & (y == 1)], held[mask & (y == 0)]):.3f}")
     for i, name in enumerate(FEATURES):
         print(f"  {name:15s} alone AUC {_auc(x[y == 1, i], x[y == 0, i]):.3f}")
     threshold, table = _threshold(held, y, done)
@@ -217,11 +237,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("step", choices=("collect", "fit"))
     parser.add_argument("--out", type=Path, default=OUT)
     parser.add_argument("--limit", type=int)
+    parser.add_argument("--reuse", type=Path, help="an earlier collect's rows: their readings are reused")
     parser.add_argument("--write", action="store_true")
     parser.add_argument("--c", type=float, default=1.0, help="inverse L2 strength of the fit")
     args = parser.parse_args(argv)
     if args.step == "collect":
-        collect(args.out, args.limit)
+        collect(args.out, args.limit, args.reuse)
     else:
         fit(args.out, args.write, args.c)
     return 0
