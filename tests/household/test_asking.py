@@ -113,6 +113,11 @@ def test_the_shipped_calibration_has_every_coverage_and_a_bad_file_is_a_clear_er
     good = tmp_path / "good.json"
     good.write_text('{"slope": 2.0, "intercept": -6, "qhat": {"0.9": 0.6}}')
     assert load_calibration(good).threshold(0.9) == 0.6
+    bad.write_text("{not json")
+    with pytest.raises(ConfigError, match="cannot read the harm judge calibration"):
+        load_calibration(bad)
+    with pytest.raises(ConfigError, match="no such file"):
+        load_calibration(tmp_path / "absent.json")
 
 
 def test_an_unsure_judge_asks_and_no_lets_the_plain_call_plan() -> None:

@@ -30,6 +30,7 @@ from conceptbot.core.errors import ConfigError
 from conceptbot.core.trace import DANGEROUS, SAFE, ClarifyingQuestion
 
 CALIBRATION_FILE = "judge_conformal.json"
+WHAT = "harm judge calibration"
 ANSWERS = (DANGEROUS, SAFE)
 ASK_ALL = 1.0
 """The coverage at which every judged instruction is a question (both answers always kept)."""
@@ -97,6 +98,27 @@ def _calibration(data: Any, where: str) -> JudgeCalibration:
     return JudgeCalibration(slope, intercept, qhat, str(data.get("fitted_on", "")))
 
 
+def read_json(source: Path | str, what: str) -> Any:
+    """The JSON in ``source``: a file's path, or (a string) the name of a file shipped in this
+    package. ``what`` names it in errors.
+
+    Raises:
+        ConfigError: It is missing, unreadable or not JSON.
+    """
+    shipped = isinstance(source, str)
+    where = f"{what} {source}"
+    try:
+        if shipped:
+            return json.loads(files("conceptbot.household").joinpath(source).read_text(encoding="utf-8"))
+        return json.loads(source.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        if shipped:
+            raise ConfigError(f"{where} is missing from the package") from None
+        raise ConfigError(f"cannot read the {where}: no such file") from None
+    except (OSError, ValueError) as exc:
+        raise ConfigError(f"cannot read the {where}: {exc}") from None
+
+
 @cache
 def shipped_calibration() -> JudgeCalibration:
     """The calibration shipped with the package (fitted for the embedded model).
@@ -104,15 +126,7 @@ def shipped_calibration() -> JudgeCalibration:
     Raises:
         ConfigError: The file is missing or not a calibration.
     """
-    where = f"harm judge calibration {CALIBRATION_FILE}"
-    try:
-        text = files("conceptbot.household").joinpath(CALIBRATION_FILE).read_text(encoding="utf-8")
-        data = json.loads(text)
-    except FileNotFoundError:
-        raise ConfigError(f"{where} is missing from the package") from None
-    except (OSError, ValueError) as exc:
-        raise ConfigError(f"{where} is not valid JSON: {exc}") from None
-    return _calibration(data, where)
+    return _calibration(read_json(CALIBRATION_FILE, WHAT), f"{WHAT} {CALIBRATION_FILE}")
 
 
 def load_calibration(path: Path) -> JudgeCalibration:
@@ -121,11 +135,7 @@ def load_calibration(path: Path) -> JudgeCalibration:
     Raises:
         ConfigError: It cannot be read or is not a calibration.
     """
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise ConfigError(f"cannot read the harm judge calibration {path}: {exc}") from None
-    return _calibration(data, str(path))
+    return _calibration(read_json(path, WHAT), str(path))
 
 
 def judge_set(p_dangerous: float, qhat: float) -> tuple[str, ...]:

@@ -161,12 +161,13 @@ class HouseholdExecutor:
             return
         raise _StepFailedError(f"{t} has not been found yet (find it first)", NOT_FOUND)
 
+    def is_closed(self, t: str) -> bool:
+        """Whether ``t`` can be opened and is not open."""
+        return self.types.has(t, "openable") and not self.state[t].flags["isOpen"]
+
     def closed_around(self, t: str) -> str | None:
         """The closed receptacle ``t`` is inside, if any (``t`` cannot be picked until it opens)."""
-        for p in self.state[t].parents:
-            if self.types.has(p, "openable") and not self.state[p].flags["isOpen"]:
-                return p
-        return None
+        return next((p for p in self.state[t].parents if self.is_closed(p)), None)
 
     def _held(self) -> str:
         if self.held is None:
@@ -252,7 +253,7 @@ class HouseholdExecutor:
         self._need(t, "receptacle")
         if t == held:
             raise _StepFailedError(f"cannot put {held} into itself")
-        if self.types.has(t, "openable") and not self.state[t].flags["isOpen"]:
+        if self.is_closed(t):
             raise _StepFailedError(f"{t} is closed (open it first)", CLOSED, t)
         self._land_put(held, t)
         return f"put {held} in/on {t}"

@@ -23,12 +23,10 @@ fit's conformal thresholds (:class:`~conceptbot.household.asking.JudgeCalibratio
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
-from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
@@ -36,11 +34,12 @@ from conceptbot.core.errors import ConfigError
 from conceptbot.core.plan import HouseholdAction
 from conceptbot.core.scene import HouseScene
 from conceptbot.core.trace import HarmVerdict
-from conceptbot.household.asking import JudgeCalibration
+from conceptbot.household.asking import JudgeCalibration, read_json
 from conceptbot.household.executor import HouseholdExecutor
 from conceptbot.household.outcomes import hazardous_outcomes
 
 MODEL_FILE = "harm_model.json"
+WHAT = "household harm model"
 READINGS = ("informed", "blind", "other_examples", "ordinary")
 """The harm judge's readings of the instruction (:data:`~conceptbot.household.judge.QUESTIONS`)."""
 PLAN_FEATURES = ("spill", "throw", "broken", "heating_inside", "left_on", "no_plan")
@@ -155,14 +154,7 @@ def shipped_model() -> HarmModel:
     Raises:
         ConfigError: The file is missing or not a model.
     """
-    where = f"household harm model {MODEL_FILE}"
-    try:
-        data = json.loads(files("conceptbot.household").joinpath(MODEL_FILE).read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ConfigError(f"{where} is missing from the package") from None
-    except (OSError, ValueError) as exc:
-        raise ConfigError(f"{where} is not valid JSON: {exc}") from None
-    return _model(data, where)
+    return _model(read_json(MODEL_FILE, WHAT), f"{WHAT} {MODEL_FILE}")
 
 
 def load_model(path: Path) -> HarmModel:
@@ -171,8 +163,4 @@ def load_model(path: Path) -> HarmModel:
     Raises:
         ConfigError: It cannot be read or is not a model.
     """
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise ConfigError(f"cannot read the household harm model {path}: {exc}") from None
-    return _model(data, str(path))
+    return _model(read_json(path, WHAT), str(path))

@@ -79,12 +79,11 @@ def plannable_objects(scene: HouseScene) -> list[str]:
 
 
 def response_schema(
-    scene: HouseScene, max_steps: int = 24, refusal: bool = True, task_steps: bool | None = None
+    scene: HouseScene, max_steps: int = 24, refusal: bool = True, task_steps: bool = False
 ) -> dict[str, Any]:
     """The reply schema: reasoning, the refusal flag, and steps matching the 17 actions' syntax with
     the scene's object names; with ``refusal`` False (a call that plans what was asked), no flag.
-    ``task_steps`` (by default: without the flag) asks for task steps instead of actions
-    (:mod:`conceptbot.household.skills`)."""
+    ``task_steps`` asks for task steps instead of actions (:mod:`conceptbot.household.skills`)."""
     objects = "|".join(re.escape(o) for o in plannable_objects(scene))
     with_object = "|".join(v for v, (obj, liquid) in HOUSEHOLD_ACTIONS.items() if obj and not liquid)
     without = "|".join(v for v, (obj, _) in HOUSEHOLD_ACTIONS.items() if not obj)
@@ -97,7 +96,7 @@ def response_schema(
     }
     if not refusal:
         del properties["refuse"]
-    if (not refusal) if task_steps is None else task_steps:
+    if task_steps:
         properties["steps"]["items"]["pattern"] = task_step_pattern(plannable_objects(scene))
         # a chore has a handful of parts; a small model given room for more repeats itself
         properties["steps"]["maxItems"] = min(max_steps, MAX_TASK_STEPS)

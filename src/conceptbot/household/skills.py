@@ -113,8 +113,7 @@ class _Expansion:
 
     def is_closed(self, obj: str) -> bool:
         name = self.name(obj)
-        state = self.robot.state.get(name)
-        return bool(state and self.types.has(name, "openable") and not state.flags["isOpen"])
+        return name in self.robot.state and self.robot.is_closed(name)
 
     def hold(self, obj: str) -> None:
         name = self.name(obj)
