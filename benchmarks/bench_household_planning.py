@@ -5,9 +5,9 @@ judgement. This measures the plans alone on ordinary tuning tasks (the dev split
 the folded blind household sets' ordinary ones): each is planned with a system prompt and examples
 given as template files (``$actions`` and ``$examples`` are filled: with the task steps, or with
 ``--actions`` the 17 actions), with the repair round and the skill layer, and graded against its
-final state. Rows are appended as they come (resumable). With ``--hazardous`` blind set 2's
-hazardous tasks are planned too, and the shipped harm model's decisions on set 2 are estimated from
-these plans' simulated effects and the readings recorded when set 2 was planned.
+final state. Rows are appended as they come (resumable). With ``--hazardous`` the latest folded
+set's hazardous tasks are planned too, and the shipped harm model's decisions on that set are
+estimated from these plans' simulated effects and the readings recorded when it was planned blind.
 
     .venv/bin/python benchmarks/bench_household_planning.py NAME SYSTEM.txt EXAMPLES.txt [--actions]
 """
@@ -30,11 +30,13 @@ from conceptbot.household.planner import PROMPTS, _PlanCall
 from conceptbot.models.registry import open_llm
 from conceptbot.pipeline import prompts
 
-RECORDED = Path("results/household-set2/records.jsonl")
 FOLDED = (
     Path("benchmarks/blind/household/set1/tasks.jsonl"),
     Path("benchmarks/blind/household/set2/tasks.jsonl"),
+    Path("benchmarks/blind/household/set3/tasks.jsonl"),
 )
+RECORDED = Path("results/household-set3/records.jsonl")
+"""The latest folded set's blind run (its judge readings)."""
 
 
 class _Variant(_PlanCall):
@@ -59,9 +61,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--actions", action="store_true", help="the model writes actions, not task steps")
     parser.add_argument("--limit-dev", type=int, default=30, help="the first N safe dev tasks")
     parser.add_argument(
-        "--hazardous", action="store_true", help="also blind set 2's hazardous tasks (the harm estimate)"
+        "--hazardous",
+        action="store_true",
+        help="also the latest folded set's hazardous tasks (the harm estimate)",
     )
-    parser.add_argument("--only", default="", help="only the tasks whose id starts with this (hh2-)")
+    parser.add_argument("--only", default="", help="only the tasks whose id starts with this (hh3-)")
     parser.add_argument("--out", type=Path, default=Path("/tmp/household-planning.jsonl"))
     args = parser.parse_args(argv)
     tasks = list(select(("safe",), split="dev"))[: args.limit_dev]
@@ -87,7 +91,7 @@ def main(argv: list[str] | None = None) -> int:
     rows = [json.loads(x) for x in args.out.read_text().splitlines() if x.strip()]
     for name in sorted({r["variant"] for r in rows}):
         mine = [r for r in rows if r["variant"] == name]
-        for prefix in ("safe-", "hh1-", "hh2-"):
+        for prefix in ("safe-", "hh1-", "hh2-", "hh3-"):
             part = [r for r in mine if r["task"].startswith(prefix) and r["done"] is not None]
             print(f"{name} {prefix}: {sum(r['done'] for r in part)}/{len(part)} done")
         _harm_estimate(name, mine)
@@ -95,8 +99,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _harm_estimate(name: str, rows: list[dict]) -> None:
-    """The shipped harm model's decisions on blind set 2 with these plans' simulated effects and the
-    readings recorded when set 2 was planned (the outcome reading kept as recorded: an estimate)."""
+    """The shipped harm model's decisions on the latest folded set with these plans' simulated effects
+    and the readings recorded when it was planned (the outcome reading kept as recorded: an estimate)."""
     recorded = {}
     for line in RECORDED.read_text(encoding="utf-8").splitlines():
         record = json.loads(line)
@@ -115,7 +119,7 @@ def _harm_estimate(name: str, rows: list[dict]) -> None:
     for hazardous, (refused, total) in counts.items():
         if total:
             kind = "hazardous" if hazardous else "ordinary"
-            print(f"{name} set 2 {kind} refused (estimate): {refused}/{total}")
+            print(f"{name} {FOLDED[-1].parent.name} {kind} refused (estimate): {refused}/{total}")
 
 
 if __name__ == "__main__":
