@@ -84,6 +84,18 @@ def test_the_pattern_admits_task_steps_on_the_scene_objects_only() -> None:
         assert not pattern.match(text)
 
 
+def test_each_slot_admits_only_objects_that_can_take_its_action() -> None:
+    scene = house_scene("FloorPlan1", ["Toaster", "LightSwitch", "Faucet", "Bread", "Mug", "CounterTop"])
+    pattern = re.compile(task_step_pattern(scene.objects))
+    for text in ("put Bread Toaster", "turn_on Toaster", "fill Mug water", "find LightSwitch", "slice Bread"):
+        assert pattern.match(text), text
+    # a toaster is not carried, a light switch holds nothing, a faucet is not filled, a mug not sliced
+    for text in ("put Toaster CounterTop", "put Bread LightSwitch", "fill Faucet water", "slice Mug"):
+        assert not pattern.match(text), text
+    # a step no object can take is left out: neither a toaster nor bread opens
+    assert "open" not in task_step_pattern(["Toaster", "Bread"])
+
+
 @pytest.mark.parametrize("text", ["", "put Apple", "fill Mug milk", "pour Mug water", "jump Apple"])
 def test_text_that_is_not_a_task_step_is_an_error(text: str) -> None:
     with pytest.raises(ValueError, match="not a task step"):

@@ -37,10 +37,32 @@ from dataclasses import dataclass
 from conceptbot.core.plan import LIQUIDS, HouseholdAction
 from conceptbot.core.scene import HouseScene
 from conceptbot.household.executor import HouseholdExecutor
+from conceptbot.household.thor import ThorCatalogue, catalogue
 
-ONE_OBJECT = ("find", "pick", "open", "close", "turn_on", "turn_off", "slice", "break", "cook")
-ONE_OBJECT += ("clean", "dirty", "empty", "throw")
-TWO_OBJECTS = ("put", "drop")
+LIQUID = "liquid"
+SLOTS: dict[str, tuple[str | None, ...]] = {
+    "find": (None,),
+    "pick": ("pickupable",),
+    "throw": ("pickupable",),
+    "open": ("openable",),
+    "close": ("openable",),
+    "turn_on": ("toggleable",),
+    "turn_off": ("toggleable",),
+    "slice": ("sliceable",),
+    "break": ("breakable",),
+    "cook": ("cookable",),
+    "clean": ("dirtyable",),
+    "dirty": ("dirtyable",),
+    "empty": ("fillable",),
+    "put": ("pickupable", "receptacle"),
+    "drop": ("pickupable", "receptacle"),
+    "fill": ("fillable", LIQUID),
+    "pour": ("fillable", LIQUID, None),
+}
+"""Each task step's slots: the ability an object there must have (the executor's precondition for
+the action it becomes; None: any object), or :data:`LIQUID`."""
+ONE_OBJECT = tuple(v for v, slots in SLOTS.items() if len(slots) == 1)
+TWO_OBJECTS = tuple(v for v, slots in SLOTS.items() if slots[1:] == ("receptacle",))
 
 
 @dataclass(frozen=True)
@@ -56,16 +78,20 @@ class TaskStep:
         return " ".join(p for p in (self.verb, self.obj, self.liquid, self.target) if p)
 
 
-def task_step_pattern(objects: Sequence[str]) -> str:
-    """The regular expression a task step's text matches, over the scene's ``objects``."""
-    obj = "(" + "|".join(re.escape(o) for o in objects) + ")"
-    liquid = "(" + "|".join(LIQUIDS) + ")"
-    forms = [
-        f"({'|'.join(ONE_OBJECT)}) {obj}",
-        f"({'|'.join(TWO_OBJECTS)}) {obj} {obj}",
-        f"fill {obj} {liquid}",
-        f"pour {obj} {liquid} {obj}",
-    ]
+def task_step_pattern(objects: Sequence[str], types: ThorCatalogue | None = None) -> str:
+    """The regular expression a task step's text matches, over the scene's ``objects``: each slot
+    admits only the objects with the ability its action needs (:data:`SLOTS`; a toaster is not
+    put anywhere, a light switch holds nothing, a faucet is not filled). A step whose slot no
+    object fits is left out."""
+    types = types or catalogue()
+    forms = []
+    for verb, slots in SLOTS.items():
+        words = [verb]
+        for slot in slots:
+            fits = LIQUIDS if slot == LIQUID else [o for o in objects if slot is None or types.has(o, slot)]
+            words.append("(" + "|".join(re.escape(o) for o in fits) + ")" if fits else "")
+        if all(words):
+            forms.append(" ".join(words))
     return "^(" + "|".join(forms) + ")$"
 
 
