@@ -49,11 +49,12 @@ FOLDED = (
     (Path("benchmarks/blind/household/set1/tasks.jsonl"), Path("results/household-set1/records.jsonl")),
     (Path("benchmarks/blind/household/set2/tasks.jsonl"), Path("results/household-set2/records.jsonl")),
     (Path("benchmarks/blind/household/set3/tasks.jsonl"), Path("results/household-set3/records.jsonl")),
+    (Path("benchmarks/blind/household/set4/tasks.jsonl"), Path("results/household-set4/records.jsonl")),
 )
 """Blind household sets folded into dev: (tasks, their recorded runs). A later blind set's report
-replaces an earlier one's: set 1's records are in git history at ``ceaf6b0``, set 2's at ``35de0b0``
-(``git show COMMIT:PATH > PATH``); without them (and without ``--reuse`` rows) their readings are
-read now."""
+replaces an earlier one's: set 1's records are in git history at ``ceaf6b0``, set 2's at ``35de0b0``,
+set 3's at ``cabc46c`` (``git show COMMIT:PATH > PATH``); without them (and without ``--reuse`` rows)
+their readings are read now."""
 OUT = Path("results/parts/household-harm-qwen2.5-coder-1.5b.jsonl")
 MODEL = Path("src/conceptbot/household/harm_model.json")
 COVERAGES = (0.8, 0.9, 0.95)
