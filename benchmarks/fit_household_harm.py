@@ -4,8 +4,8 @@ The tuning tasks are SafeAgentBench's dev split (its detailed safe and unsafe ta
 household sets folded into dev (:data:`FOLDED`). Two steps:
 
 ``collect``: for each task, the signals of the judgement. The harm judge's readings of the
-instruction and OPE's Risk Index come from the task's recorded ``conceptbot`` run where there is
-one (the judge's prompts are unchanged since), else they are read now; the plan of what was asked is
+instruction come from the task's recorded ``conceptbot`` run where there is one (the judge's
+prompts are unchanged since), else they are read now; the plan of what was asked is
 made now with ConceptBot's planning call, the outcome judge reads what it leaves behind, and its
 symbolic effects are counted. An ordinary task's plan is also graded (would it be done if let
 through). Rows are appended as they come (resumable).
@@ -39,7 +39,7 @@ from conceptbot.core.observe import SILENT
 from conceptbot.core.plan import format_actions
 from conceptbot.core.trace import HouseholdTrace
 from conceptbot.core.usage import Usage
-from conceptbot.household.harm import FEATURES, HarmModel
+from conceptbot.household.harm import FEATURES, READINGS, HarmModel
 from conceptbot.household.planner import ConceptBotHouseholdPlanner
 from conceptbot.systems import build_household_system
 
@@ -74,31 +74,23 @@ def tuning_tasks() -> list[tuple[SafetyTask, dict[str, Any]]]:
 
 
 def recorded(run: dict[str, Any]) -> dict[str, float] | None:
-    """The judge's readings and the highest Risk Index in a recorded run (None: it has none)."""
-    trace = run.get("trace") or {}
-    judged = trace.get("judge") or {}
-    if not judged.get("readings"):
+    """The judge's readings that the judgement weighs, in a recorded run (None: it has none)."""
+    readings = ((run.get("trace") or {}).get("judge") or {}).get("readings") or {}
+    if not all(k in readings for k in READINGS):
         return None
-    risk = max((float(v.get("dangerous", 0)) for v in (trace.get("risk") or {}).values()), default=0.0)
-    return {**judged["readings"], "risk": risk}
+    return {k: float(readings[k]) for k in READINGS}
 
 
 def signals_now(planner: ConceptBotHouseholdPlanner, task: SafetyTask) -> dict[str, float]:
-    """The judge's readings and the highest Risk Index, read now."""
+    """The judge's readings, read now."""
     assert planner.judge is not None
-    scene, usage = scenes()[task.scene], {}
-    knowledge, _, trace = planner.evidence(task.instruction, scene, SILENT, usage)
-    verdict, _ = planner.judge.judge(task.instruction, scene, knowledge)
-    risk = max((float(v.get("dangerous", 0)) for v in (trace.risk or {}).values()), default=0.0)
-    return {**verdict.readings, "risk": risk}
-
-
-READINGS = ("informed", "blind", "other_examples", "ordinary", "risk")
+    verdict, _ = planner.judge.judge(task.instruction, scenes()[task.scene], "")
+    return dict(verdict.readings)
 
 
 def earlier_readings(path: Path | None) -> dict[str, dict[str, float]]:
-    """The instruction's readings (judge and Risk Index) per task in an earlier collect's rows: they
-    depend on the instruction alone, so a new planning call reuses them."""
+    """The judge's readings per task in an earlier collect's rows: they depend on the instruction
+    alone, so a new planning call reuses them."""
     if path is None or not path.exists():
         return {}
     rows = [json.loads(x) for x in path.read_text(encoding="utf-8").splitlines() if x.strip()]
@@ -209,7 +201,7 @@ def fit(out: Path, write: bool, c: float = 1.0) -> None:
         w, b = _fit(x[fold != k], y[fold != k], c)
         held[fold == k] = x[fold == k] @ w + b
     print(f"held-out AUC {_auc(held[y == 1], held[y == 0]):.3f}")
-    parts = {"dev": ("safe-", "unsafe-")} | {f"blind set {n}": (f"hh{n}-",) for n in (1, 2, 3)}
+    parts = {"dev": ("safe-", "unsafe-")} | {f"blind set {n}": (f"hh{n}-",) for n in (1, 2, 3, 4)}
     for part, prefixes in parts.items():
         mask = np.array([r["task"].startswith(prefixes) for r in rows])
         if (y[mask] == 1).any() and (y[mask] == 0).any():

@@ -155,6 +155,22 @@ def test_household_systems_by_name_plan_a_typed_plan(settings: Settings, tmp_pat
         build_household_system(settings, "joint")
 
 
+def test_the_household_judge_asks_only_what_the_harm_judgement_weighs(
+    settings: Settings, tmp_path: Path
+) -> None:
+    from conceptbot import systems
+    from conceptbot.household.harm import FEATURES, READINGS, shipped_model
+
+    replies = tmp_path / "replies.json"
+    replies.write_text("[]")
+    judge = systems._harm_judge(replace(settings, llm=f"fake:{replies}"), None)
+    assert tuple(q.name for q in judge.questions) == READINGS
+    assert all(not q.evidence for q in judge.questions) and set(judge.contexts) == {
+        q.system for q in judge.questions[1:]
+    }
+    assert set(shipped_model().weights) <= set(FEATURES) and not {"informed", "risk"} & set(FEATURES)
+
+
 def test_the_coverage_is_one_the_calibration_ships() -> None:
     assert SystemOptions(coverage=0.95).coverage == 0.95
     for bad in (0.7, True, "0.9"):

@@ -25,6 +25,7 @@ from conceptbot.baselines.saycan import SayCan
 from conceptbot.core.config import Settings
 from conceptbot.core.errors import ConfigError, NotSupportedError
 from conceptbot.core.system import HouseholdSystem, PlannerSystem, SystemOptions
+from conceptbot.household.harm import READINGS
 from conceptbot.household.judge import QUESTIONS, HarmJudge, OutcomeJudge
 from conceptbot.household.planner import ConceptBotHouseholdPlanner, PlainHouseholdPlanner
 from conceptbot.knowledge.base import KnowledgeGraph
@@ -217,10 +218,12 @@ def _conceptbot_household(joint: bool, settings: Settings, coverage: float | Non
 
 
 def _harm_judge(settings: Settings, store: CacheStore | None) -> HarmJudge:
-    """The harm judge, with a backend instance per system prompt it asks with."""
-    _, *others = dict.fromkeys(q.system for q in QUESTIONS)
+    """The harm judge asking the questions the harm judgement weighs, with a backend instance per
+    system prompt it asks with."""
+    questions = tuple(q for q in QUESTIONS if q.name in READINGS)
+    _, *others = dict.fromkeys(q.system for q in questions)
     contexts = {system: open_llm(settings, store, module="judge") for system in others}
-    return HarmJudge(open_llm(settings, store, module="judge"), contexts=contexts)
+    return HarmJudge(open_llm(settings, store, module="judge"), questions=questions, contexts=contexts)
 
 
 _HOUSEHOLD_BUILDERS: dict[str, Callable[[Settings, float | None], HouseholdSystem]] = {

@@ -65,9 +65,9 @@ def test_the_shipped_model_weighs_known_signals_and_a_bad_file_is_a_clear_error(
         shipped.fitted_on,
     )
     for bad, message in (
-        ({"weights": {"blind": 1}, "bias": 0, "threshold": 0}, "needs"),
+        ({"weights": {"ordinary": 1}, "bias": 0, "threshold": 0}, "needs"),
         ({"weights": {"the_verb": 1}, "bias": 0, "threshold": 0, "qhat": {}}, "unknown signals the_verb"),
-        ({"weights": {"blind": "nan"}, "bias": 0, "threshold": 0, "qhat": {}}, "finite"),
+        ({"weights": {"ordinary": "nan"}, "bias": 0, "threshold": 0, "qhat": {}}, "finite"),
         ({"weights": {}, "bias": 0, "threshold": 0, "qhat": {"0.9": 2}}, "from 0 to 1"),
     ):
         with pytest.raises(ConfigError, match=message):

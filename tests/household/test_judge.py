@@ -114,12 +114,16 @@ def test_a_dangerous_score_refuses_the_plan_of_what_was_asked() -> None:
     assert not re.match(steps["items"]["pattern"], "pour") and steps["maxItems"] == 10
     assert plan.trace.to_dict()["judge"]["refuse"] and plan.trace.to_dict()["refused_by"] == "judge"
     assert plan.trace.config == "conceptbot"
-    assert "judged dangerous (score +4.39, threshold +0.50)" in plan.reason and "danger 4/5" in plan.reason
-    evidence = judge_llm.score_requests[0].messages[-1].content
-    assert "Risk analysis" in evidence and "candle is used for light" in evidence
+    assert "judged dangerous (score +4.39, threshold +0.50)" in plan.reason
+    # The judgement weighs no evidence: neither OPE nor URP is asked, the judge sees no graph facts.
+    assert all(
+        "Risk analysis" not in r.messages[-1].content
+        and "candle is used for light" not in r.messages[-1].content
+        for r in judge_llm.score_requests
+    )
     signals = plan.trace.to_dict()["judge"]["readings"]
-    assert signals["risk"] == 4 and signals["outcome"] == 0.0 and signals["no_plan"] == 0
-    assert set(plan.usage) >= {"ope", "urp", "judge", "planner", "total"}
+    assert "risk" not in signals and signals["outcome"] == 0.0 and signals["no_plan"] == 0
+    assert set(plan.usage) == {"judge", "planner", "total"}
 
 
 def test_the_planning_call_plans_what_was_asked_and_leaves_the_decision_to_the_judgement() -> None:
@@ -130,8 +134,6 @@ def test_the_planning_call_plans_what_was_asked_and_leaves_the_decision_to_the_j
     plan = planner.plan("Find the candle.", KITCHEN, observer=seen)
     assert not plan.refused and texts(plan.actions) == ["find Candle"]
     assert seen.names() == [
-        "OPE: risk index of Candle",
-        "URP: keywords and their relations",
         "judge: would carrying it out be dangerous?",
         "planner: planning what was asked",
     ]

@@ -3,10 +3,11 @@
 Whether the robot may carry out a plan is decided from what the plan would do, with no rule about
 the request's words. The signals are general and each is a number:
 
-* the harm judge's four readings of the instruction (:class:`~conceptbot.household.judge.HarmJudge`:
-  "would carrying this out be dangerous?", with and without the knowledge graph's facts and OPE's
-  risk analysis);
-* OPE's highest Risk Index (1-5) among the objects the instruction names (0: none named);
+* the harm judge's two readings of the instruction (:class:`~conceptbot.household.judge.HarmJudge`:
+  "would carrying this out be dangerous?" and "is this an ordinary chore?", without evidence: the
+  knowledge graph's facts, OPE's Risk Index and the judge's other two questions added nothing on
+  held-out or blind tasks and cost half a plan's time,
+  docs/notes/2026-12-07-household-judgement-without-evidence.md);
 * the outcome reading (:class:`~conceptbot.household.judge.OutcomeJudge`): the model asked plainly
   whether the state the simulated plan leaves behind is dangerous;
 * what the plan does in the symbolic world (:func:`plan_features`): liquid poured onto something
@@ -40,11 +41,12 @@ from conceptbot.household.outcomes import hazardous_outcomes
 
 MODEL_FILE = "harm_model.json"
 WHAT = "household harm model"
-READINGS = ("informed", "blind", "other_examples", "ordinary")
-"""The harm judge's readings of the instruction (:data:`~conceptbot.household.judge.QUESTIONS`)."""
+READINGS = ("other_examples", "ordinary")
+"""The harm judge's readings of the instruction (:data:`~conceptbot.household.judge.QUESTIONS`) that
+the judgement weighs: the questions without the graph's evidence."""
 PLAN_FEATURES = ("spill", "throw", "broken", "heating_inside", "left_on", "no_plan")
 """What the plan does in the symbolic world (:func:`plan_features`)."""
-FEATURES = (*READINGS, "risk", "outcome", *PLAN_FEATURES)
+FEATURES = (*READINGS, "outcome", *PLAN_FEATURES)
 """Every signal of the judgement, in the order the fit writes its weights."""
 
 

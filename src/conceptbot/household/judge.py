@@ -17,9 +17,10 @@ log-odds of "dangerous":
 On the 154 detailed dev tasks the request check lets through, the first two alone separate unsafe
 from safe with AUC 0.89, all four with 0.93; on the 125 that nothing else refuses, 0.87 and 0.90
 (``docs/notes/2026-12-01-safeagentbench-v4-four-questions-and-request-check.md``).
-The ConceptBot household planner does not refuse on the sum: each reading is a signal of the
-fitted harm judgement (:mod:`conceptbot.household.harm`). The sum and its threshold remain the
-judge's own verdict, for the benchmarks that measure the judge alone.
+The ConceptBot household planner does not refuse on the sum: it asks the two questions whose
+readings the fitted harm judgement weighs (:data:`~conceptbot.household.harm.READINGS`; the other
+two added nothing there). The sum of all four and its threshold remain the judge's own verdict,
+for the benchmarks that measure the judge alone.
 """
 
 from __future__ import annotations

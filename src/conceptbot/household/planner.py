@@ -269,7 +269,7 @@ def _planned(reply: _Reply, trace: HouseholdTrace, usage: dict[str, Usage], conf
 
 
 def _judged(verdict: HarmVerdict, decision: HarmDecision | None) -> str:
-    """Why the judge refused, without the risk analysis."""
+    """Why the judgement refused."""
     score = f"score {verdict.log_odds:+.2f}"
     if decision is None:
         return f"Carrying it out was judged dangerous ({score}, threshold {verdict.threshold:+.2f})"
@@ -329,15 +329,17 @@ class ConceptBotHouseholdPlanner:
     """ConceptBot's household planner: the plan of what was asked, and one fitted judgement of
     whether carrying it out would be dangerous (:mod:`conceptbot.household.harm`).
 
-    The evidence is OPE's Risk Index for the objects the instruction names and URP's keywords with
-    their graph relations; the harm judge reads the instruction with and without it; the planning
-    call plans what was asked (with one repair round where steps fail); the outcome judge reads what
-    the simulated plan leaves behind; the harm model weighs all of it. Without a judge
-    (``conceptbot-joint``, the first design) the evidence goes to the plain planner's call, which
-    judges and plans at once.
+    The harm judge reads the instruction; the planning call plans what was asked (with one repair
+    round where steps fail); the outcome judge reads what the simulated plan leaves behind; the
+    harm model weighs all of it with what the plan does in the symbolic world. Without a judge
+    (``conceptbot-joint``, the first design) the evidence, OPE's Risk Index for the objects the
+    instruction names and URP's keywords with their graph relations, goes to the plain planner's
+    call, which judges and plans at once. (As readings of the judgement the evidence added nothing
+    on held-out or blind tasks and took half a plan's time:
+    docs/notes/2026-12-07-household-judgement-without-evidence.md.)
 
     Args:
-        llm: The LLM for OPE and URP's keywords.
+        llm: The LLM for OPE and URP's keywords (``conceptbot-joint``).
         retriever: Graph relations + cosine filter.
         planner_llm: The LLM for the planning call; ``llm`` if None.
         keyword_llm: The LLM for URP's keywords; ``llm`` if None. (Separate contexts of the same
@@ -471,16 +473,16 @@ class ConceptBotHouseholdPlanner:
         request = check_request(request)
         observer = observer or SILENT
         usage: dict[str, Usage] = {}
-        knowledge, riskiest, trace = self.evidence(request, scene, observer, usage)
         if self.judge is None or self.harm is None:
+            knowledge, _, trace = self.evidence(request, scene, observer, usage)
             return self._joint(request, scene, knowledge, trace, observer, usage)
         started = time.perf_counter()
         observer.progress("judge: would carrying it out be dangerous?")
-        judged, used = self.judge.judge(request, scene, knowledge)
+        judged, used = self.judge.judge(request, scene, "")
         usage["judge"] = used.with_latency(time.perf_counter() - started)
+        trace = HouseholdTrace(objects=tuple(mentioned_objects(request, scene)))
         reply, trace = self.draft(request, scene, trace, observer, usage)
-        risk = max((float(v.get("dangerous", 0)) for v in (trace.risk or {}).values()), default=0.0)
-        signals = {**judged.readings, "risk": risk, **self.read_plan(scene, reply.steps, observer, usage)}
+        signals = {**judged.readings, **self.read_plan(scene, reply.steps, observer, usage)}
         verdict = self.harm.verdict(signals)
         outcomes = tuple(hazardous_outcomes(scene, reply.steps))
         trace = replace(trace, judge=verdict, outcomes=outcomes or None)
@@ -493,8 +495,7 @@ class ConceptBotHouseholdPlanner:
                 "confidence": decision.confidence,
             }
         if verdict.refuse if decision is None else decision.refuse:
-            reason = _judged(verdict, decision)
-            reason += f"; risk analysis: {riskiest}" if riskiest else "."
+            reason = _judged(verdict, decision) + "."
             trace = replace(trace, refused_by="judge", reasoning=reply.reasoning)
             return replace(_refused(reason, trace, usage, self.config), **answered)
         return replace(_planned(reply, trace, usage, self.config), **answered)
