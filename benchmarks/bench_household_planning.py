@@ -35,8 +35,9 @@ FOLDED = (
     Path("benchmarks/blind/household/set2/tasks.jsonl"),
     Path("benchmarks/blind/household/set3/tasks.jsonl"),
     Path("benchmarks/blind/household/set4/tasks.jsonl"),
+    Path("benchmarks/blind/household/set5/tasks.jsonl"),
 )
-RECORDED = Path("results/household-set4/records.jsonl")
+RECORDED = Path("results/household-set5/records.jsonl")
 """The latest folded set's blind run (its judge readings)."""
 
 
@@ -92,7 +93,7 @@ def main(argv: list[str] | None = None) -> int:
     rows = [json.loads(x) for x in args.out.read_text().splitlines() if x.strip()]
     for name in sorted({r["variant"] for r in rows}):
         mine = [r for r in rows if r["variant"] == name]
-        for prefix in ("safe-", "hh1-", "hh2-", "hh3-", "hh4-"):
+        for prefix in ("safe-", "hh1-", "hh2-", "hh3-", "hh4-", "hh5-"):
             part = [r for r in mine if r["task"].startswith(prefix) and r["done"] is not None]
             print(f"{name} {prefix}: {sum(r['done'] for r in part)}/{len(part)} done")
         _harm_estimate(name, mine)

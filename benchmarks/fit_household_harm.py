@@ -50,11 +50,12 @@ FOLDED = (
     (Path("benchmarks/blind/household/set2/tasks.jsonl"), Path("results/household-set2/records.jsonl")),
     (Path("benchmarks/blind/household/set3/tasks.jsonl"), Path("results/household-set3/records.jsonl")),
     (Path("benchmarks/blind/household/set4/tasks.jsonl"), Path("results/household-set4/records.jsonl")),
+    (Path("benchmarks/blind/household/set5/tasks.jsonl"), Path("results/household-set5/records.jsonl")),
 )
 """Blind household sets folded into dev: (tasks, their recorded runs). A later blind set's report
 replaces an earlier one's: set 1's records are in git history at ``ceaf6b0``, set 2's at ``35de0b0``,
-set 3's at ``cabc46c`` (``git show COMMIT:PATH > PATH``); without them (and without ``--reuse`` rows)
-their readings are read now."""
+set 3's at ``cabc46c``, set 4's at ``55c9cc7`` (``git show COMMIT:PATH > PATH``); without them (and
+without ``--reuse`` rows) their readings are read now."""
 OUT = Path("results/parts/household-harm-qwen2.5-coder-1.5b.jsonl")
 MODEL = Path("src/conceptbot/household/harm_model.json")
 COVERAGES = (0.8, 0.9, 0.95)
@@ -201,7 +202,7 @@ def fit(out: Path, write: bool, c: float = 1.0) -> None:
         w, b = _fit(x[fold != k], y[fold != k], c)
         held[fold == k] = x[fold == k] @ w + b
     print(f"held-out AUC {_auc(held[y == 1], held[y == 0]):.3f}")
-    parts = {"dev": ("safe-", "unsafe-")} | {f"blind set {n}": (f"hh{n}-",) for n in (1, 2, 3, 4)}
+    parts = {"dev": ("safe-", "unsafe-")} | {f"blind set {n}": (f"hh{n}-",) for n in (1, 2, 3, 4, 5)}
     for part, prefixes in parts.items():
         mask = np.array([r["task"].startswith(prefixes) for r in rows])
         if (y[mask] == 1).any() and (y[mask] == 0).any():

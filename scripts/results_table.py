@@ -25,7 +25,7 @@ DEV = Path("results/dev/report.json")
 SAFETY = Path("results/safeagentbench/safeagentbench-test.json")
 ASKING = Path("results/asking/report.json")
 BLIND1 = Path("results/blind1/report.json")
-HOUSEHOLD = Path("results/household-set4/safeagentbench.json")
+HOUSEHOLD = Path("results/household-set5/safeagentbench.json")
 TASK_REPORTS = (
     (PAPER47, "the paper's 47"),
     (BLIND1, "blind set 1"),
@@ -151,7 +151,7 @@ def render(root: Path = ROOT) -> str:
         parts += _safety_table(found, SAFETY.with_suffix(".md"))
     if (found := _load(root, HOUSEHOLD)) is not None:
         title = (
-            "Blind household set 4 (100 tasks in SafeAgentBench's scenes, written without seeing the planner)"
+            "Blind household set 5 (100 tasks in SafeAgentBench's scenes, written without seeing the planner)"
         )
         parts += _safety_table(found, HOUSEHOLD.with_suffix(".md"), title)
     return "\n".join(parts).rstrip("\n") + "\n" if parts else "No reports yet.\n"
@@ -191,10 +191,10 @@ COMMANDS = (
         " && conceptbot safebench report results/safeagentbench/records.jsonl --split test",
     ),
     (
-        "blind household set 4 (50 hazardous, 50 ordinary tasks, the benchmark's scenes): plain, ConceptBot",
+        "blind household set 5 (50 hazardous, 50 ordinary tasks, the benchmark's scenes): plain, ConceptBot",
         HOUSEHOLD,
-        "conceptbot --no-cache safebench run --tasks benchmarks/blind/household/set4/tasks.jsonl -c plain"
-        " -c conceptbot && conceptbot safebench report results/household-set4/records.jsonl",
+        "conceptbot --no-cache safebench run --tasks benchmarks/blind/household/set5/tasks.jsonl -c plain"
+        " -c conceptbot && conceptbot safebench report results/household-set5/records.jsonl",
     ),
 )
 
