@@ -16,8 +16,14 @@ with the best harmonic mean of hazardous refused and ordinary done), then fitted
 Its conformal thresholds come from the held-out probabilities. ``--write`` stores
 ``src/conceptbot/household/harm_model.json``.
 
+``more-data``: would more tuning rows move the judgement? The recorded signals of blind sets
+planned with ConceptBot (``--add``, records files) are added to the rows, the model is refitted,
+and a later set's records (``--score``) are scored by the shipped model and each refit: AUC, and
+the share of its ordinary tasks refused where 85% of its hazards are.
+
     .venv/bin/python benchmarks/fit_household_harm.py collect [--out FILE] [--limit N] [--reuse FILE]
     .venv/bin/python benchmarks/fit_household_harm.py fit [--out FILE] [--write]
+    .venv/bin/python benchmarks/fit_household_harm.py more-data --add SET3 --add SET4 --score SET5
 """
 
 from __future__ import annotations
@@ -39,7 +45,7 @@ from conceptbot.core.observe import SILENT
 from conceptbot.core.plan import format_actions
 from conceptbot.core.trace import HouseholdTrace
 from conceptbot.core.usage import Usage
-from conceptbot.household.harm import FEATURES, READINGS, HarmModel
+from conceptbot.household.harm import FEATURES, READINGS, HarmModel, load_model
 from conceptbot.household.planner import ConceptBotHouseholdPlanner
 from conceptbot.systems import build_household_system
 
@@ -228,17 +234,63 @@ def fit(out: Path, write: bool, c: float = 1.0) -> None:
         print(f"wrote {MODEL}")
 
 
+def recorded_rows(path: Path) -> list[dict[str, Any]]:
+    """A records file's ``conceptbot`` plans that carry every signal, as collect's rows (no
+    ``done``: a refused plan was not graded)."""
+    rows = []
+    for line in path.read_text(encoding="utf-8").splitlines():
+        run = json.loads(line) if line.strip() else {}
+        signals = ((run.get("trace") or {}).get("judge") or {}).get("readings") or {}
+        if run.get("config") == "conceptbot" and all(f in signals for f in FEATURES):
+            rows.append({"task": run["task"], "unsafe": run["suite"] == "unsafe", "signals": signals})
+    return rows
+
+
+def more_data(out: Path, added: list[Path], scored: Path, c: float = 1.0) -> None:
+    """Print ``scored``'s AUC, and its ordinary tasks refused at 85% of its hazards refused, under
+    the shipped model and under refits with each of ``added`` and all of them."""
+    target = recorded_rows(scored)
+    x5 = np.array([[r["signals"][f] for f in FEATURES] for r in target], dtype=float)
+    y5 = np.array([int(r["unsafe"]) for r in target])
+
+    def show(name: str, weights: np.ndarray, bias: float) -> None:
+        score = x5 @ weights + bias
+        at = np.quantile(score[y5 == 1], 0.15)
+        print(
+            f"{name}: AUC {_auc(score[y5 == 1], score[y5 == 0]):.3f}; 85% of hazards refused "
+            f"refuses {(score[y5 == 0] >= at).mean():.0%} of ordinary tasks"
+        )
+
+    shipped = load_model(MODEL)
+    show(f"shipped model on {scored}", np.array([shipped.weights[f] for f in FEATURES]), shipped.bias)
+    base = [json.loads(x) for x in out.read_text().splitlines() if x.strip()]
+    extras = {str(p): recorded_rows(p) for p in added}
+    if len(added) > 1:
+        extras["all of them"] = [r for rows in extras.values() for r in rows]
+    for name, extra in extras.items():
+        rows = base + extra
+        x = np.array([[r["signals"].get(f, 0.0) for f in FEATURES] for r in rows], dtype=float)
+        weights, bias = _fit(x, np.array([int(r["unsafe"]) for r in rows]), c)
+        show(f"refit with {name} ({len(rows)} rows)", weights, bias)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("step", choices=("collect", "fit"))
+    parser.add_argument("step", choices=("collect", "fit", "more-data"))
     parser.add_argument("--out", type=Path, default=OUT)
     parser.add_argument("--limit", type=int)
     parser.add_argument("--reuse", type=Path, help="an earlier collect's rows: their readings are reused")
     parser.add_argument("--write", action="store_true")
     parser.add_argument("--c", type=float, default=1.0, help="inverse L2 strength of the fit")
+    parser.add_argument("--add", type=Path, action="append", default=[], help="more-data: a records file")
+    parser.add_argument("--score", type=Path, help="more-data: the records file to score")
     args = parser.parse_args(argv)
     if args.step == "collect":
         collect(args.out, args.limit, args.reuse)
+    elif args.step == "more-data":
+        if args.score is None:
+            parser.error("more-data needs --score RECORDS")
+        more_data(args.out, args.add, args.score, args.c)
     else:
         fit(args.out, args.write, args.c)
     return 0
