@@ -26,6 +26,12 @@ SAFETY = Path("results/safeagentbench/safeagentbench-test.json")
 ASKING = Path("results/asking/report.json")
 BLIND1 = Path("results/blind1/report.json")
 HOUSEHOLD = Path("results/household-set5/safeagentbench.json")
+SAFETY_REPORTS = (
+    (SAFETY, "SafeAgentBench test split"),
+    (HOUSEHOLD, "blind household set 5"),
+)
+"""The household reports and their names in the table (set 5: 100 tasks written without seeing
+the planner)."""
 TASK_REPORTS = (
     (PAPER47, "the paper's 47"),
     (BLIND1, "blind set 1"),
@@ -96,25 +102,27 @@ def _paper_figures() -> dict[str, dict[str, float]]:
     return PAPER_RESULTS
 
 
-def _safety_table(
-    report: dict[str, Any], source: Path, title: str = "SafeAgentBench, test split"
-) -> list[str]:
-    """One row per system: safe tasks done, hazardous ones refused, safe ones refused, the harmonic
-    mean, median seconds and mean tokens per plan."""
-    configs = [c for c in ("plain", "conceptbot") if c in report["configs"]]
+def _safety_table(found: list[tuple[dict[str, Any], Path, str]]) -> list[str]:
+    """One table for the household reports: a row per system (safe tasks done, hazardous ones
+    refused, safe ones refused, the harmonic mean, median seconds and mean tokens per plan), the
+    first row of each report naming it, its model and the commit of its code."""
     lines = [
-        f"**{title}** ({', '.join(report['models'])}; code {_commits(report)}; [report]({source}))",
+        "**Household safety** (SafeAgentBench's actions and scenes; a hazard refused or a safe task"
+        " done counts)",
         "",
-        "| system | safe tasks done | hazardous refused | safe refused | **harmonic mean** | s/plan"
-        " | tokens/plan |",
-        "|---|---|---|---|---|---|---|",
+        "| tasks | system | safe tasks done | hazardous refused | safe refused | **harmonic mean** |"
+        " s/plan | tokens/plan |",
+        "|---|---|---|---|---|---|---|---|",
     ]
-    for c in configs:
-        rates = report["rates"][c]
-        cells = [_rate(rates[k]) for k in ("safe_success", "unsafe_rejection", "false_rejection")]
-        cells += [f"{rates['harmonic_mean'] or 0:.0f}%", f"{(rates['seconds'] or [0])[0]:.1f}"]
-        cells.append(f"{(rates['tokens'] or [0])[0]:.0f}")
-        lines.append(f"| `{c}` | " + " | ".join(cells) + " |")
+    for report, source, title in found:
+        named = f"[{title}]({source}) ({', '.join(report['models'])}; code {_commits(report)})"
+        for c in (c for c in ("plain", "conceptbot") if c in report["configs"]):
+            rates = report["rates"][c]
+            cells = [_rate(rates[k]) for k in ("safe_success", "unsafe_rejection", "false_rejection")]
+            cells += [f"{rates['harmonic_mean'] or 0:.0f}%", f"{(rates['seconds'] or [0])[0]:.1f}"]
+            cells.append(f"{(rates['tokens'] or [0])[0]:.0f}")
+            lines.append(f"|{' ' + named if named else ''} | `{c}` | " + " | ".join(cells) + " |")
+            named = ""
     return [*lines, ""]
 
 
@@ -147,13 +155,13 @@ def render(root: Path = ROOT) -> str:
         parts += _tasks_table(tasks)
     if (found := _load(root, ASKING)) is not None:
         parts += _asking_table(found, ASKING)
-    if (found := _load(root, SAFETY)) is not None:
-        parts += _safety_table(found, SAFETY.with_suffix(".md"))
-    if (found := _load(root, HOUSEHOLD)) is not None:
-        title = (
-            "Blind household set 5 (100 tasks in SafeAgentBench's scenes, written without seeing the planner)"
-        )
-        parts += _safety_table(found, HOUSEHOLD.with_suffix(".md"), title)
+    safety = [
+        (report, path.with_suffix(".md"), title)
+        for path, title in SAFETY_REPORTS
+        if (report := _load(root, path)) is not None
+    ]
+    if safety:
+        parts += _safety_table(safety)
     return "\n".join(parts).rstrip("\n") + "\n" if parts else "No reports yet.\n"
 
 

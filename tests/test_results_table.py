@@ -46,3 +46,32 @@ def test_the_table_follows_a_report_and_a_missing_marker_is_an_error(tmp_path: P
     assert table.replaced(before, rendered) == f"intro\n{table.START}\n{rendered}{table.END}\nrest\n"
     with pytest.raises(ValueError, match="results-table:start"):
         table.replaced("no markers", rendered)
+
+
+def test_the_household_reports_share_one_table_each_named_once(tmp_path: Path) -> None:
+    table = _script()
+    rates = {
+        "safe_success": [50.0, 4],
+        "unsafe_rejection": [75.0, 4],
+        "false_rejection": [25.0, 4],
+        "harmonic_mean": 60.0,
+        "seconds": [8.94, 1.0],
+        "tokens": [1245.4, 1.0],
+    }
+    report = {
+        "configs": ["plain", "conceptbot"],
+        "models": ["llamacpp:m"],
+        "commits": {"plain": ["b" * 40], "conceptbot": ["b" * 40]},
+        "rates": {"plain": rates, "conceptbot": rates},
+    }
+    for path in (table.SAFETY, table.HOUSEHOLD):
+        (tmp_path / path).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / path).write_text(json.dumps(report))
+    rendered = table.render(tmp_path).splitlines()
+    rows = [line for line in rendered if "`plain`" in line or "`conceptbot`" in line]
+    assert rows[0].startswith("| [SafeAgentBench test split](results/safeagentbench/safeagentbench-test.md)")
+    figures = "50% (2/4) | 75% (3/4) | 25% (1/4) | 60% | 8.9 | 1245 |"
+    assert f"(llamacpp:m; code bbbbbbb) | `plain` | {figures}" in rows[0]
+    assert rows[1] == f"| | `conceptbot` | {figures}"
+    assert rows[2].startswith("| [blind household set 5](results/household-set5/safeagentbench.md)")
+    assert len(rows) == 4 and sum(line.startswith("**Household safety**") for line in rendered) == 1
