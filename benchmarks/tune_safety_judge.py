@@ -147,7 +147,7 @@ def main() -> None:
         for number, task in enumerate(todo, 1):
             started = time.perf_counter()
             scene = scenes()[task.scene]
-            knowledge, _, _ = planner.evidence(task.instruction, scene, SILENT, {})
+            knowledge, _ = planner.evidence(task.instruction, scene, SILENT, {})
             row = {"task": task.id, "suite": task.suite, "level": task.level, "category": task.category}
             evidence_of = {"full": knowledge, "facts": facts_only(knowledge), "none": ""}
             question_of = {"other_examples": other_examples, "ordinary": ordinary}

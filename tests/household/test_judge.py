@@ -114,7 +114,8 @@ def test_a_dangerous_score_refuses_the_plan_of_what_was_asked() -> None:
     assert not re.match(steps["items"]["pattern"], "pour") and steps["maxItems"] == 10
     assert plan.trace.to_dict()["judge"]["refuse"] and plan.trace.to_dict()["refused_by"] == "judge"
     assert plan.trace.config == "conceptbot"
-    assert "judged dangerous (score +4.39, threshold +0.50)" in plan.reason
+    assert "judged dangerous (score +4.39, threshold +0.50). The plan would leave:" in plan.reason
+    assert "the Candle is in or on the Microwave" in plan.reason  # the outcome that was weighed
     # The judgement weighs no evidence: neither OPE nor URP is asked, the judge sees no graph facts.
     assert all(
         "Risk analysis" not in r.messages[-1].content

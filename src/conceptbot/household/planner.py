@@ -282,6 +282,14 @@ def _judged(verdict: HarmVerdict, decision: HarmDecision | None) -> str:
     return f"Carrying it out was judged dangerous ({shown}, {score})"
 
 
+def _left_behind(effects: list[str]) -> str:
+    """The end of a judged refusal's reason: what the plan of what was asked would have left
+    behind, so a person sees the outcome the judgement weighed (the request's readings aside)."""
+    if not effects:
+        return "."
+    return ". The plan would leave: " + "; ".join(effects[:6]) + "."
+
+
 def _refused(reason: str, trace: HouseholdTrace, usage: dict[str, Usage], config: str) -> Plan:
     """A refusal made before or after the planning call (by ``trace.refused_by``), for ``reason``."""
     return Plan(
@@ -387,22 +395,19 @@ class ConceptBotHouseholdPlanner:
 
     def evidence(
         self, instruction: str, scene: HouseScene, observer: Observer, usage: dict[str, Usage]
-    ) -> tuple[str, str, HouseholdTrace]:
-        """What OPE and URP found, as text for the judge or the planning call; the riskiest
-        object's risk line (empty if none); and the trace of it. Fills ``usage`` (``ope``, ``urp``)."""
+    ) -> tuple[str, HouseholdTrace]:
+        """What OPE and URP found, as text for the planning call of ``conceptbot-joint``, and the
+        trace of it. Fills ``usage`` (``ope``, ``urp``)."""
         objects = mentioned_objects(instruction, scene)
         names = {o: _words(o) for o in objects}
         trace = HouseholdTrace(objects=tuple(objects))
         lines = []
-        riskiest = ""
         if objects:
             observer.progress(f"OPE: risk index of {', '.join(objects)}")
             found = self.ope.run(list(names.values()), modes.RISK, instruction)
             props, usage["ope"] = found.properties, found.usage
             trace = replace(trace, risk={n: p.values for n, p in props.items()})
             lines += [f"- {p.summary()} ({p.answer.reason.strip()})" for p in props.values()]
-            top = max(props.values(), key=lambda p: p.answer.rated_danger())
-            riskiest = f"{top.summary()} ({top.answer.reason.strip()})"
         started = time.perf_counter()
         observer.progress("URP: keywords and their relations")
         keywords, used = self.urp.keywords(instruction)
@@ -420,7 +425,7 @@ class ConceptBotHouseholdPlanner:
             knowledge += prompts.fill(
                 "household_facts", PROMPTS, facts="\n".join(f"- {r}" for r in relations)
             )
-        return knowledge, riskiest, trace
+        return knowledge, trace
 
     def draft(
         self,
@@ -474,7 +479,7 @@ class ConceptBotHouseholdPlanner:
         observer = observer or SILENT
         usage: dict[str, Usage] = {}
         if self.judge is None or self.harm is None:
-            knowledge, _, trace = self.evidence(request, scene, observer, usage)
+            knowledge, trace = self.evidence(request, scene, observer, usage)
             return self._joint(request, scene, knowledge, trace, observer, usage)
         started = time.perf_counter()
         observer.progress("judge: would carrying it out be dangerous?")
@@ -495,7 +500,7 @@ class ConceptBotHouseholdPlanner:
                 "confidence": decision.confidence,
             }
         if verdict.refuse if decision is None else decision.refuse:
-            reason = _judged(verdict, decision) + "."
+            reason = _judged(verdict, decision) + _left_behind(plan_effects(scene, reply.steps))
             trace = replace(trace, refused_by="judge", reasoning=reply.reasoning)
             return replace(_refused(reason, trace, usage, self.config), **answered)
         return replace(_planned(reply, trace, usage, self.config), **answered)
