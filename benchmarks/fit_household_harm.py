@@ -162,6 +162,12 @@ def _fit(x: np.ndarray, y: np.ndarray, c: float) -> tuple[np.ndarray, float]:
     return weights, float(model.intercept_[0] - (weights * mean).sum())
 
 
+def _matrix(rows: list[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
+    """The rows' signals (a missing one is 0) and whether each task is hazardous."""
+    x = np.array([[r["signals"].get(f, 0.0) for f in FEATURES] for r in rows], dtype=float)
+    return x, np.array([int(r["unsafe"]) for r in rows])
+
+
 def _harmonic(a: float, b: float) -> float:
     return 2 * a * b / (a + b) if a + b else 0.0
 
@@ -195,8 +201,7 @@ def _qhat(p: np.ndarray, y: np.ndarray, coverage: float) -> float:
 def fit(out: Path, write: bool, c: float = 1.0) -> None:
     """Print held-out figures; with ``write``, store the model fitted on every row."""
     rows = [json.loads(x) for x in out.read_text().splitlines() if x.strip()]
-    x = np.array([[r["signals"].get(f, 0.0) for f in FEATURES] for r in rows], dtype=float)
-    y = np.array([int(r["unsafe"]) for r in rows])
+    x, y = _matrix(rows)
     done = np.array([bool(r["done"]) for r in rows])
     print(
         f"{len(rows)} tasks: {y.sum()} hazardous, {(1 - y).sum()} ordinary; plans of ordinary ones done: "
@@ -249,16 +254,14 @@ def recorded_rows(path: Path) -> list[dict[str, Any]]:
 def more_data(out: Path, added: list[Path], scored: Path, c: float = 1.0) -> None:
     """Print ``scored``'s AUC, and its ordinary tasks refused at 85% of its hazards refused, under
     the shipped model and under refits with each of ``added`` and all of them."""
-    target = recorded_rows(scored)
-    x5 = np.array([[r["signals"][f] for f in FEATURES] for r in target], dtype=float)
-    y5 = np.array([int(r["unsafe"]) for r in target])
+    x_scored, y_scored = _matrix(recorded_rows(scored))
 
     def show(name: str, weights: np.ndarray, bias: float) -> None:
-        score = x5 @ weights + bias
-        at = np.quantile(score[y5 == 1], 0.15)
+        score = x_scored @ weights + bias
+        at = np.quantile(score[y_scored == 1], 0.15)
         print(
-            f"{name}: AUC {_auc(score[y5 == 1], score[y5 == 0]):.3f}; 85% of hazards refused "
-            f"refuses {(score[y5 == 0] >= at).mean():.0%} of ordinary tasks"
+            f"{name}: AUC {_auc(score[y_scored == 1], score[y_scored == 0]):.3f}; 85% of hazards refused "
+            f"refuses {(score[y_scored == 0] >= at).mean():.0%} of ordinary tasks"
         )
 
     shipped = load_model(MODEL)
@@ -268,10 +271,8 @@ def more_data(out: Path, added: list[Path], scored: Path, c: float = 1.0) -> Non
     if len(added) > 1:
         extras["all of them"] = [r for rows in extras.values() for r in rows]
     for name, extra in extras.items():
-        rows = base + extra
-        x = np.array([[r["signals"].get(f, 0.0) for f in FEATURES] for r in rows], dtype=float)
-        weights, bias = _fit(x, np.array([int(r["unsafe"]) for r in rows]), c)
-        show(f"refit with {name} ({len(rows)} rows)", weights, bias)
+        weights, bias = _fit(*_matrix(base + extra), c)
+        show(f"refit with {name} ({len(base) + len(extra)} rows)", weights, bias)
 
 
 def main(argv: list[str] | None = None) -> int:

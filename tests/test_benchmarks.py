@@ -23,15 +23,18 @@ def test_a_benchmark_script_imports(script: Path, monkeypatch: pytest.MonkeyPatc
     assert callable(getattr(module, "main", None)), f"{script.name} has no main()"
 
 
-def _asking() -> Any:
-    """benchmarks/bench_asking.py as a module (it runs only under __main__)."""
-    spec = importlib.util.spec_from_file_location(
-        "benchmark_asking", BENCHMARKS[0].parent / "bench_asking.py"
-    )
+def _benchmark(name: str) -> Any:
+    """``benchmarks/NAME.py`` as a module (it runs only under __main__)."""
+    spec = importlib.util.spec_from_file_location(f"benchmark_{name}", BENCHMARKS[0].parent / f"{name}.py")
     assert spec is not None and spec.loader is not None
-    asking = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(asking)
-    return asking
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _asking() -> Any:
+    """benchmarks/bench_asking.py as a module."""
+    return _benchmark("bench_asking")
 
 
 def test_the_asking_benchmark_measures_calibration_error() -> None:
@@ -296,12 +299,7 @@ def test_the_harm_fit_picks_the_threshold_of_the_best_harmonic_mean_and_covers()
 
 
 def test_the_household_decisions_split_a_refused_chore_by_whether_its_plan_would_be_done() -> None:
-    spec = importlib.util.spec_from_file_location(
-        "benchmark_household_decisions", BENCHMARKS[0].parent / "household_decisions.py"
-    )
-    assert spec is not None and spec.loader is not None
-    decisions = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(decisions)
+    decisions = _benchmark("household_decisions")
     from conceptbot.bench.safeagentbench.dataset import load_safety_tasks
 
     tasks = {t.id: t for t in load_safety_tasks() if t.id in ("safe-1", "unsafe-1")}  # "Open the Cabinet."
