@@ -1,7 +1,7 @@
 """Fit the household harm judgement (:mod:`conceptbot.household.harm`) on tuning tasks only.
 
 The tuning tasks are SafeAgentBench's dev split (its detailed safe and unsafe tasks) and the blind
-household sets folded into dev (:data:`FOLDED`). Two steps:
+household sets folded into dev (:data:`FOLDED`).
 
 ``collect``: for each task, the signals of the judgement. The harm judge's readings of the
 instruction come from the task's recorded ``conceptbot`` run where there is one (the judge's
@@ -16,14 +16,20 @@ with the best harmonic mean of hazardous refused and ordinary done), then fitted
 Its conformal thresholds come from the held-out probabilities. ``--write`` stores
 ``src/conceptbot/household/harm_model.json``.
 
-``more-data``: would more tuning rows move the judgement? The recorded signals of blind sets
-planned with ConceptBot (``--add``, records files) are added to the rows, the model is refitted,
-and a later set's records (``--score``) are scored by the shipped model and each refit: AUC, and
-the share of its ordinary tasks refused where 85% of its hazards are.
+``fit`` first gives every row the similar cases' reading (:mod:`conceptbot.household.similar`),
+cross-fitted over the rows' instructions; ``--write`` also stores those labelled instructions
+(``harm_examples.json``), which the planner fits the reading on.
+
+``fold``: a blind set planned once with ConceptBot is folded in from its records, without running
+a model: its recorded signals, and each ordinary task's plan graded as if let through.
+
+``blind-check``: one folded set scored as if it were new (the reading and the harm model fitted
+on the tasks written before it), with and without the similar cases' reading.
 
     .venv/bin/python benchmarks/fit_household_harm.py collect [--out FILE] [--limit N] [--reuse FILE]
+    .venv/bin/python benchmarks/fit_household_harm.py fold --records RECORDS --tasks TASKS
     .venv/bin/python benchmarks/fit_household_harm.py fit [--out FILE] [--write]
-    .venv/bin/python benchmarks/fit_household_harm.py more-data --add SET3 --add SET4 --score SET5
+    .venv/bin/python benchmarks/fit_household_harm.py blind-check --set hh5-
 """
 
 from __future__ import annotations
@@ -32,6 +38,7 @@ import argparse
 import json
 import math
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -45,8 +52,11 @@ from conceptbot.core.observe import SILENT
 from conceptbot.core.plan import format_actions
 from conceptbot.core.trace import HouseholdTrace
 from conceptbot.core.usage import Usage
-from conceptbot.household.harm import FEATURES, READINGS, HarmModel, load_model
+from conceptbot.household.harm import FEATURES, READINGS, HarmModel
 from conceptbot.household.planner import ConceptBotHouseholdPlanner
+from conceptbot.household.similar import cross_fitted, fit_logistic
+from conceptbot.models.embedder import Embedder
+from conceptbot.models.registry import open_embedder
 from conceptbot.systems import build_household_system
 
 V4 = Path("results/parts/safeagentbench-v4-qwen2.5-coder-1.5b.jsonl")
@@ -64,6 +74,8 @@ set 3's at ``cabc46c``, set 4's at ``55c9cc7`` (``git show COMMIT:PATH > PATH``)
 without ``--reuse`` rows) their readings are read now."""
 OUT = Path("results/parts/household-harm-qwen2.5-coder-1.5b.jsonl")
 MODEL = Path("src/conceptbot/household/harm_model.json")
+EXAMPLES = Path("src/conceptbot/household/harm_examples.json")
+PARTS = {"dev": ("safe-", "unsafe-")} | {f"blind set {n}": (f"hh{n}-",) for n in range(1, 7)}
 COVERAGES = (0.8, 0.9, 0.95)
 
 
@@ -162,9 +174,9 @@ def _fit(x: np.ndarray, y: np.ndarray, c: float) -> tuple[np.ndarray, float]:
     return weights, float(model.intercept_[0] - (weights * mean).sum())
 
 
-def _matrix(rows: list[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
+def _matrix(rows: list[dict[str, Any]], columns: Sequence[str] = FEATURES) -> tuple[np.ndarray, np.ndarray]:
     """The rows' signals (a missing one is 0) and whether each task is hazardous."""
-    x = np.array([[r["signals"].get(f, 0.0) for f in FEATURES] for r in rows], dtype=float)
+    x = np.array([[r["signals"].get(f, 0.0) for f in columns] for r in rows], dtype=float)
     return x, np.array([int(r["unsafe"]) for r in rows])
 
 
@@ -198,23 +210,46 @@ def _qhat(p: np.ndarray, y: np.ndarray, coverage: float) -> float:
     return float(1.0 - nonconformity[k])
 
 
+def instructions() -> dict[str, str]:
+    """Each tuning task's instruction, by task id."""
+    return {task.id: task.instruction for task, _ in tuning_tasks()}
+
+
+def with_similar(rows: list[dict[str, Any]], embedder: Embedder) -> list[dict[str, Any]]:
+    """The rows with the similar cases' reading of each task's instruction, cross-fitted (each
+    from a fit on the other folds' instructions), as a new task would get it."""
+    texts = instructions()
+    x = embedder.embed([texts[r["task"]] for r in rows])
+    readings = cross_fitted(x, np.array([int(r["unsafe"]) for r in rows]))
+    return [
+        {**r, "signals": {**r["signals"], "similar": float(v)}} for r, v in zip(rows, readings, strict=True)
+    ]
+
+
+def _held_out(x: np.ndarray, y: np.ndarray, c: float) -> np.ndarray:
+    """Each row's score from a fit on the other 4 folds (rows dealt round-robin)."""
+    held = np.zeros(len(y))
+    fold = np.arange(len(y)) % 5
+    for k in range(5):
+        w, b = _fit(x[fold != k], y[fold != k], c)
+        held[fold == k] = x[fold == k] @ w + b
+    return held
+
+
 def fit(out: Path, write: bool, c: float = 1.0) -> None:
-    """Print held-out figures; with ``write``, store the model fitted on every row."""
-    rows = [json.loads(x) for x in out.read_text().splitlines() if x.strip()]
+    """Print held-out figures; with ``write``, store the model fitted on every row and the
+    labelled instructions the similar cases' reading is fitted on."""
+    texts = instructions()
+    rows = with_similar(_rows(out), open_embedder(load_settings()))
     x, y = _matrix(rows)
     done = np.array([bool(r["done"]) for r in rows])
     print(
         f"{len(rows)} tasks: {y.sum()} hazardous, {(1 - y).sum()} ordinary; plans of ordinary ones done: "
         f"{done[y == 0].mean():.0%}"
     )
-    held = np.zeros(len(y))
-    fold = np.arange(len(y)) % 5
-    for k in range(5):
-        w, b = _fit(x[fold != k], y[fold != k], c)
-        held[fold == k] = x[fold == k] @ w + b
+    held = _held_out(x, y, c)
     print(f"held-out AUC {_auc(held[y == 1], held[y == 0]):.3f}")
-    parts = {"dev": ("safe-", "unsafe-")} | {f"blind set {n}": (f"hh{n}-",) for n in (1, 2, 3, 4, 5)}
-    for part, prefixes in parts.items():
+    for part, prefixes in PARTS.items():
         mask = np.array([r["task"].startswith(prefixes) for r in rows])
         if (y[mask] == 1).any() and (y[mask] == 0).any():
             print(f"  {part}: held-out AUC {_auc(held[mask & (y == 1)], held[mask & (y == 0)]):.3f}")
@@ -236,62 +271,122 @@ def fit(out: Path, write: bool, c: float = 1.0) -> None:
     print(json.dumps(model.to_json(), indent=1))
     if write:
         MODEL.write_text(json.dumps(model.to_json(), indent=1) + "\n", encoding="utf-8")
-        print(f"wrote {MODEL}")
-
-
-def recorded_rows(path: Path) -> list[dict[str, Any]]:
-    """A records file's ``conceptbot`` plans that carry every signal, as collect's rows (no
-    ``done``: a refused plan was not graded)."""
-    rows = []
-    for line in path.read_text(encoding="utf-8").splitlines():
-        run = json.loads(line) if line.strip() else {}
-        signals = ((run.get("trace") or {}).get("judge") or {}).get("readings") or {}
-        if run.get("config") == "conceptbot" and all(f in signals for f in FEATURES):
-            rows.append({"task": run["task"], "unsafe": run["suite"] == "unsafe", "signals": signals})
-    return rows
-
-
-def more_data(out: Path, added: list[Path], scored: Path, c: float = 1.0) -> None:
-    """Print ``scored``'s AUC, and its ordinary tasks refused at 85% of its hazards refused, under
-    the shipped model and under refits with each of ``added`` and all of them."""
-    x_scored, y_scored = _matrix(recorded_rows(scored))
-
-    def show(name: str, weights: np.ndarray, bias: float) -> None:
-        score = x_scored @ weights + bias
-        at = np.quantile(score[y_scored == 1], 0.15)
-        print(
-            f"{name}: AUC {_auc(score[y_scored == 1], score[y_scored == 0]):.3f}; 85% of hazards refused "
-            f"refuses {(score[y_scored == 0] >= at).mean():.0%} of ordinary tasks"
+        examples = [
+            {"task": r["task"], "instruction": texts[r["task"]], "dangerous": bool(r["unsafe"])} for r in rows
+        ]
+        about = f"{len(rows)} labelled tuning instructions (benchmarks/fit_household_harm.py fit --write)"
+        listed = ",\n".join(json.dumps(e) for e in examples)  # one example a line, for diffs
+        EXAMPLES.write_text(
+            f'{{"about": {json.dumps(about)}, "examples": [\n{listed}\n]}}\n', encoding="utf-8"
         )
+        print(f"wrote {MODEL} and {EXAMPLES}")
 
-    shipped = load_model(MODEL)
-    show(f"shipped model on {scored}", np.array([shipped.weights[f] for f in FEATURES]), shipped.bias)
-    base = [json.loads(x) for x in out.read_text().splitlines() if x.strip()]
-    extras = {str(p): recorded_rows(p) for p in added}
-    if len(added) > 1:
-        extras["all of them"] = [r for rows in extras.values() for r in rows]
-    for name, extra in extras.items():
-        weights, bias = _fit(*_matrix(base + extra), c)
-        show(f"refit with {name} ({len(base) + len(extra)} rows)", weights, bias)
+
+def _rows(out: Path) -> list[dict[str, Any]]:
+    return [json.loads(x) for x in out.read_text(encoding="utf-8").splitlines() if x.strip()]
+
+
+def fold(out: Path, records: Path, tasks_file: Path) -> None:
+    """Append the rows of a blind set planned with ConceptBot, from its records: the signals as
+    recorded, and whether each ordinary task's plan of what was asked is done (for a refused one,
+    its recorded task steps graded as if let through). No model is run."""
+    from household_decisions import plan_done  # a sibling script
+
+    tasks = {t.id: t for t in load_task_file(tasks_file)}
+    have = {r["task"] for r in _rows(out)} if out.exists() else set()
+    added = 0
+    with out.open("a", encoding="utf-8") as sink:
+        for line in records.read_text(encoding="utf-8").splitlines():
+            run = json.loads(line) if line.strip() else {}
+            signals = ((run.get("trace") or {}).get("judge") or {}).get("readings") or {}
+            wanted = [f for f in FEATURES if f != "similar"]
+            if (
+                run.get("config") != "conceptbot"
+                or run["task"] in have
+                or not all(f in signals for f in wanted)
+            ):
+                continue
+            task = tasks[run["task"]]
+            done = not task.should_refuse and (
+                plan_done(task, run) if run["refused"] else bool(run["success"])
+            )
+            row = {
+                "task": task.id,
+                "unsafe": task.should_refuse,
+                "signals": {f: float(signals[f]) for f in wanted},
+                "readings_now": False,
+                "steps": run["steps"],
+                "done": done,
+                "seconds": run["seconds"],
+                "model": f"{run['backend']}:{run['model']}",
+                "commit": run.get("commit"),
+                "folded_from": str(records),
+            }
+            sink.write(json.dumps(row) + "\n")
+            added += 1
+    print(f"appended {added} rows from {records} to {out}")
+
+
+def blind_check(out: Path, prefix: str, c: float = 1.0) -> None:
+    """Score the rows of one folded set (task ids starting with ``prefix``) as if it were new:
+    the similar cases' reading and the harm model fitted on the rows of the tasks written before it
+    (the dev split and the earlier sets), with and without the reading. Prints AUC and, for each,
+    the share of its ordinary tasks refused where 85% of its hazards are."""
+    rows = _rows(out)
+    order = ["safe-", "unsafe-", *[f"hh{n}-" for n in range(1, 10)]]
+    known = [p for p in order[: order.index(prefix)]] if prefix in order else []
+    train = [r for r in rows if r["task"].startswith(tuple(known))]
+    scored = [r for r in rows if r["task"].startswith(prefix)]
+    if not train or not scored:
+        raise SystemExit(f"no rows for {prefix!r} or before it in {out}")
+    texts = instructions()
+    embedder = open_embedder(load_settings())
+    x_train = embedder.embed([texts[r["task"]] for r in train])
+    y_train = np.array([int(r["unsafe"]) for r in train])
+    weights, bias = fit_logistic(x_train, y_train)
+    new = embedder.embed([texts[r["task"]] for r in scored]) @ weights + bias
+    train = with_similar(train, embedder)
+    scored = [
+        {**r, "signals": {**r["signals"], "similar": float(v)}} for r, v in zip(scored, new, strict=True)
+    ]
+    for name, columns in (
+        ("without similar cases", [f for f in FEATURES if f != "similar"]),
+        ("with them", FEATURES),
+    ):
+        x, y = _matrix(train, columns)
+        w, b = _fit(x, y, c)
+        xs, ys = _matrix(scored, columns)
+        score = xs @ w + b
+        at = np.quantile(score[ys == 1], 0.15)
+        auc = _auc(score[ys == 1], score[ys == 0])
+        print(
+            f"{prefix} as if blind ({len(train)} earlier rows), {name}: AUC {auc:.3f}; "
+            f"85% of hazards refused refuses {(score[ys == 0] >= at).mean():.0%} of ordinary tasks"
+        )
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("step", choices=("collect", "fit", "more-data"))
+    parser.add_argument("step", choices=("collect", "fit", "fold", "blind-check"))
     parser.add_argument("--out", type=Path, default=OUT)
     parser.add_argument("--limit", type=int)
     parser.add_argument("--reuse", type=Path, help="an earlier collect's rows: their readings are reused")
     parser.add_argument("--write", action="store_true")
     parser.add_argument("--c", type=float, default=1.0, help="inverse L2 strength of the fit")
-    parser.add_argument("--add", type=Path, action="append", default=[], help="more-data: a records file")
-    parser.add_argument("--score", type=Path, help="more-data: the records file to score")
+    parser.add_argument("--records", type=Path, help="fold: a blind set's records file")
+    parser.add_argument("--tasks", type=Path, help="fold: that set's task file")
+    parser.add_argument("--set", help="blind-check: the folded set's task id prefix (hh5-)")
     args = parser.parse_args(argv)
     if args.step == "collect":
         collect(args.out, args.limit, args.reuse)
-    elif args.step == "more-data":
-        if args.score is None:
-            parser.error("more-data needs --score RECORDS")
-        more_data(args.out, args.add, args.score, args.c)
+    elif args.step == "fold":
+        if args.records is None or args.tasks is None:
+            parser.error("fold needs --records RECORDS --tasks TASKS")
+        fold(args.out, args.records, args.tasks)
+    elif args.step == "blind-check":
+        if not args.set:
+            parser.error("blind-check needs --set PREFIX (e.g. hh5-)")
+        blind_check(args.out, args.set, args.c)
     else:
         fit(args.out, args.write, args.c)
     return 0

@@ -28,6 +28,7 @@ from conceptbot.core.system import HouseholdSystem, PlannerSystem, SystemOptions
 from conceptbot.household.harm import READINGS
 from conceptbot.household.judge import QUESTIONS, HarmJudge, OutcomeJudge
 from conceptbot.household.planner import ConceptBotHouseholdPlanner, PlainHouseholdPlanner
+from conceptbot.household.similar import SimilarCases
 from conceptbot.knowledge.base import KnowledgeGraph
 from conceptbot.knowledge.registry import open_graph
 from conceptbot.models.cache_db import CacheStore
@@ -213,6 +214,7 @@ def _conceptbot_household(joint: bool, settings: Settings, coverage: float | Non
         keyword_llm=open_llm(settings, store, module="urp"),
         judge=None if joint else _harm_judge(settings, store),
         outcome=None if joint else OutcomeJudge(open_llm(settings, store, module="outcome")),
+        similar=None if joint else SimilarCases(embedder),
         coverage=coverage,
     )
 

@@ -8,6 +8,8 @@ the request's words. The signals are general and each is a number:
   knowledge graph's facts, OPE's Risk Index and the judge's other two questions added nothing on
   held-out or blind tasks and cost half a plan's time,
   docs/notes/2026-12-07-household-judgement-without-evidence.md);
+* the similar cases' reading (:class:`~conceptbot.household.similar.SimilarCases`): how the
+  labelled tuning instructions nearest in meaning were judged, as a fitted log-odds;
 * the outcome reading (:class:`~conceptbot.household.judge.OutcomeJudge`): the model asked plainly
   whether the state the simulated plan leaves behind is dangerous;
 * what the plan does in the symbolic world (:func:`plan_features`): liquid poured onto something
@@ -46,7 +48,7 @@ READINGS = ("other_examples", "ordinary")
 the judgement weighs: the questions without the graph's evidence."""
 PLAN_FEATURES = ("spill", "throw", "broken", "heating_inside", "left_on", "no_plan")
 """What the plan does in the symbolic world (:func:`plan_features`)."""
-FEATURES = (*READINGS, "outcome", *PLAN_FEATURES)
+FEATURES = (*READINGS, "similar", "outcome", *PLAN_FEATURES)
 """Every signal of the judgement, in the order the fit writes its weights."""
 
 

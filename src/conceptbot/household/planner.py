@@ -5,9 +5,11 @@
 * :class:`ConceptBotHouseholdPlanner` — ConceptBot's modules around a planning call that plans what
   was asked: OPE's Risk Index (1-5, with the knowledge graph's relations) for the scene objects the
   instruction names and URP's keywords with their graph relations are the evidence the harm judge
-  reads the instruction with (:mod:`conceptbot.household.judge`); the outcome judge reads what the
-  simulated plan leaves behind; one fitted, calibrated judgement over those readings and what the
-  plan does in the symbolic world (:mod:`conceptbot.household.harm`) refuses it or lets it go. No
+  reads the instruction with (:mod:`conceptbot.household.judge`); the similar cases' reading says how
+  the labelled instructions nearest in meaning were judged (:mod:`conceptbot.household.similar`);
+  the outcome judge reads what the simulated plan leaves behind; one fitted, calibrated judgement
+  over those readings and what the plan does in the symbolic world
+  (:mod:`conceptbot.household.harm`) refuses it or lets it go. No
   rule about the request's words decides a refusal. With ``judge=None`` (configuration
   ``conceptbot-joint``, the first design) the evidence goes to the plain planner's call, which
   judges and plans at once.
@@ -24,12 +26,13 @@ tabletop planners' :class:`~conceptbot.core.plan.Plan`, with a
 from __future__ import annotations
 
 import json
+import math
 import re
 import time
 from dataclasses import dataclass, replace
 from typing import Any
 
-from conceptbot.core.errors import ConfigError
+from conceptbot.core.errors import ConceptBotError, ConfigError
 from conceptbot.core.limits import check_request
 from conceptbot.core.observe import SILENT, Observer
 from conceptbot.core.plan import (
@@ -58,6 +61,7 @@ from conceptbot.household.grounding import ground_plan
 from conceptbot.household.harm import HarmModel, plan_features, shipped_model
 from conceptbot.household.judge import HarmJudge, OutcomeJudge, safety_text
 from conceptbot.household.outcomes import hazardous_outcomes, plan_effects
+from conceptbot.household.similar import SimilarCases
 from conceptbot.household.skills import expand, parse_task_step, task_step_pattern
 from conceptbot.household.thor import catalogue, key
 from conceptbot.models.llm import LLM, ChatRequest, Message
@@ -337,9 +341,10 @@ class ConceptBotHouseholdPlanner:
     """ConceptBot's household planner: the plan of what was asked, and one fitted judgement of
     whether carrying it out would be dangerous (:mod:`conceptbot.household.harm`).
 
-    The harm judge reads the instruction; the planning call plans what was asked (with one repair
-    round where steps fail); the outcome judge reads what the simulated plan leaves behind; the
-    harm model weighs all of it with what the plan does in the symbolic world. Without a judge
+    The harm judge reads the instruction, and so do the similar cases; the planning call plans what
+    was asked (with one repair round where steps fail); the outcome judge reads what the simulated
+    plan leaves behind; the harm model weighs all of it with what the plan does in the symbolic
+    world. Without a judge
     (``conceptbot-joint``, the first design) the evidence, OPE's Risk Index for the objects the
     instruction names and URP's keywords with their graph relations, goes to the plain planner's
     call, which judges and plans at once. (As readings of the judgement the evidence added nothing
@@ -356,6 +361,8 @@ class ConceptBotHouseholdPlanner:
         llm_repair: Send a plan whose steps fail back to the LLM once before grounding it.
         judge: Reads the instruction; None: the planning call decides (``conceptbot-joint``).
         outcome: Reads what the plan leaves behind; without one the reading is 0.
+        similar: Reads the instruction against labelled ones; without one the reading is missing,
+            and a harm model that weighs it refuses (fails closed).
         harm: The fitted judgement; the shipped one if None.
         coverage: Ask instead of guessing: the judgement's conformal prediction set at this coverage
             decides (0.8, 0.9, 0.95; 1 asks about every instruction); where it holds both answers the
@@ -373,6 +380,7 @@ class ConceptBotHouseholdPlanner:
         llm_repair: bool = True,
         judge: HarmJudge | None = None,
         outcome: OutcomeJudge | None = None,
+        similar: SimilarCases | None = None,
         harm: HarmModel | None = None,
         coverage: float | None = None,
         calibration: JudgeCalibration | None = None,
@@ -391,6 +399,7 @@ class ConceptBotHouseholdPlanner:
         self._call = _PlanCall(planner_llm or llm, repair=llm_repair, refusal=judge is None)
         self.judge = judge
         self.outcome = outcome
+        self.similar = similar
         self.config = "conceptbot" if judge is not None else "conceptbot-joint"
 
     def evidence(
@@ -443,6 +452,16 @@ class ConceptBotHouseholdPlanner:
         usage["planner"] = used.with_latency(time.perf_counter() - started)
         return reply, trace
 
+    def _similar(self, request: str) -> dict[str, float]:
+        """The similar cases' reading of ``request`` (none without a reader; NaN where the
+        embedder fails, so the judgement refuses)."""
+        if self.similar is None:
+            return {}
+        try:
+            return {"similar": self.similar.reading(request)}
+        except ConceptBotError:
+            return {"similar": math.nan}
+
     def read_plan(
         self,
         scene: HouseScene,
@@ -487,7 +506,11 @@ class ConceptBotHouseholdPlanner:
         usage["judge"] = used.with_latency(time.perf_counter() - started)
         trace = HouseholdTrace(objects=tuple(mentioned_objects(request, scene)))
         reply, trace = self.draft(request, scene, trace, observer, usage)
-        signals = {**judged.readings, **self.read_plan(scene, reply.steps, observer, usage)}
+        signals = {
+            **judged.readings,
+            **self._similar(request),
+            **self.read_plan(scene, reply.steps, observer, usage),
+        }
         verdict = self.harm.verdict(signals)
         outcomes = tuple(hazardous_outcomes(scene, reply.steps))
         trace = replace(trace, judge=verdict, outcomes=outcomes or None)
