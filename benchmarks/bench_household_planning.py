@@ -5,9 +5,10 @@ judgement. This measures the plans alone on ordinary tuning tasks (the dev split
 the folded blind household sets' ordinary ones): each is planned with a system prompt and examples
 given as template files (``$actions`` and ``$examples`` are filled: with the task steps, or with
 ``--actions`` the 17 actions), with the repair round and the skill layer, and graded against its
-final state. Rows are appended as they come (resumable). With ``--hazardous`` the latest folded
-set's hazardous tasks are planned too, and the shipped harm model's decisions on that set are
-estimated from these plans' simulated effects and the readings recorded when it was planned blind.
+final state. Rows are appended as they come (resumable).
+
+With ``--similar K`` the call also sees the K tuning tasks nearest in meaning with their reference
+steps, as ConceptBot's planner does (the task's own set left out of them).
 
     .venv/bin/python benchmarks/bench_household_planning.py NAME SYSTEM.txt EXAMPLES.txt [--actions]
 """
@@ -23,11 +24,11 @@ from string import Template
 from conceptbot.bench.safeagentbench.dataset import load_task_file, scenes, select
 from conceptbot.bench.safeagentbench.grading import grade_safety
 from conceptbot.core.config import load_settings
-from conceptbot.core.plan import format_actions, parse_household_actions
+from conceptbot.core.plan import format_actions
 from conceptbot.core.trace import HouseholdTrace
-from conceptbot.household.harm import plan_features, shipped_model
-from conceptbot.household.planner import PROMPTS, _PlanCall
-from conceptbot.models.registry import open_llm
+from conceptbot.household.planner import PROMPTS, _PlanCall, similar_tasks
+from conceptbot.household.similar import SimilarCases
+from conceptbot.models.registry import open_embedder, open_llm
 from conceptbot.pipeline import prompts
 
 FOLDED = (
@@ -37,8 +38,6 @@ FOLDED = (
     Path("benchmarks/blind/household/set4/tasks.jsonl"),
     Path("benchmarks/blind/household/set5/tasks.jsonl"),
 )
-RECORDED = Path("results/household-set5/records.jsonl")
-"""The latest folded set's blind run (its judge readings)."""
 
 
 class _Variant(_PlanCall):
@@ -62,29 +61,32 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("examples", type=Path)
     parser.add_argument("--actions", action="store_true", help="the model writes actions, not task steps")
     parser.add_argument("--limit-dev", type=int, default=30, help="the first N safe dev tasks")
-    parser.add_argument(
-        "--hazardous",
-        action="store_true",
-        help="also the latest folded set's hazardous tasks (the harm estimate)",
-    )
     parser.add_argument("--only", default="", help="only the tasks whose id starts with this (hh3-)")
+    parser.add_argument(
+        "--similar",
+        type=int,
+        default=0,
+        help="show the planning call this many tasks like it with their reference steps (from the "
+        "shipped examples, leaving out the task's own set)",
+    )
     parser.add_argument("--out", type=Path, default=Path("/tmp/household-planning.jsonl"))
     args = parser.parse_args(argv)
     tasks = list(select(("safe",), split="dev"))[: args.limit_dev]
     tasks += [t for path in FOLDED for t in load_task_file(path) if not t.should_refuse]
-    if args.hazardous:
-        tasks += [t for t in load_task_file(FOLDED[-1]) if t.should_refuse]
     tasks = [t for t in tasks if t.id.startswith(args.only)]
     done = set()
     if args.out.exists():
         rows = [json.loads(x) for x in args.out.read_text().splitlines() if x.strip()]
         done = {(r["variant"], r["task"]) for r in rows}
     call = _Variant(args.system, args.examples, task_steps=not args.actions)
+    cases = SimilarCases(open_embedder(load_settings())) if args.similar else None
     with args.out.open("a", encoding="utf-8") as sink:
         for number, task in enumerate(tasks, 1):
             if (args.name, task.id) in done:
                 continue
-            reply, _, _ = call(task.instruction, scenes()[task.scene], "", HouseholdTrace())
+            own = task.id.split("-")[0] + "-"  # safe-, hh3-: the task's own set is left out
+            like = cases.nearest(task.instruction, args.similar, leave_out=own) if cases else []
+            reply, _, _ = call(task.instruction, scenes()[task.scene], similar_tasks(like), HouseholdTrace())
             ok = None if task.should_refuse else grade_safety(task, reply.steps, refused=False).success
             row = {"variant": args.name, "task": task.id, "done": ok, "steps": format_actions(reply.steps)}
             sink.write(json.dumps(row) + "\n")
@@ -93,35 +95,10 @@ def main(argv: list[str] | None = None) -> int:
     rows = [json.loads(x) for x in args.out.read_text().splitlines() if x.strip()]
     for name in sorted({r["variant"] for r in rows}):
         mine = [r for r in rows if r["variant"] == name]
-        for prefix in ("safe-", "hh1-", "hh2-", "hh3-", "hh4-", "hh5-"):
+        for prefix in ("safe-", "hh1-", "hh2-", "hh3-", "hh4-", "hh5-", "hh6-"):
             part = [r for r in mine if r["task"].startswith(prefix) and r["done"] is not None]
             print(f"{name} {prefix}: {sum(r['done'] for r in part)}/{len(part)} done")
-        _harm_estimate(name, mine)
     return 0
-
-
-def _harm_estimate(name: str, rows: list[dict]) -> None:
-    """The shipped harm model's decisions on the latest folded set with these plans' simulated effects
-    and the readings recorded when it was planned (the outcome reading kept as recorded: an estimate)."""
-    recorded = {}
-    for line in RECORDED.read_text(encoding="utf-8").splitlines():
-        record = json.loads(line)
-        if record["config"] == "conceptbot" and "judge" in record["trace"]:
-            recorded[record["task"]] = record["trace"]["judge"]["readings"]
-    tasks = {t.id: t for t in load_task_file(FOLDED[-1])}
-    model, counts = shipped_model(), {True: [0, 0], False: [0, 0]}
-    for row in rows:
-        task = tasks.get(row["task"])
-        if task is None or row["task"] not in recorded:
-            continue
-        steps = parse_household_actions(row["steps"])
-        signals = {**recorded[row["task"]], **plan_features(scenes()[task.scene], steps)}
-        counts[task.should_refuse][0] += model.verdict(signals).refuse
-        counts[task.should_refuse][1] += 1
-    for hazardous, (refused, total) in counts.items():
-        if total:
-            kind = "hazardous" if hazardous else "ordinary"
-            print(f"{name} {FOLDED[-1].parent.name} {kind} refused (estimate): {refused}/{total}")
 
 
 if __name__ == "__main__":

@@ -39,6 +39,7 @@ import json
 import math
 import sys
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -55,6 +56,8 @@ from conceptbot.core.usage import Usage
 from conceptbot.household.harm import FEATURES, READINGS, HarmModel
 from conceptbot.household.planner import ConceptBotHouseholdPlanner
 from conceptbot.household.similar import cross_fitted, fit_logistic
+from conceptbot.household.skills import expand, task_steps
+from conceptbot.household.thor import catalogue
 from conceptbot.models.embedder import Embedder
 from conceptbot.models.registry import open_embedder
 from conceptbot.systems import build_household_system
@@ -215,6 +218,21 @@ def instructions() -> dict[str, str]:
     return {task.id: task.instruction for task, _ in tuning_tasks()}
 
 
+def reference_steps(task: SafetyTask) -> list[str]:
+    """The task's reference plan as task steps with the scene's names, where those steps reach
+    what the reference plan reaches (else none: a few references fail in the simulator)."""
+    cat = catalogue()
+    steps = [
+        replace(
+            s, obj=cat.canonical(s.obj) or s.obj, target=s.target and (cat.canonical(s.target) or s.target)
+        )
+        for s in task_steps(task.steps)
+    ]
+    scene = scenes()[task.scene]
+    reached = grade_safety(task, expand(scene, steps), refused=False).success
+    return [str(s) for s in steps] if reached else []
+
+
 def with_similar(rows: list[dict[str, Any]], embedder: Embedder) -> list[dict[str, Any]]:
     """The rows with the similar cases' reading of each task's instruction, cross-fitted (each
     from a fit on the other folds' instructions), as a new task would get it."""
@@ -240,6 +258,7 @@ def fit(out: Path, write: bool, c: float = 1.0) -> None:
     """Print held-out figures; with ``write``, store the model fitted on every row and the
     labelled instructions the similar cases' reading is fitted on."""
     texts = instructions()
+    tasks = {task.id: task for task, _ in tuning_tasks()}
     rows = with_similar(_rows(out), open_embedder(load_settings()))
     x, y = _matrix(rows)
     done = np.array([bool(r["done"]) for r in rows])
@@ -272,7 +291,14 @@ def fit(out: Path, write: bool, c: float = 1.0) -> None:
     if write:
         MODEL.write_text(json.dumps(model.to_json(), indent=1) + "\n", encoding="utf-8")
         examples = [
-            {"task": r["task"], "instruction": texts[r["task"]], "dangerous": bool(r["unsafe"])} for r in rows
+            {
+                "task": r["task"],
+                "instruction": texts[r["task"]],
+                "dangerous": bool(r["unsafe"]),
+                "steps": steps,
+            }
+            for r in rows
+            for steps in [reference_steps(tasks[r["task"]])]
         ]
         about = f"{len(rows)} labelled tuning instructions (benchmarks/fit_household_harm.py fit --write)"
         listed = ",\n".join(json.dumps(e) for e in examples)  # one example a line, for diffs

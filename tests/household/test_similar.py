@@ -99,3 +99,33 @@ def test_the_shipped_examples_are_tuning_tasks_only() -> None:
         # SafeAgentBench's own tasks come from its dev split; the rest are folded blind sets
         assert e.task.startswith("hh") or in_split(e.task, "dev"), e.task
         assert e.task.startswith("hh") or e.instruction == benchmark[e.task]
+
+
+def test_the_nearest_tasks_with_a_plan_come_first_and_a_set_can_be_left_out() -> None:
+    planned = [
+        Example(
+            "a-1", "Boil water in the pot on the stove.", False, ("fill Pot water", "put Pot StoveBurner")
+        ),
+        Example("a-2", "Put the bread in the fridge.", False, ("put Bread Fridge",)),
+        Example("b-1", "Boil some water in the kettle on the stove.", False, ("fill Kettle water",)),
+        Example("b-2", "Boil the water in the pot, please.", True, ()),  # no plan: never shown
+    ]
+    cases = SimilarCases(FakeEmbedder(), planned)
+    assert [c.task for c in cases.nearest("Boil water in the pot.", 2)] == ["a-1", "b-1"]
+    assert [c.task for c in cases.nearest("Boil water in the pot.", 2, leave_out="a-")] == ["b-1"]
+
+
+def test_the_planning_call_sees_the_nearest_tasks_with_their_steps() -> None:
+    planned = [
+        Example("a-1", "Light the candle on the table.", False, ("turn_on Candle", "put Candle DiningTable"))
+    ]
+    calm = [[math.log(0.5), math.log(0.5)]] * 4
+    planner, planner_llm, _ = _conceptbot(calm * 2, [_reply(False, ["turn_on Candle"])] * 2)
+    planner.similar = SimilarCases(FakeEmbedder(), planned)
+    planner.plan("Light the candle.", KITCHEN)
+    user = planner_llm.requests[0].messages[-1].content
+    assert '- "Light the candle on the table.": turn_on Candle; put Candle DiningTable\n' in user
+    assert user.endswith("Instruction: Light the candle.")
+    planner.examples = 0
+    planner.plan("Light the candle.", KITCHEN)
+    assert "other homes" not in planner_llm.requests[1].messages[-1].content

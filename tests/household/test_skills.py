@@ -6,8 +6,9 @@ import re
 
 import pytest
 
+from conceptbot.core.plan import parse_household_actions
 from conceptbot.household.executor import execute
-from conceptbot.household.skills import expand, parse_task_step, task_step_pattern
+from conceptbot.household.skills import expand, parse_task_step, task_step_pattern, task_steps
 from conceptbot.household.thor import house_scene
 from tests.household.steps import texts
 
@@ -100,3 +101,31 @@ def test_each_slot_admits_only_objects_that_can_take_its_action() -> None:
 def test_text_that_is_not_a_task_step_is_an_error(text: str) -> None:
     with pytest.raises(ValueError, match="not a task step"):
         parse_task_step(text)
+
+
+def test_a_reference_plan_reads_back_as_the_task_steps_that_expand_to_it() -> None:
+    reference = parse_household_actions(
+        [
+            "find Knife", "pick Knife", "find Tomato", "slice Tomato", "find Drawer", "open Drawer",
+            "put Drawer", "close Drawer", "find Pot", "pick Pot", "fillLiquid Pot water",
+            "find StoveBurner", "put StoveBurner", "find StoveKnob", "turn_on StoveKnob",
+            "find Mug", "pick Mug", "find Sink", "pour", "find Bottle", "pick Bottle", "throw",
+        ]
+    )  # fmt: skip
+    assert [str(s) for s in task_steps(reference)] == [
+        "pick Knife",
+        "slice Tomato",
+        "open Drawer",
+        "put Knife Drawer",
+        "close Drawer",
+        "fill Pot water",
+        "put Pot StoveBurner",
+        "turn_on StoveKnob",
+        "pour Mug water Sink",
+        "throw Bottle",
+    ]
+    # a pick that is never put down stays a pick; a drop lands where the robot last went
+    held = parse_household_actions(
+        ["find Bed", "find Pillow", "pick Pillow", "find Bed", "drop", "find Cup", "pick Cup"]
+    )
+    assert [str(s) for s in task_steps(held)] == ["drop Pillow Bed", "pick Cup"]

@@ -61,7 +61,7 @@ from conceptbot.household.grounding import ground_plan
 from conceptbot.household.harm import HarmModel, plan_features, shipped_model
 from conceptbot.household.judge import HarmJudge, OutcomeJudge, safety_text
 from conceptbot.household.outcomes import hazardous_outcomes, plan_effects
-from conceptbot.household.similar import SimilarCases
+from conceptbot.household.similar import Example, SimilarCases
 from conceptbot.household.skills import expand, parse_task_step, task_step_pattern
 from conceptbot.household.thor import catalogue, key
 from conceptbot.models.llm import LLM, ChatRequest, Message
@@ -252,6 +252,15 @@ class _PlanCall:
         return reply, trace, usage
 
 
+def similar_tasks(cases: list[Example]) -> str:
+    """The planning call's text for tasks like the one asked, with their reference task steps
+    (empty without any)."""
+    if not cases:
+        return ""
+    listed = "\n".join(f'- "{c.instruction}": {"; ".join(c.steps)}' for c in cases)
+    return prompts.fill("household_similar", PROMPTS, tasks=listed)
+
+
 def _with_total(usage: dict[str, Usage]) -> dict[str, Usage]:
     total = Usage(calls=0)
     for part in usage.values():
@@ -362,7 +371,9 @@ class ConceptBotHouseholdPlanner:
         judge: Reads the instruction; None: the planning call decides (``conceptbot-joint``).
         outcome: Reads what the plan leaves behind; without one the reading is 0.
         similar: Reads the instruction against labelled ones; without one the reading is missing,
-            and a harm model that weighs it refuses (fails closed).
+            and a harm model that weighs it refuses (fails closed). Its nearest tasks with their
+            reference steps go to the planning call.
+        examples: How many of those nearest tasks the planning call sees (0: none).
         harm: The fitted judgement; the shipped one if None.
         coverage: Ask instead of guessing: the judgement's conformal prediction set at this coverage
             decides (0.8, 0.9, 0.95; 1 asks about every instruction); where it holds both answers the
@@ -381,6 +392,7 @@ class ConceptBotHouseholdPlanner:
         judge: HarmJudge | None = None,
         outcome: OutcomeJudge | None = None,
         similar: SimilarCases | None = None,
+        examples: int = 3,
         harm: HarmModel | None = None,
         coverage: float | None = None,
         calibration: JudgeCalibration | None = None,
@@ -400,6 +412,7 @@ class ConceptBotHouseholdPlanner:
         self.judge = judge
         self.outcome = outcome
         self.similar = similar
+        self.examples = examples
         self.config = "conceptbot" if judge is not None else "conceptbot-joint"
 
     def evidence(
@@ -448,7 +461,11 @@ class ConceptBotHouseholdPlanner:
         trace of its repair and grounding. Fills ``usage["planner"]``."""
         started = time.perf_counter()
         observer.progress("planner: planning what was asked")
-        reply, trace, used = self._call(request, scene, "", trace)
+        try:
+            like = self.similar.nearest(request, self.examples) if self.similar and self.examples else []
+        except ConceptBotError:  # the embedder failed: planned without them (the judgement fails closed)
+            like = []
+        reply, trace, used = self._call(request, scene, similar_tasks(like), trace)
         usage["planner"] = used.with_latency(time.perf_counter() - started)
         return reply, trace
 

@@ -38,11 +38,13 @@ between the best and the most regularised."""
 
 @dataclass(frozen=True)
 class Example:
-    """A labelled instruction: the task it comes from, its words, and whether it is dangerous."""
+    """A labelled instruction: the task it comes from, its words, whether it is dangerous, and its
+    reference plan as task steps (:mod:`conceptbot.household.skills`; empty where there is none)."""
 
     task: str
     instruction: str
     dangerous: bool
+    steps: tuple[str, ...] = ()
 
 
 def fit_logistic(x: np.ndarray, y: np.ndarray, strength: float = STRENGTH) -> tuple[np.ndarray, float]:
@@ -87,7 +89,8 @@ def shipped_examples() -> tuple[Example, ...]:
     data = read_json(EXAMPLES_FILE, WHAT)
     try:
         found = tuple(
-            Example(str(e["task"]), str(e["instruction"]), bool(e["dangerous"])) for e in data["examples"]
+            Example(str(e["task"]), str(e["instruction"]), bool(e["dangerous"]), tuple(e.get("steps", ())))
+            for e in data["examples"]
         )
     except (KeyError, TypeError) as exc:
         raise ConfigError(
@@ -114,14 +117,37 @@ class SimilarCases:
         self.examples = tuple(examples) if examples is not None else None
         self.strength = strength
         self._fitted: tuple[np.ndarray, float] | None = None
+        self._vectors: np.ndarray | None = None
+
+    def _cases(self) -> tuple[Example, ...]:
+        return self.examples if self.examples is not None else shipped_examples()
+
+    def _embedded(self) -> np.ndarray:
+        if self._vectors is None:
+            self._vectors = np.asarray(
+                self.embedder.embed([e.instruction for e in self._cases()]), dtype=float
+            )
+        return self._vectors
 
     def _model(self) -> tuple[np.ndarray, float]:
         if self._fitted is None:
-            examples = self.examples if self.examples is not None else shipped_examples()
-            x = self.embedder.embed([e.instruction for e in examples])
-            y = np.array([e.dangerous for e in examples], dtype=float)
-            self._fitted = fit_logistic(x, y, self.strength)
+            y = np.array([e.dangerous for e in self._cases()], dtype=float)
+            self._fitted = fit_logistic(self._embedded(), y, self.strength)
         return self._fitted
+
+    def nearest(self, instruction: str, k: int, leave_out: str = "") -> list[Example]:
+        """The ``k`` examples with a plan whose instructions are nearest in meaning to
+        ``instruction`` (cosine of the embeddings), nearest first; ``leave_out``: not those whose
+        task id starts with it (a set measured on its own)."""
+        vectors = self._embedded()
+        cases = self._cases()
+        similarity = vectors @ np.asarray(self.embedder.embed([instruction]), dtype=float)[0]
+        ranked = [
+            cases[i]
+            for i in np.argsort(-similarity, kind="stable")
+            if cases[i].steps and not (leave_out and cases[i].task.startswith(leave_out))
+        ]
+        return ranked[:k]
 
     def reading(self, instruction: str) -> float:
         """The log-odds that ``instruction`` is dangerous, from the cases like it; NaN where it

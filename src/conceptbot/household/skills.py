@@ -210,3 +210,40 @@ def expand(scene: HouseScene, steps: Sequence[TaskStep]) -> list[HouseholdAction
     for step in steps:
         _carry_out(expansion, step)
     return expansion.actions
+
+
+def task_steps(actions: Sequence[HouseholdAction]) -> list[TaskStep]:
+    """The task steps that say what ``actions`` do (the inverse of :func:`expand`, for writing a
+    reference plan of the 17 actions as the planning call writes plans): a pick followed by a put,
+    drop, throw or pour becomes one step with it; a pick the hand keeps while it does something
+    else (a knife to slice with) stays a ``pick``; ``find`` is where the next step happens."""
+    steps: list[TaskStep] = []
+    held: str | None = None
+    kept = False  # the held object's pick is written already
+    place: str | None = None
+    liquids: dict[str, str] = {}
+    for action in actions:
+        verb, obj = action.verb, action.obj
+        if verb == "find":
+            place = obj
+        elif verb == "pick" and obj:
+            held, kept = obj, False
+        elif verb in ("put", "drop") and held and (obj or place):
+            steps.append(TaskStep(verb, held, target=obj or place))
+            held = None
+        elif verb == "throw" and held:
+            steps.append(TaskStep("throw", held))
+            held = None
+        elif verb == "pour" and held and place:
+            steps.append(TaskStep("pour", held, liquid=liquids.get(held, "water"), target=place))
+        elif verb == "fillLiquid" and obj and action.liquid:
+            liquids[obj] = action.liquid
+            steps.append(TaskStep("fill", obj, liquid=action.liquid))
+        elif obj:
+            if held and not kept:
+                steps.append(TaskStep("pick", held))
+                kept = True
+            steps.append(TaskStep("empty" if verb == "emptyLiquid" else verb, obj))
+    if held and not kept:
+        steps.append(TaskStep("pick", held))
+    return steps
