@@ -122,7 +122,8 @@ def test_the_planning_call_sees_the_nearest_tasks_with_their_steps() -> None:
     calm = [[math.log(0.5), math.log(0.5)]] * 4
     planner, planner_llm, _ = _conceptbot(calm * 2, [_reply(False, ["turn_on Candle"])] * 2)
     planner.similar = SimilarCases(FakeEmbedder(), planned)
-    planner.plan("Light the candle.", KITCHEN)
+    plan = planner.plan("Light the candle.", KITCHEN)
+    assert plan.trace.to_dict()["similar_tasks"] == ["a-1"]
     user = planner_llm.requests[0].messages[-1].content
     assert '- "Light the candle on the table.": turn_on Candle; put Candle DiningTable\n' in user
     assert user.endswith("Instruction: Light the candle.")

@@ -856,6 +856,7 @@ class HouseholdTrace:
         reasoning: The planning call's reasoning, or the reason of a refusal made without it.
         task_steps: The task steps ConceptBot's planning call wrote (before the skills expanded them
             to actions).
+        similar_tasks: The tuning tasks (ids) the planning call was shown as examples.
     """
 
     objects: tuple[str, ...] | None = None
@@ -870,6 +871,7 @@ class HouseholdTrace:
     refused_by: str | None = None
     reasoning: str | None = None
     task_steps: tuple[str, ...] | None = None
+    similar_tasks: tuple[str, ...] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form: the set parts, in this order (the order the planners have always written)."""

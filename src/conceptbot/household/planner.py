@@ -465,6 +465,8 @@ class ConceptBotHouseholdPlanner:
             like = self.similar.nearest(request, self.examples) if self.similar and self.examples else []
         except ConceptBotError:  # the embedder failed: planned without them (the judgement fails closed)
             like = []
+        if like:
+            trace = replace(trace, similar_tasks=tuple(c.task for c in like))
         reply, trace, used = self._call(request, scene, similar_tasks(like), trace)
         usage["planner"] = used.with_latency(time.perf_counter() - started)
         return reply, trace
