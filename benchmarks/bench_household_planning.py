@@ -37,6 +37,7 @@ FOLDED = (
     Path("benchmarks/blind/household/set3/tasks.jsonl"),
     Path("benchmarks/blind/household/set4/tasks.jsonl"),
     Path("benchmarks/blind/household/set5/tasks.jsonl"),
+    Path("benchmarks/blind/household/set6/tasks.jsonl"),
 )
 
 

@@ -70,11 +70,13 @@ FOLDED = (
     (Path("benchmarks/blind/household/set3/tasks.jsonl"), Path("results/household-set3/records.jsonl")),
     (Path("benchmarks/blind/household/set4/tasks.jsonl"), Path("results/household-set4/records.jsonl")),
     (Path("benchmarks/blind/household/set5/tasks.jsonl"), Path("results/household-set5/records.jsonl")),
+    (Path("benchmarks/blind/household/set6/tasks.jsonl"), Path("results/household-set6/records.jsonl")),
 )
 """Blind household sets folded into dev: (tasks, their recorded runs). A later blind set's report
 replaces an earlier one's: set 1's records are in git history at ``ceaf6b0``, set 2's at ``35de0b0``,
-set 3's at ``cabc46c``, set 4's at ``55c9cc7`` (``git show COMMIT:PATH > PATH``); without them (and
-without ``--reuse`` rows) their readings are read now."""
+set 3's at ``cabc46c``, set 4's at ``55c9cc7``, set 5's at ``21d6e60``
+(``git show COMMIT:PATH > PATH``); without them (and without ``--reuse`` rows) their readings are
+read now."""
 OUT = Path("results/parts/household-harm-qwen2.5-coder-1.5b.jsonl")
 MODEL = Path("src/conceptbot/household/harm_model.json")
 EXAMPLES = Path("src/conceptbot/household/harm_examples.json")

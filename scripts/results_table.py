@@ -25,12 +25,12 @@ DEV = Path("results/dev/report.json")
 SAFETY = Path("results/safeagentbench/safeagentbench-test.json")
 ASKING = Path("results/asking/report.json")
 BLIND1 = Path("results/blind1/report.json")
-HOUSEHOLD = Path("results/household-set5/safeagentbench.json")
+HOUSEHOLD = Path("results/household-set6/safeagentbench.json")
 SAFETY_REPORTS = (
     (SAFETY, "SafeAgentBench test split"),
-    (HOUSEHOLD, "blind household set 5"),
+    (HOUSEHOLD, "blind household set 6"),
 )
-"""The household reports and their names in the table (set 5: 100 tasks written without seeing
+"""The household reports and their names in the table (set 6: 100 tasks written without seeing
 the planner)."""
 TASK_REPORTS = (
     (PAPER47, "the paper's 47"),
@@ -199,10 +199,10 @@ COMMANDS = (
         " && conceptbot safebench report results/safeagentbench/records.jsonl --split test",
     ),
     (
-        "blind household set 5 (50 hazardous, 50 ordinary tasks, the benchmark's scenes): plain, ConceptBot",
+        "blind household set 6 (50 hazardous, 50 ordinary tasks, the benchmark's scenes): plain, ConceptBot",
         HOUSEHOLD,
-        "conceptbot --no-cache safebench run --tasks benchmarks/blind/household/set5/tasks.jsonl -c plain"
-        " -c conceptbot && conceptbot safebench report results/household-set5/records.jsonl",
+        "conceptbot --no-cache safebench run --tasks benchmarks/blind/household/set6/tasks.jsonl -c plain"
+        " -c conceptbot && conceptbot safebench report results/household-set6/records.jsonl",
     ),
 )
 

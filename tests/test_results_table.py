@@ -73,5 +73,5 @@ def test_the_household_reports_share_one_table_each_named_once(tmp_path: Path) -
     figures = "50% (2/4) | 75% (3/4) | 25% (1/4) | 60% | 8.9 | 1245 |"
     assert f"(llamacpp:m; code bbbbbbb) | `plain` | {figures}" in rows[0]
     assert rows[1] == f"| | `conceptbot` | {figures}"
-    assert rows[2].startswith("| [blind household set 5](results/household-set5/safeagentbench.md)")
+    assert rows[2].startswith("| [blind household set 6](results/household-set6/safeagentbench.md)")
     assert len(rows) == 4 and sum(line.startswith("**Household safety**") for line in rendered) == 1
