@@ -72,6 +72,8 @@ class _Shorter(FakeEmbedder):
 
 def test_a_reading_that_cannot_be_made_is_nan_and_the_planner_refuses() -> None:
     assert math.isnan(SimilarCases(_Shorter(), EXAMPLES).reading("Find the candle."))
+    planned = [Example(e.task, e.instruction, e.dangerous, ("find Candle",)) for e in EXAMPLES]
+    assert SimilarCases(_Shorter(), planned).nearest("Find the candle.", 2) == []
     weighs = HarmModel({**READINGS_MODEL.weights, "similar": 1.0}, 0.0, 0.5, {})
     calm = [[math.log(0.2), math.log(0.8)]] * 4
     planner, _, _ = _conceptbot(calm, [_reply(False, ["find Candle"])], weighs)

@@ -6,7 +6,8 @@ household sets: ``harm_examples.json``, written by ``benchmarks/fit_household_ha
 embedded with the configured sentence embedder, and an L2-regularised logistic model over those
 vectors is fitted when the signal is first read. The reading of a new instruction is that model's
 log-odds of "dangerous". No word decides it: it is where the instruction's meaning lies among cases
-already judged, and the harm model weighs it with what the plan does.
+already judged, and the harm model weighs it with what the plan does. The same embeddings find the
+cases nearest to a new instruction, whose reference plans the planning call sees as examples.
 
 The model is fitted in the process rather than shipped as weights, so it holds for whichever
 embedder is configured; the embeddings go through the embedding cache like any others. On the
@@ -141,7 +142,10 @@ class SimilarCases:
         task id starts with it (a set measured on its own)."""
         vectors = self._embedded()
         cases = self._cases()
-        similarity = vectors @ np.asarray(self.embedder.embed([instruction]), dtype=float)[0]
+        vector = np.asarray(self.embedder.embed([instruction]), dtype=float)
+        if vector.shape != (1, vectors.shape[1]):
+            return []
+        similarity = vectors @ vector[0]
         ranked = [
             cases[i]
             for i in np.argsort(-similarity, kind="stable")
